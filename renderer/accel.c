@@ -1,0 +1,2 @@
+/* accel.c — placeholder until its module lands. */
+typedef int ts_placeholder_accel;

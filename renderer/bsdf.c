@@ -1,0 +1,2 @@
+/* bsdf.c — placeholder until its module lands. */
+typedef int ts_placeholder_bsdf;

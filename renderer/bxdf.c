@@ -1,0 +1,2 @@
+/* bxdf.c — placeholder until its module lands. */
+typedef int ts_placeholder_bxdf;

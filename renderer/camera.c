@@ -1,0 +1,2 @@
+/* camera.c — placeholder until its module lands. */
+typedef int ts_placeholder_camera;

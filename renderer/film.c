@@ -1,0 +1,2 @@
+/* film.c — placeholder until its module lands. */
+typedef int ts_placeholder_film;

@@ -1,0 +1,2 @@
+/* filter.c — placeholder until its module lands. */
+typedef int ts_placeholder_filter;

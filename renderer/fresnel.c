@@ -1,0 +1,2 @@
+/* fresnel.c — placeholder until its module lands. */
+typedef int ts_placeholder_fresnel;

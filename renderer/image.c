@@ -1,0 +1,2 @@
+/* image.c — placeholder until its module lands. */
+typedef int ts_placeholder_image;

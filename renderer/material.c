@@ -1,0 +1,2 @@
+/* material.c — placeholder until its module lands. */
+typedef int ts_placeholder_material;

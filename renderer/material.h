@@ -1,0 +1,46 @@
+/* material.h — the materials of scene format v1 (DESIGN.md §4) as parameters, and the
+ * mapping from a material at a hit to its BSDF.
+ *
+ * Design note: a material is plain data filled by the scene loader (which validates every
+ * value); ts_material_bsdf builds the BSDF for one shading point into caller storage with
+ * no allocation (the hot path). `roughness` is the microfacet α, no remapping (pbrt-v3
+ * meaning). Materials are immutable after scene build and shared by all threads. */
+#ifndef TS_MATERIAL_H
+#define TS_MATERIAL_H
+
+#include <stdbool.h>
+
+#include "interaction.h"
+#include "vecmath.h"
+
+typedef enum ts_material_type {
+    TS_MATERIAL_DIFFUSE,    /* reflectance, sigma (degrees; Oren–Nayar if > 0) */
+    TS_MATERIAL_MIRROR,     /* reflectance */
+    TS_MATERIAL_DIELECTRIC, /* eta, reflectance, transmittance, roughness (0 = smooth) */
+    TS_MATERIAL_CONDUCTOR,  /* eta[rgb], k[rgb], roughness, distribution */
+    TS_MATERIAL_PLASTIC,    /* diffuse, specular, roughness */
+    TS_MATERIAL_SUBSTRATE,  /* diffuse, specular, roughness (FresnelBlend) */
+    TS_MATERIAL_FOURIER,    /* file: pbrt-v3 .bsdf */
+} ts_material_type;
+
+typedef enum ts_microfacet_type {
+    TS_MICROFACET_GGX, /* Trowbridge–Reitz */
+    TS_MICROFACET_BECKMANN,
+} ts_microfacet_type;
+
+struct ts_fourier_table; /* fourier_bsdf.h */
+
+typedef struct ts_material {
+    ts_material_type type;
+    ts_rgb reflectance;                  /* diffuse, mirror, dielectric */
+    ts_rgb transmittance;                /* dielectric */
+    float sigma_deg;                     /* diffuse: Oren–Nayar σ in degrees */
+    float eta;                           /* dielectric: interior / exterior index */
+    ts_rgb conductor_eta, conductor_k;   /* conductor: complex index per channel */
+    float roughness;                     /* microfacet α (dielectric, conductor, plastic, substrate) */
+    ts_microfacet_type distribution;     /* conductor (plastic/substrate/dielectric: GGX) */
+    ts_rgb diffuse, specular;            /* plastic, substrate */
+    const struct ts_fourier_table *fourier; /* fourier: owned by the scene */
+} ts_material;
+
+#endif

@@ -1,0 +1,2 @@
+/* microfacet.c — placeholder until its module lands. */
+typedef int ts_placeholder_microfacet;

@@ -1,0 +1,2 @@
+/* png.c — placeholder until its module lands. */
+typedef int ts_placeholder_png;

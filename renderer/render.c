@@ -1,0 +1,2 @@
+/* render.c — placeholder until its module lands. */
+typedef int ts_placeholder_render;

@@ -1,0 +1,2 @@
+/* sampler.c — placeholder until its module lands. */
+typedef int ts_placeholder_sampler;

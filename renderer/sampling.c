@@ -1,0 +1,2 @@
+/* sampling.c — placeholder until its module lands. */
+typedef int ts_placeholder_sampling;

@@ -1,0 +1,2 @@
+/* scene.c — placeholder until its module lands. */
+typedef int ts_placeholder_scene;
