@@ -1,0 +1,2 @@
+/* envmap.c — placeholder until its module lands. */
+typedef int ts_placeholder_envmap;

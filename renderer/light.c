@@ -1,0 +1,2 @@
+/* light.c — placeholder until its module lands. */
+typedef int ts_placeholder_light;

@@ -1,0 +1,2 @@
+/* shape_sample.c — placeholder until its module lands. */
+typedef int ts_placeholder_shape_sample;
