@@ -83,4 +83,15 @@ ts_ray ts_spawn_ray(const ts_interaction *si, const ts_shape *shapes, ts_vec3 d)
 ts_ray ts_spawn_ray_to(const ts_interaction *si, const ts_shape *shapes, ts_vec3 p_to, ts_vec3 p_to_error,
                        ts_vec3 n_to);
 
+/* One triangle prim of a mesh: nearest hit with t in (0, tmax), computed in double
+ * precision (Möller–Trumbore on the float vertices) and conservative like
+ * ts_shape_intersect: a ray whose origin lies on the triangle's plane within double
+ * round-off does not hit it. The ray's skip ids are not consulted. */
+bool ts_shape_triangle_intersect(const ts_shape *s, uint32_t prim, const ts_ray *ray, float tmax, float *t_hit);
+/* True if the ray crosses the plane of triangle prim at a t > 0 that double precision can
+ * tell from 0 (false for a ray leaving that plane, lying in it or moving away from it).
+ * The accelerator's check, for rays leaving a mesh, that a hit of Embree's float test is
+ * not the surface the ray leaves (e.g. the coplanar neighbour of its triangle). */
+bool ts_shape_triangle_ahead(const ts_shape *s, uint32_t prim, const ts_ray *ray);
+
 #endif

@@ -1,2 +1,0 @@
-/* png.c — placeholder until its module lands. */
-typedef int ts_placeholder_png;

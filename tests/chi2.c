@@ -1,0 +1,542 @@
+/* chi2.c — the χ² test of chi2.h: histogram, adaptive per-cell quadrature, pooling,
+ * incomplete-gamma tail and Šidák threshold. */
+#include "chi2.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define KEEP_PER_CELL 8      /* samples kept per cell to guide refinement */
+#define NEAR_MAX (9 * KEEP_PER_CELL) /* a cell's and its 8 neighbours' */
+#define MAX_DEPTH 64         /* binary splits below a cell half */
+#define ZERO_EXPECTED 1e-8   /* a cell this empty should never see a sample */
+#define NOISE_FRACTION 0.03  /* quadrature error target: 0.03 √E counts per cell ... */
+#define MAX_COUNT_ERROR 1e-3 /* ... and at most 0.001 counts */
+
+void ts_chi2_params_default(ts_chi2_params *p)
+{
+    p->sample_count = 1000000;
+    p->cos_theta_res = 21;
+    p->phi_res = 42;
+    p->significance = 0.01;
+    p->test_count = TS_CHI2_FAMILY_SIZE;
+    p->min_expected = 5;
+    p->seed = 1;
+    p->max_node_evals = 400000;
+}
+
+/* ---------------------------------------------------------------- quadrature ---- */
+
+typedef struct kept_point {
+    double z, phi; /* where the sample fell */
+    double pdf;    /* pdf there */
+} kept_point;
+
+typedef struct quad {
+    ts_chi2_pdf_fn pdf;
+    void *ctx;
+    uint64_t evals;     /* total pdf calls */
+    uint64_t cell_evals;
+    uint64_t budget;    /* per cell */
+    bool over_budget;
+    bool bad_value;     /* a negative or non-finite pdf was seen */
+    ts_vec3 bad_w;
+    double bad_pdf;
+} quad;
+
+static const double gl_x[4] = {-0.86113631159405257522, -0.33998104358485626480, 0.33998104358485626480,
+                               0.86113631159405257522};
+static const double gl_w[4] = {0.34785484513745385737, 0.65214515486254614263, 0.65214515486254614263,
+                               0.34785484513745385737};
+
+static ts_vec3 direction_of(double z, double phi)
+{
+    double s = sqrt(fmax(0.0, 1.0 - z * z));
+    return (ts_vec3){(float)(s * cos(phi)), (float)(s * sin(phi)), (float)z};
+}
+
+static double eval_pdf(quad *q, double z, double phi)
+{
+    ts_vec3 w = direction_of(z, phi);
+    double v = q->pdf(q->ctx, w);
+    q->evals++;
+    q->cell_evals++;
+    if (!(v >= 0) || !isfinite(v)) {
+        if (!q->bad_value) {
+            q->bad_value = true;
+            q->bad_w = w;
+            q->bad_pdf = v;
+        }
+        return 0;
+    }
+    return v;
+}
+
+/* 4×4 Gauss–Legendre rule on [z0,z1]×[p0,p1]; *maxv gets the largest node value. */
+static double gl_rect(quad *q, double z0, double z1, double p0, double p1, double *maxv)
+{
+    double hz = 0.5 * (z1 - z0), cz = 0.5 * (z1 + z0);
+    double hp = 0.5 * (p1 - p0), cp = 0.5 * (p1 + p0);
+    double sum = 0;
+    for (int i = 0; i < 4; i++) {
+        double z = cz + hz * gl_x[i];
+        for (int j = 0; j < 4; j++) {
+            double v = eval_pdf(q, z, cp + hp * gl_x[j]);
+            if (v > *maxv) *maxv = v;
+            sum += gl_w[i] * gl_w[j] * v;
+        }
+    }
+    return sum * hz * hp;
+}
+
+/* 5-point Gauss–Lobatto rule (degree 7, like the 4-point Gauss rule, but with nodes on
+ * the rectangle's edges): a step just inside an edge, invisible to the interior Gauss
+ * nodes of the rectangle and of its halves, shows up as a disagreement of the two rules.
+ * *var_z / *var_p get the summed jumps between opposite edges, to choose a split. */
+static const double lob_x[5] = {-1.0, -0.65465367070797714380, 0.0, 0.65465367070797714380, 1.0};
+static const double lob_w[5] = {0.1, 0.54444444444444444444, 0.71111111111111111111, 0.54444444444444444444, 0.1};
+
+static double lobatto_rect(quad *q, double z0, double z1, double p0, double p1, double *maxv, double *var_z,
+                           double *var_p)
+{
+    double hz = 0.5 * (z1 - z0), cz = 0.5 * (z1 + z0);
+    double hp = 0.5 * (p1 - p0), cp = 0.5 * (p1 + p0);
+    double v[5][5], sum = 0;
+    for (int i = 0; i < 5; i++)
+        for (int j = 0; j < 5; j++) {
+            double z = i == 0 ? z0 : (i == 4 ? z1 : cz + hz * lob_x[i]);
+            double p = j == 0 ? p0 : (j == 4 ? p1 : cp + hp * lob_x[j]);
+            v[i][j] = eval_pdf(q, z, p);
+            if (v[i][j] > *maxv) *maxv = v[i][j];
+            sum += lob_w[i] * lob_w[j] * v[i][j];
+        }
+    *var_z = *var_p = 0;
+    for (int k = 0; k < 5; k++) {
+        *var_z += fabs(v[4][k] - v[0][k]);
+        *var_p += fabs(v[k][4] - v[k][0]);
+    }
+    return sum * hz * hp;
+}
+
+/* Angular lengths of the rectangle's sides, to choose a split when the error estimates
+ * say nothing (an unresolved peak): near the pole a cosθ interval is long in angle. */
+static bool split_z_by_geometry(double z0, double z1, double p0, double p1)
+{
+    double zm = 0.5 * (z0 + z1);
+    double s_mid = sqrt(fmax(1e-300, 1.0 - zm * zm));
+    double s_max = sqrt(fmax(0.0, 1.0 - fmin(z0 * z0, z1 * z1)));
+    if (z0 < 0 && z1 > 0) s_max = 1;
+    double len_z = (z1 - z0) / s_mid;
+    double len_p = (p1 - p0) * s_max;
+    return len_z >= len_p;
+}
+
+/* Kept samples within one rectangle size of [z0,z1]×[p0,p1] (the 3×3 neighbourhood):
+ * a peak there may spill into the rectangle without touching its nodes. */
+static int near_points(double z0, double z1, double p0, double p1, const kept_point *const *pts, int n,
+                       const kept_point **out)
+{
+    double hz = z1 - z0, hp = p1 - p0;
+    int m = 0;
+    for (int i = 0; i < n; i++)
+        if (pts[i]->z >= z0 - hz && pts[i]->z <= z1 + hz && pts[i]->phi >= p0 - hp && pts[i]->phi <= p1 + hp)
+            out[m++] = pts[i];
+    return m;
+}
+
+/* Integral over the rectangle, whose one-rule estimate is `whole`. pts[0..n) are the kept
+ * samples near it; *err accumulates the error estimates of the accepted pieces. */
+static double refine(quad *q, double z0, double z1, double p0, double p1, double whole, double tol,
+                     const kept_point *const *pts, int n, int depth, double *err)
+{
+    double zm = 0.5 * (z0 + z1), pm = 0.5 * (p0 + p1);
+    double maxv = 0;
+    double za = gl_rect(q, z0, zm, p0, p1, &maxv), zb = gl_rect(q, zm, z1, p0, p1, &maxv);
+    double pa = gl_rect(q, z0, z1, p0, pm, &maxv), pb = gl_rect(q, z0, z1, pm, p1, &maxv);
+    double var_z, var_p;
+    double lob = lobatto_rect(q, z0, z1, p0, p1, &maxv, &var_z, &var_p);
+    double ez = fabs(za + zb - whole), ep = fabs(pa + pb - whole), el = fabs(lob - whole);
+    double best = 0.5 * (za + zb + pa + pb);
+    double e = fmax(el, fmax(ez, ep));
+
+    /* Unresolved: a sample nearby has a pdf the nodes never came close to. */
+    bool unresolved = false;
+    for (int i = 0; i < n; i++)
+        if (pts[i]->pdf > 2.0 * maxv) unresolved = true;
+
+    bool converged = !unresolved && e <= tol;
+    if (converged) {
+        *err += e;
+        return best;
+    }
+    if (depth >= MAX_DEPTH || q->cell_evals >= q->budget || (z1 - z0) < 1e-15 || (p1 - p0) < 1e-15) {
+        /* Cannot refine further: accept, report, and let the error estimate widen the
+         * bin's variance. */
+        *err += e;
+        return best;
+    }
+    bool split_z;
+    if (fmax(ez, ep) > tol && fmax(ez, ep) >= el && fabs(ez - ep) > 1e-3 * fmax(ez, ep))
+        split_z = ez > ep; /* the halves say where the variation is */
+    else if (el > tol && fabs(var_z - var_p) > 1e-3 * fmax(var_z, var_p))
+        split_z = var_z > var_p; /* a step near an edge: split across it */
+    else
+        split_z = split_z_by_geometry(z0, z1, p0, p1);
+
+    const kept_point *near[NEAR_MAX] = {0};
+    double ctol = tol * 0.70710678118654752440; /* tol ∝ √area: see the design note */
+    double sum = 0;
+    for (int k = 0; k < 2; k++) {
+        double cz0 = z0, cz1 = z1, cp0 = p0, cp1 = p1, cw;
+        if (split_z) {
+            if (k == 0) cz1 = zm;
+            else cz0 = zm;
+            cw = k == 0 ? za : zb;
+        } else {
+            if (k == 0) cp1 = pm;
+            else cp0 = pm;
+            cw = k == 0 ? pa : pb;
+        }
+        int m = near_points(cz0, cz1, cp0, cp1, pts, n, near);
+        sum += refine(q, cz0, cz1, cp0, cp1, cw, ctol, near, m, depth + 1, err);
+    }
+    return sum;
+}
+
+/* ∫ over cell [z0,z1]×[p0,p1], split at the horizon. pts are the kept samples of this
+ * cell and its neighbours (φ already unwrapped to be near this cell). With n_samples > 0
+ * the tolerance follows the cell's statistical noise, else it is abs_tol. */
+static double integrate_cell(quad *q, double z0, double z1, double p0, double p1, const kept_point *const *pts,
+                             int n, double n_samples, double abs_tol, double *err)
+{
+    double bounds[3] = {z0, z1, z1};
+    int parts = 1;
+    if (z0 < 0 && z1 > 0) {
+        bounds[1] = 0;
+        parts = 2;
+    }
+    q->cell_evals = 0;
+    q->over_budget = false;
+    double total = 0;
+    for (int k = 0; k < parts; k++) {
+        double a = bounds[k], b = bounds[k + 1];
+        const kept_point *near[NEAR_MAX] = {0};
+        int m = near_points(a, b, p0, p1, pts, n, near);
+        double maxv = 0;
+        double whole = gl_rect(q, a, b, p0, p1, &maxv);
+        double tol = abs_tol;
+        if (n_samples > 0) {
+            /* Target |ΔE| ≤ min(0.03 √E, 0.001) counts: negligible in the cell's term
+             * and, summed over all cells, in the no-direction bin's. */
+            double e = fmax(whole * n_samples, 1.0);
+            tol = fmin(NOISE_FRACTION * sqrt(e), MAX_COUNT_ERROR) / n_samples / parts;
+        }
+        double e = 0;
+        total += refine(q, a, b, p0, p1, whole, tol, near, m, 0, &e);
+        /* Unconverged: the error estimate ended far above the target (budget or depth
+         * exhausted, typically along a curved discontinuity). */
+        if (e > 10 * tol) q->over_budget = true;
+        *err += e;
+    }
+    return total;
+}
+
+double ts_chi2_integrate(ts_chi2_pdf_fn pdf, void *ctx, int cos_theta_res, int phi_res, double abs_tol)
+{
+    quad q = {.pdf = pdf, .ctx = ctx, .budget = 4000000};
+    double cells = (double)cos_theta_res * phi_res;
+    double total = 0;
+    for (int i = 0; i < cos_theta_res; i++) {
+        double z0 = -1.0 + 2.0 * i / cos_theta_res, z1 = -1.0 + 2.0 * (i + 1) / cos_theta_res;
+        if (i == cos_theta_res - 1) z1 = 1.0;
+        for (int j = 0; j < phi_res; j++) {
+            double p0 = 2.0 * TS_PI_D * j / phi_res, p1 = 2.0 * TS_PI_D * (j + 1) / phi_res;
+            double err = 0;
+            total += integrate_cell(&q, z0, z1, p0, p1, NULL, 0, 0, abs_tol / cells, &err);
+        }
+    }
+    return total;
+}
+
+/* ------------------------------------------------------------- statistics ---- */
+
+double ts_chi2_upper_tail(double x, int dof)
+{
+    if (dof <= 0) return 1.0;
+    if (!(x > 0)) return 1.0;
+    double a = 0.5 * dof, y = 0.5 * x;
+    double lg = lgamma(a);
+    if (y < a + 1) {
+        /* Series for the lower regularised gamma P(a, y). */
+        double ap = a, del = 1.0 / a, sum = del;
+        for (int n = 0; n < 100000; n++) {
+            ap += 1;
+            del *= y / ap;
+            sum += del;
+            if (fabs(del) < fabs(sum) * 1e-16) break;
+        }
+        double p = sum * exp(-y + a * log(y) - lg);
+        return fmax(0.0, 1.0 - p);
+    }
+    /* Continued fraction for Q(a, y) (modified Lentz). */
+    const double tiny = 1e-300;
+    double b = y + 1 - a, c = 1 / tiny, d = 1 / b, h = d;
+    for (int i = 1; i < 100000; i++) {
+        double an = -i * (i - a);
+        b += 2;
+        d = an * d + b;
+        if (fabs(d) < tiny) d = tiny;
+        c = b + an / c;
+        if (fabs(c) < tiny) c = tiny;
+        d = 1 / d;
+        double del = d * c;
+        h *= del;
+        if (fabs(del - 1) < 1e-16) break;
+    }
+    return exp(-y + a * log(y) - lg) * h;
+}
+
+double ts_chi2_sidak(double alpha, int tests)
+{
+    if (tests <= 1) return alpha;
+    return -expm1(log1p(-alpha) / tests);
+}
+
+typedef struct bin {
+    double expected;
+    double observed;
+    int cell;      /* −1: the no-direction bin; −2: pooled */
+    double sigma;  /* error bound of `expected` from the quadrature (counts) */
+} bin;
+
+static int bin_cmp(const void *a, const void *b)
+{
+    double ea = ((const bin *)a)->expected, eb = ((const bin *)b)->expected;
+    return (ea > eb) - (ea < eb);
+}
+
+static void describe_cell(const ts_chi2_params *p, int cell, char *buf, size_t size)
+{
+    if (cell == -1) {
+        snprintf(buf, size, "no-direction bin");
+        return;
+    }
+    if (cell == -2) {
+        snprintf(buf, size, "pooled bin");
+        return;
+    }
+    int i = cell / p->phi_res, j = cell % p->phi_res;
+    snprintf(buf, size, "cell cosθ∈[%.3f,%.3f] φ∈[%.1f°,%.1f°]", -1.0 + 2.0 * i / p->cos_theta_res,
+             -1.0 + 2.0 * (i + 1) / p->cos_theta_res, 360.0 * j / p->phi_res, 360.0 * (j + 1) / p->phi_res);
+}
+
+bool ts_chi2_test(const ts_chi2_params *p, ts_chi2_sample_fn sample, ts_chi2_pdf_fn pdf, void *ctx,
+                  ts_chi2_result *r)
+{
+    memset(r, 0, sizeof *r);
+    if (p->cos_theta_res < 1 || p->cos_theta_res % 2 == 0 || p->phi_res < 1 || p->sample_count == 0 ||
+        p->test_count < 1 || !(p->significance > 0 && p->significance < 1)) {
+        snprintf(r->message, sizeof r->message,
+                 "invalid parameters (cos_theta_res must be odd and ≥ 1, phi_res ≥ 1, samples > 0, "
+                 "test_count ≥ 1, 0 < significance < 1)");
+        return false;
+    }
+    int nz = p->cos_theta_res, np = p->phi_res, ncells = nz * np;
+    double *observed = calloc((size_t)ncells, sizeof *observed);
+    kept_point *kept = calloc((size_t)ncells * KEEP_PER_CELL, sizeof *kept);
+    int *nkept = calloc((size_t)ncells, sizeof *nkept);
+    bin *bins = calloc((size_t)ncells + 1, sizeof *bins);
+    if (!observed || !kept || !nkept || !bins) {
+        snprintf(r->message, sizeof r->message, "out of memory");
+        goto fail;
+    }
+    r->threshold = ts_chi2_sidak(p->significance, p->test_count);
+
+    /* 1. Histogram. */
+    ts_pcg32 rng;
+    ts_pcg32_seed(&rng, p->seed, 0x5eed);
+    for (uint64_t s = 0; s < p->sample_count; s++) {
+        ts_vec3 w = {0, 0, 0};
+        ts_chi2_outcome o = sample(ctx, &rng, &w);
+        if (o == TS_CHI2_NONE) {
+            r->none++;
+            continue;
+        }
+        if (o == TS_CHI2_DISCRETE) {
+            r->discrete++;
+            continue;
+        }
+        double x = w.x, y = w.y, z = w.z, len = sqrt(x * x + y * y + z * z);
+        if (!ts_vec3_is_finite(w) || fabs(len - 1) > 1e-3) {
+            snprintf(r->message, sizeof r->message, "sample %llu is not a unit direction: (%g, %g, %g)",
+                     (unsigned long long)s, x, y, z);
+            goto fail;
+        }
+        z /= len;
+        double phi = atan2(y, x);
+        if (phi < 0) phi += 2 * TS_PI_D;
+        int iz = (int)floor((z + 1) * 0.5 * nz), ip = (int)floor(phi * np / (2 * TS_PI_D));
+        iz = iz < 0 ? 0 : (iz >= nz ? nz - 1 : iz);
+        ip = ip < 0 ? 0 : (ip >= np ? np - 1 : ip);
+        int c = iz * np + ip;
+        observed[c] += 1;
+        r->binned++;
+        if (nkept[c] < KEEP_PER_CELL) {
+            kept_point *k = &kept[(size_t)c * KEEP_PER_CELL + nkept[c]];
+            k->z = z;
+            k->phi = phi;
+            k->pdf = pdf(ctx, w);
+            if (!(k->pdf >= 0) || !isfinite(k->pdf)) {
+                snprintf(r->message, sizeof r->message, "pdf(%g, %g, %g) = %g at a sampled direction", x, y, z,
+                         k->pdf);
+                goto fail;
+            }
+            nkept[c]++;
+        }
+    }
+
+    /* 2. Expected counts. */
+    double n = (double)p->sample_count;
+    quad q = {.pdf = pdf, .ctx = ctx, .budget = (uint64_t)p->max_node_evals};
+    double total = 0, total_err = 0;
+    for (int i = 0; i < nz; i++) {
+        double z0 = -1.0 + 2.0 * i / nz, z1 = i == nz - 1 ? 1.0 : -1.0 + 2.0 * (i + 1) / nz;
+        for (int j = 0; j < np; j++) {
+            int c = i * np + j;
+            double p0 = 2.0 * TS_PI_D * j / np, p1 = 2.0 * TS_PI_D * (j + 1) / np;
+            double err = 0;
+            /* Kept samples of this cell and its neighbours, φ unwrapped across 0/2π. */
+            kept_point local[NEAR_MAX];
+            const kept_point *ptrs[NEAR_MAX];
+            int m = 0;
+            for (int di = -1; di <= 1; di++) {
+                int ii = i + di;
+                if (ii < 0 || ii >= nz) continue;
+                for (int dj = -1; dj <= 1; dj++) {
+                    int jj = j + dj;
+                    double shift = 0;
+                    if (jj < 0) {
+                        jj += np;
+                        shift = -2 * TS_PI_D;
+                    } else if (jj >= np) {
+                        jj -= np;
+                        shift = 2 * TS_PI_D;
+                    }
+                    int cc = ii * np + jj;
+                    for (int k = 0; k < nkept[cc]; k++) {
+                        local[m] = kept[(size_t)cc * KEEP_PER_CELL + k];
+                        local[m].phi += shift;
+                        ptrs[m] = &local[m];
+                        m++;
+                    }
+                }
+            }
+            double integral = integrate_cell(&q, z0, z1, p0, p1, ptrs, m, n, 0, &err);
+            if (q.over_budget) r->unconverged++;
+            total += integral;
+            total_err += err;
+            bins[c] = (bin){integral * n, observed[c], c, err * n};
+        }
+    }
+    r->pdf_evals = q.evals;
+    r->pdf_integral = total;
+    if (q.bad_value) {
+        snprintf(r->message, sizeof r->message, "pdf(%g, %g, %g) = %g: negative or not finite", q.bad_w.x,
+                 q.bad_w.y, q.bad_w.z, q.bad_pdf);
+        goto fail;
+    }
+    double missing_expected = fmax(0.0, n * (1.0 - total));
+    bins[ncells] = (bin){missing_expected, (double)(r->none + r->discrete), -1, total_err * n};
+    r->quadrature_error = total_err;
+
+    /* 3. Samples where none can be. */
+    for (int c = 0; c <= ncells; c++) {
+        if (bins[c].observed > 0 && bins[c].expected < ZERO_EXPECTED) {
+            char where[128];
+            describe_cell(p, bins[c].cell, where, sizeof where);
+            snprintf(r->message, sizeof r->message,
+                     "%.0f sample(s) in the %s whose expected count is %.3g (pdf integral over the sphere %.6f)",
+                     bins[c].observed, where, bins[c].expected, total);
+            goto fail;
+        }
+    }
+
+    /* 4. Pool and sum. Bins that cannot receive samples (checked above) carry nothing. */
+    int nb = 0;
+    for (int c = 0; c <= ncells; c++)
+        if (bins[c].expected >= ZERO_EXPECTED) bins[nb++] = bins[c];
+    qsort(bins, (size_t)nb, sizeof *bins, bin_cmp);
+    bin pooled = {0, 0, -2, 0};
+    int first = 0;
+    while (first < nb && (bins[first].expected < p->min_expected || (first > 0 && pooled.expected < p->min_expected))) {
+        pooled.expected += bins[first].expected;
+        pooled.observed += bins[first].observed;
+        pooled.sigma += bins[first].sigma;
+        first++;
+    }
+    int used = nb - first + (first > 0 ? 1 : 0);
+    double chi2 = 0;
+    double worst[3] = {0, 0, 0};
+    int worst_cell[3] = {-3, -3, -3};
+    for (int b = first > 0 ? first - 1 : 0; b < nb; b++) {
+        const bin *bb = (first > 0 && b == first - 1) ? &pooled : &bins[b];
+        /* The quadrature's error bound adds to the variance of O − E (it is ≪ √E except
+         * where the quadrature ran out of budget, e.g. at a curved discontinuity). */
+        double d = bb->observed - bb->expected, term = d * d / (bb->expected + bb->sigma * bb->sigma);
+        chi2 += term;
+        for (int k = 0; k < 3; k++)
+            if (term > worst[k]) {
+                for (int m = 2; m > k; m--) {
+                    worst[m] = worst[m - 1];
+                    worst_cell[m] = worst_cell[m - 1];
+                }
+                worst[k] = term;
+                worst_cell[k] = bb->cell;
+                break;
+            }
+    }
+    r->statistic = chi2;
+    r->dof = used - 1;
+    r->p_value = ts_chi2_upper_tail(chi2, r->dof);
+    r->passed = r->dof < 1 || r->p_value >= r->threshold;
+    if (r->passed) {
+        snprintf(r->message, sizeof r->message,
+                 "passed: χ²=%.1f dof=%d p=%.4f (threshold %.2e), ∫pdf=%.6f, %llu binned, %llu discrete, %llu none",
+                 chi2, r->dof, r->p_value, r->threshold, total, (unsigned long long)r->binned,
+                 (unsigned long long)r->discrete, (unsigned long long)r->none);
+    } else {
+        int len = snprintf(r->message, sizeof r->message,
+                           "χ²=%.1f dof=%d p=%.3g < %.2e, ∫pdf=%.6f; largest terms:", chi2, r->dof, r->p_value,
+                           r->threshold, total);
+        for (int k = 0; k < 3 && worst_cell[k] != -3 && len < (int)sizeof r->message; k++) {
+            char where[128];
+            describe_cell(p, worst_cell[k], where, sizeof where);
+            double e = 0, o = 0;
+            for (int b = 0; b < nb; b++)
+                if (bins[b].cell == worst_cell[k]) {
+                    e = bins[b].expected;
+                    o = bins[b].observed;
+                }
+            if (worst_cell[k] == -2) {
+                e = pooled.expected;
+                o = pooled.observed;
+            }
+            len += snprintf(r->message + len, sizeof r->message - (size_t)len, " [%s: observed %.0f expected %.1f]",
+                            where, o, e);
+        }
+    }
+    free(observed);
+    free(kept);
+    free(nkept);
+    free(bins);
+    return r->passed;
+
+fail:
+    free(observed);
+    free(kept);
+    free(nkept);
+    free(bins);
+    r->passed = false;
+    return false;
+}
