@@ -162,9 +162,8 @@ static RTCGeometry make_mesh(ts_accel *a, const ts_shape *s)
     return g;
 }
 
-static RTCGeometry make_user(ts_accel *a, const ts_shape *s)
+static RTCGeometry make_user(ts_accel *a)
 {
-    (void)s;
     RTCGeometry g = rtcNewGeometry(a->device, RTC_GEOMETRY_TYPE_USER);
     if (!g) return NULL;
     rtcSetGeometryUserPrimitiveCount(g, 1);
@@ -205,7 +204,7 @@ ts_accel *ts_accel_create(const ts_shape *shapes, uint32_t n_shapes, ts_error *e
             if (s->mesh.n_triangles == 0 || s->mesh.n_vertices == 0) continue; /* nothing to hit */
             g = make_mesh(a, s);
         } else {
-            g = make_user(a, s);
+            g = make_user(a);
         }
         if (!g) goto fail_embree;
         rtcSetGeometryUserData(g, (void *)s);

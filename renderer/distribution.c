@@ -223,9 +223,9 @@ fail_free:
 
 uint32_t ts_alias_table_sample(const ts_alias_table *t, float u, float *pmf)
 {
-    float x = u * (float)t->n;
-    uint32_t i = x < (float)t->n ? (uint32_t)x : t->n - 1;
-    float up = ts_minf(x - (float)i, TS_ONE_MINUS_EPSILON);
+    double x = (double)u * t->n; /* double: bins stay resolved for large n */
+    uint32_t i = x < (double)t->n ? (uint32_t)x : t->n - 1;
+    float up = ts_minf((float)(x - i), TS_ONE_MINUS_EPSILON);
     uint32_t k = up < t->q[i] ? i : t->alias[i];
     if (pmf) *pmf = t->pmf[k];
     return k;

@@ -43,4 +43,22 @@ typedef struct ts_material {
     const struct ts_fourier_table *fourier; /* fourier: owned by the scene */
 } ts_material;
 
+struct ts_bsdf; /* bsdf.h */
+
+/* Builds the BSDF of material m at hit si into *out (no allocation; pbrt-v3 §9.2):
+ *   diffuse    Lambertian(reflectance), or Oren–Nayar(reflectance, sigma) when sigma > 0
+ *   mirror     specular reflection(reflectance), Fresnel = 1
+ *   dielectric smooth (roughness < TS_MICROFACET_SPECULAR_ALPHA): FresnelSpecular
+ *              (reflectance, transmittance, 1, eta); rough: microfacet reflection with
+ *              dielectric Fresnel + microfacet transmission, GGX(roughness)
+ *   conductor  microfacet reflection (distribution, roughness) with conductor Fresnel
+ *              (eta, k), or specular reflection when smooth
+ *   plastic    Lambertian(diffuse) + microfacet (GGX) or specular reflection(specular)
+ *              with dielectric Fresnel from 1 into 1.5
+ *   substrate  FresnelBlend(diffuse, specular, GGX roughness); when smooth, its diffuse
+ *              part + a specular reflection with Schlick's Fresnel(specular)
+ *   fourier    the tabulated lobe (out->eta from the table)
+ * Lobes with black scale are left out. Pure and thread-safe. */
+void ts_material_bsdf(const ts_material *m, const ts_interaction *si, struct ts_bsdf *out);
+
 #endif

@@ -266,7 +266,8 @@ static ts_ray rnd_ray_analytic(ts_pcg32 *g, const ts_shape *s)
     ts_dvec3 c;
     double size = shape_size(s, &c);
     ts_dvec3 o, target;
-    double R = size * rnd_range(g, 1.5, 20);
+    /* Origins 1.5 to 20 sizes away, one in ten up to 10^4 sizes away. */
+    double R = size * (rnd(g) < 0.1 ? exp(rnd_range(g, log(20), log(1e4))) : rnd_range(g, 1.5, 20));
     if (rnd(g) < 0.1) {
         ts_dvec3 d = rnd_unit(g);
         if (s->type == TS_SHAPE_SPHERE) {
@@ -424,6 +425,10 @@ static void test_sphere_known(void **state)
     assert_close(ts_shape_area(&s, 0), 16 * TS_PI_D, 1e-12, "area");
     ts_shape big = make_analytic(TS_SHAPE_SPHERE, 1, 0, ts_xform_scale((ts_dvec3){3, 3, 3}));
     assert_close(ts_shape_area(&big, 0), 36 * TS_PI_D, 1e-9, "scaled area");
+    ts_xform rot = ts_xform_rotate(37, (ts_dvec3){1, 2, 3});
+    ts_xform rot_big = ts_xform_compose(&rot, &big.to_world);
+    ts_shape rb = make_analytic(TS_SHAPE_SPHERE, 1, 0, rot_big);
+    assert_close(ts_shape_area(&rb, 0), 36 * TS_PI_D, 1e-9, "rotated, scaled area"); /* double round-off */
     /* Non-uniform: the ellipsoid's area by Thomsen's formula, within its 1.1% of the truth
      * (the prolate spheroid a = 1, c = 2 has area 2π(1 + 2·asin(e)/e), e = √3/2). */
     ts_shape ell = make_analytic(TS_SHAPE_SPHERE, 1, 0, ts_xform_scale((ts_dvec3){1, 1, 2}));
@@ -514,7 +519,7 @@ static void test_cylinder_known(void **state)
     assert_false(ts_shape_intersect(&s, &r, INFINITY, &t));
     /* Near wall below z = 0, far wall above z = h: the tube is missed although the
      * infinite cylinder is hit twice. */
-    r = ts_ray_make((ts_vec3){-3, 0, -1}, (ts_vec3){1, 0, 1}, INFINITY);
+    r = ts_ray_make((ts_vec3){-2, 0, -4}, (ts_vec3){1, 0, 3}, INFINITY);
     assert_false(ts_shape_intersect(&s, &r, INFINITY, &t));
     /* Area 2πrh; with a scale along the axis and a uniform one across, still exact. */
     assert_close(ts_shape_area(&s, 0), 4 * TS_PI_D, 1e-12, "area");
@@ -693,6 +698,12 @@ static void check_bound_ray(const ts_shape *s, const ts_ray *r, bound_stats *st)
     st->both++;
     ts_interaction si;
     ts_shape_interaction(s, 0, 0, r, t, &si);
+    /* The hit lies in the shape's (conservative) world bounds. */
+    ts_bounds3 b = ts_shape_bounds(s);
+    for (int i = 0; i < 3; i++)
+        if (!(vget(si.p, i) >= vget(b.lo, i) && vget(si.p, i) <= vget(b.hi, i)))
+            fail_msg("hit outside the bounds on axis %d: %.9g not in [%.9g, %.9g]", i, vget(si.p, i), vget(b.lo, i),
+                     vget(b.hi, i));
     double ratio = bound_ratio(&si, ex.p);
     if (ratio > st->worst) st->worst = ratio;
     if (!(ratio <= 1))
@@ -937,7 +948,7 @@ static void test_spawn_ray_to(void **state)
     ts_shape shapes[2];
     tri_store st;
     shapes[0] = make_analytic(TS_SHAPE_SPHERE, 1, 0, ts_xform_identity());
-    shapes[1] = make_triangle(&st, (ts_vec3){-5, -5, -3}, (ts_vec3){5, -5, -3}, (ts_vec3){0, 5, -3});
+    shapes[1] = make_triangle(&st, (ts_vec3){-5, -5, 5}, (ts_vec3){5, -5, 5}, (ts_vec3){0, 5, 5});
     ts_ray r = ts_ray_make((ts_vec3){0.1f, 0.2f, 10}, (ts_vec3){0, 0, -1}, INFINITY);
     float t;
     assert_true(ts_shape_intersect(&shapes[0], &r, INFINITY, &t));
@@ -956,10 +967,10 @@ static void test_spawn_ray_to(void **state)
     assert_false(ts_shape_intersect(&shapes[0], &s, s.tmax, &t));
     assert_false(ts_shape_triangle_intersect(&shapes[1], 0, &s, s.tmax, &t));
     /* From the triangle: its ids are named; towards a point light (no normal, no error). */
-    s = ts_spawn_ray_to(&b, shapes, (ts_vec3){0, 0, 5}, (ts_vec3){0, 0, 0}, (ts_vec3){0, 0, 0});
+    s = ts_spawn_ray_to(&b, shapes, (ts_vec3){0, 0, 8}, (ts_vec3){0, 0, 0}, (ts_vec3){0, 0, 0});
     assert_int_equal(s.skip_shape, 1);
     assert_int_equal(s.skip_prim, 0);
-    assert_vec_close(ts_vec3_add(s.o, s.d), (ts_vec3){0, 0, 5}, 1e-6, "target");
+    assert_vec_close(ts_vec3_add(s.o, s.d), (ts_vec3){0, 0, 8}, 1e-6, "target");
     /* ts_spawn_ray from the sphere: no ids; from the triangle: ids. */
     assert_int_equal(ts_spawn_ray(&a, shapes, a.n).skip_shape, TS_NONE);
     ts_ray sb = ts_spawn_ray(&b, shapes, b.n);

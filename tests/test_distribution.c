@@ -1,0 +1,132 @@
+/* test_distribution.c — piecewise-constant 1D/2D distributions and the alias table
+ * (distribution.h). Deterministic: samples are taken on fine u grids, so frequencies are
+ * compared with exact cdf widths, and tolerances are float rounding of the tables. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <cmocka.h>
+
+#include <stdio.h>
+
+#include "distribution.h"
+
+static void assert_close(double a, double b, double tol, const char *what)
+{
+    if (!(fabs(a - b) <= tol)) fail_msg("%s: %.9g != %.9g (tolerance %g)", what, a, b, tol);
+}
+
+static void test_1d(void **state)
+{
+    (void)state;
+    ts_arena arena;
+    ts_arena_init(&arena, 0);
+    ts_error err = {0};
+    float f[5] = {1, 0, 3, 0.5f, 0};
+    ts_distribution1d d;
+    assert_int_equal(ts_distribution1d_init(&d, f, 5, &arena, &err), TS_OK);
+    assert_close(d.func_int, 4.5 / 5, 1e-7, "∫f");
+    /* pdf = f/∫f; sample ↔ invert; zero pieces never sampled; pdf integrates to 1. */
+    double integral = 0;
+    for (int i = 0; i < 5; i++) integral += ts_distribution1d_pdf(&d, (i + 0.5f) / 5) / 5;
+    assert_close(integral, 1, 1e-6, "∫pdf");
+    int count[5] = {0};
+    const int n = 100000;
+    for (int k = 0; k < n; k++) {
+        float u = (k + 0.5f) / n, pdf;
+        uint32_t off;
+        float x = ts_distribution1d_sample_continuous(&d, u, &pdf, &off);
+        assert_true(x >= 0 && x < 1);
+        assert_int_equal(off, (uint32_t)(x * 5));
+        assert_close(pdf, f[off] / d.func_int, 1e-6, "pdf of the sample");
+        assert_close(ts_distribution1d_invert(&d, x), u, 1e-5, "invert");
+        float pmf;
+        uint32_t i = ts_distribution1d_sample_discrete(&d, u, &pmf, NULL);
+        count[i]++;
+        assert_close(pmf, f[i] / 4.5, 1e-6, "discrete pmf");
+    }
+    for (int i = 0; i < 5; i++) assert_close((double)count[i] / n, f[i] / 4.5, 2.0 / n, "discrete frequency");
+    /* All zeros: uniform, func_int 0. */
+    float z[3] = {0, 0, 0};
+    assert_int_equal(ts_distribution1d_init(&d, z, 3, &arena, &err), TS_OK);
+    assert_true(d.func_int == 0);
+    assert_close(ts_distribution1d_discrete_pmf(&d, 1), 1.0 / 3, 1e-7, "uniform fallback");
+    /* Invalid input. */
+    float bad[2] = {1, NAN};
+    assert_int_equal(ts_distribution1d_init(&d, bad, 2, &arena, &err), TS_ERR_INVALID);
+    assert_int_equal(ts_distribution1d_init(&d, f, 0, &arena, &err), TS_ERR_INVALID);
+    ts_arena_fini(&arena);
+}
+
+static void test_2d(void **state)
+{
+    (void)state;
+    ts_arena arena;
+    ts_arena_init(&arena, 0);
+    ts_error err = {0};
+    float f[4 * 3] = {1, 2, 0, 4, 0, 0, 0, 0, 0.5f, 0.25f, 3, 1};
+    ts_distribution2d d;
+    assert_int_equal(ts_distribution2d_init(&d, f, 4, 3, &arena, &err), TS_OK);
+    double integral = 0;
+    for (int v = 0; v < 3; v++)
+        for (int u = 0; u < 4; u++) {
+            float p = ts_distribution2d_pdf(&d, (ts_vec2){(u + 0.5f) / 4, (v + 0.5f) / 3});
+            assert_close(p, f[v * 4 + u] / ts_distribution2d_integral(&d), 1e-5, "2D pdf ∝ f");
+            integral += p / 12;
+        }
+    assert_close(integral, 1, 1e-6, "∫pdf");
+    for (int i = 0; i < 200; i++)
+        for (int j = 0; j < 200; j++) {
+            ts_vec2 u = {(i + 0.5f) / 200, (j + 0.5f) / 200};
+            float pdf;
+            ts_vec2 x = ts_distribution2d_sample(&d, u, &pdf);
+            assert_true(pdf > 0);
+            assert_close(pdf, ts_distribution2d_pdf(&d, x), 1e-5 * pdf, "sample pdf = pdf");
+            ts_vec2 back = ts_distribution2d_invert(&d, x);
+            assert_close(back.x, u.x, 1e-4, "invert u");
+            assert_close(back.y, u.y, 1e-4, "invert v");
+        }
+    ts_arena_fini(&arena);
+}
+
+static void test_alias(void **state)
+{
+    (void)state;
+    ts_arena arena;
+    ts_arena_init(&arena, 0);
+    ts_error err = {0};
+    double w[7] = {1, 0, 1e-6, 100, 3, 0, 7};
+    double sum = 1 + 1e-6 + 100 + 3 + 7;
+    ts_alias_table t;
+    assert_int_equal(ts_alias_table_init(&t, w, 7, &arena, &err), TS_OK);
+    double psum = 0;
+    for (int i = 0; i < 7; i++) {
+        assert_close(ts_alias_table_pmf(&t, (uint32_t)i), w[i] / sum, 1e-7 * w[i] / sum, "exact pmf");
+        psum += t.pmf[i];
+    }
+    assert_close(psum, 1, 1e-6, "Σ pmf");
+    int count[7] = {0};
+    const int n = 1 << 22;
+    for (int k = 0; k < n; k++) {
+        float pmf;
+        uint32_t i = ts_alias_table_sample(&t, (k + 0.5f) / n, &pmf);
+        assert_true(pmf == t.pmf[i]);
+        count[i]++;
+    }
+    /* Each bin of the table spans 1/7 of u; a 2^22 grid resolves it to 7·2/2^22. */
+    for (int i = 0; i < 7; i++) assert_close((double)count[i] / n, w[i] / sum, 16.0 / n + 1e-6, "frequency");
+    assert_int_equal(count[1], 0);
+    assert_int_equal(count[5], 0);
+    double neg[2] = {1, -1};
+    assert_int_equal(ts_alias_table_init(&t, neg, 2, &arena, &err), TS_ERR_INVALID);
+    ts_arena_fini(&arena);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_1d),
+        cmocka_unit_test(test_2d),
+        cmocka_unit_test(test_alias),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
