@@ -19,6 +19,7 @@
 
 #include "exr.h"
 #include "film.h"
+#include "film_image.h"
 #include "image.h"
 #include "png_encode.h"
 #include "render.h"
@@ -108,11 +109,9 @@ static ts_status write_outputs(const ts_scene *scene, const ts_film *film, char 
                                const ts_render_stats *stats, uint32_t spp_done, double error, const char *integrator,
                                ts_error *err)
 {
-    static const char *const names[] = {"R", "G", "B"};
     ts_image img;
-    ts_status st = ts_image_init(&img, film->width, film->height, 3, names, err);
+    ts_status st = ts_film_to_image(film, TS_FILM_IMAGE_STATS, &img, err);
     if (st) return st;
-    ts_film_resolve(film, img.data);
     char version[64];
     snprintf(version, sizeof version, "tessera %s", TS_VERSION);
     if (!st) st = ts_image_set_string(&img, "software", version, err);
