@@ -1,11 +1,15 @@
 /* integrator.c — integrator dispatch and the debugging views; see integrator.h. */
 #include "integrator.h"
 
+#include "bsdf.h"
+#include "light.h"
+#include "material.h"
 #include "sampling.h"
 
 bool ts_integrator_available(ts_integrator_type type)
 {
-    return type == TS_INTEGRATOR_AO || type == TS_INTEGRATOR_NORMALS;
+    (void)type;
+    return true;
 }
 
 /* Ambient occlusion: the cosine-weighted fraction of the hemisphere around the shading
@@ -36,6 +40,201 @@ static ts_rgb li_normals(const ts_scene *s, const ts_ray *ray)
     return (ts_rgb){0.5f * (si.ns.x + 1), 0.5f * (si.ns.y + 1), 0.5f * (si.ns.z + 1)};
 }
 
+/* ---------------------------------------------------------------- shared light transport */
+
+/* Emitted radiance leaving hit si towards w, if its shape emits. */
+static ts_rgb emitted(const ts_scene *s, const ts_interaction *si, ts_vec3 w)
+{
+    const ts_shape *sh = &s->shapes[si->shape];
+    if (!sh->emissive) return ts_rgb_gray(0);
+    const ts_light *l = &s->lights[sh->first_light + (sh->type == TS_SHAPE_MESH ? si->prim : 0)];
+    return ts_area_light_l(l, si, w);
+}
+
+/* Radiance of every infinite light along an escaping ray. */
+static ts_rgb escaped(const ts_scene *s, const ts_ray *ray)
+{
+    ts_rgb L = ts_rgb_gray(0);
+    for (uint32_t i = 0; i < s->n_infinite_lights; i++)
+        L = ts_rgb_add(L, ts_light_le(&s->lights[s->infinite_lights[i]], ray));
+    return L;
+}
+
+static float power_heuristic(float f_pdf, float g_pdf) { return ts_power_heuristic(1, f_pdf, 1, g_pdf); }
+
+/* pbrt's EstimateDirect: light `li` sampled with u_light, the BSDF with (u_lobe, u_bsdf),
+ * combined by the power heuristic; delta lights get light sampling only. The BSDF here
+ * samples all its lobes; a specular pick adds nothing (specular transport is handled by
+ * the caller), which stays unbiased because the returned pdf includes the lobe choice. */
+static ts_rgb estimate_direct(const ts_scene *s, const ts_interaction *si, const ts_bsdf *bsdf, uint32_t li,
+                              ts_vec2 u_light, float u_lobe, ts_vec2 u_bsdf, ts_counters *c)
+{
+    const ts_light *light = &s->lights[li];
+    ts_rgb Ld = ts_rgb_gray(0);
+    ts_light_sample ls;
+    if (ts_light_sample_li(light, s->shapes, si, u_light, &ls)) {
+        ts_rgb f = ts_rgb_scale(ts_bsdf_f(bsdf, si->wo, ls.wi), ts_vec3_absdot(ls.wi, si->ns));
+        if (!ts_rgb_is_black(f)) {
+            ts_ray shadow = ts_spawn_ray_to(si, s->shapes, ls.p_light, ls.p_light_error, ls.n_light);
+            c->other_rays++;
+            if (!ts_accel_occluded(s->accel, &shadow)) {
+                if (ls.is_delta) Ld = ts_rgb_scale(ts_rgb_mul(f, ls.L), 1.0f / ls.pdf);
+                else {
+                    float w = power_heuristic(ls.pdf, ts_bsdf_pdf(bsdf, si->wo, ls.wi));
+                    Ld = ts_rgb_scale(ts_rgb_mul(f, ls.L), w / ls.pdf);
+                }
+            }
+        }
+    }
+    if (ls.is_delta || light->type == TS_LIGHT_POINT || light->type == TS_LIGHT_SPOT || light->type == TS_LIGHT_DISTANT)
+        return Ld;
+    ts_bsdf_sample bs;
+    if (!ts_bsdf_sample_f(bsdf, si->wo, u_lobe, u_bsdf, &bs) || (bs.flags & TS_BXDF_SPECULAR) || !(bs.pdf > 0))
+        return Ld;
+    ts_rgb f = ts_rgb_scale(bs.f, ts_vec3_absdot(bs.wi, si->ns));
+    if (ts_rgb_is_black(f)) return Ld;
+    ts_ray ray = ts_spawn_ray(si, s->shapes, bs.wi);
+    ts_interaction hit;
+    c->other_rays++;
+    ts_rgb Li = ts_rgb_gray(0);
+    float light_pdf = 0;
+    if (ts_accel_intersect(s->accel, &ray, &hit)) {
+        const ts_shape *sh = &s->shapes[hit.shape];
+        if (light->type == TS_LIGHT_AREA && sh->emissive &&
+            sh->first_light + (sh->type == TS_SHAPE_MESH ? hit.prim : 0) == li) {
+            light_pdf = ts_light_pdf_li_hit(light, s->shapes, si, hit.p);
+            Li = ts_area_light_l(light, &hit, ts_vec3_neg(bs.wi));
+        }
+    } else if (light->type == TS_LIGHT_INFINITE) {
+        light_pdf = ts_light_pdf_li(light, s->shapes, si, bs.wi);
+        Li = ts_light_le(light, &ray);
+    }
+    if (ts_rgb_is_black(Li) || !(light_pdf > 0)) return Ld;
+    float w = power_heuristic(bs.pdf, light_pdf);
+    return ts_rgb_add(Ld, ts_rgb_scale(ts_rgb_mul(f, Li), w / bs.pdf));
+}
+
+/* pbrt's UniformSampleOneLight: one light from the distribution, divided by its pmf. */
+static ts_rgb sample_one_light(const ts_scene *s, const ts_interaction *si, const ts_bsdf *bsdf, ts_sample_stream *st,
+                               ts_counters *c)
+{
+    float u_select = ts_sample_1d(st);
+    ts_vec2 u_light = ts_sample_2d(st);
+    float u_lobe = ts_sample_1d(st);
+    ts_vec2 u_bsdf = ts_sample_2d(st);
+    float pmf;
+    uint32_t li = ts_light_distribution_sample(&s->light_distribution, u_select, &pmf);
+    if (li == TS_NONE || !(pmf > 0)) return ts_rgb_gray(0);
+    return ts_rgb_scale(estimate_direct(s, si, bsdf, li, u_light, u_lobe, u_bsdf, c), 1.0f / pmf);
+}
+
+/* pbrt's UniformSampleAllLights: samples_per_light samples of every light, drawn as arrays
+ * (consecutive sequence indices of one dimension) so that they are stratified together. */
+static ts_rgb sample_all_lights(const ts_scene *s, const ts_interaction *si, const ts_bsdf *bsdf, ts_sample_stream *st,
+                                ts_counters *c)
+{
+    ts_rgb L = ts_rgb_gray(0);
+    uint32_t n = (uint32_t)s->integrator.samples_per_light;
+    ts_sampler sampler = {st->type, st->seed};
+    for (uint32_t li = 0; li < s->n_lights; li++) {
+        uint32_t dim = st->dim;
+        st->dim += 3;
+        ts_rgb Ll = ts_rgb_gray(0);
+        for (uint32_t j = 0; j < n; j++) {
+            uint32_t index = st->index * n + j;
+            ts_vec2 u_light = ts_sampler_value_2d(&sampler, st->px, st->py, index, dim);
+            ts_vec2 u_lobe = ts_sampler_value_2d(&sampler, st->px, st->py, index, dim + 1);
+            ts_vec2 u_bsdf = ts_sampler_value_2d(&sampler, st->px, st->py, index, dim + 2);
+            Ll = ts_rgb_add(Ll, estimate_direct(s, si, bsdf, li, u_light, u_lobe.x, u_bsdf, c));
+        }
+        L = ts_rgb_add(L, ts_rgb_scale(Ll, 1.0f / (float)n));
+    }
+    return L;
+}
+
+/* ---------------------------------------------------------------- path */
+
+/* pbrt-v3's PathIntegrator: emission added at the camera vertex and after specular
+ * bounces (elsewhere next-event estimation counts it), MIS next-event estimation at every
+ * vertex with a non-specular lobe, Russian roulette after rr_depth on β·η-scale. */
+static ts_rgb li_path(const ts_scene *s, ts_ray ray, ts_sample_stream *st, ts_counters *c)
+{
+    ts_rgb L = ts_rgb_gray(0), beta = ts_rgb_gray(1);
+    bool specular_bounce = false;
+    float eta_scale = 1;
+    const int max_depth = s->integrator.max_depth, rr_depth = s->integrator.rr_depth;
+    for (int bounces = 0;; bounces++) {
+        ts_interaction si;
+        bool found = ts_accel_intersect(s->accel, &ray, &si);
+        if (bounces > 0) c->other_rays++;
+        if (bounces == 0 || specular_bounce) {
+            if (found) L = ts_rgb_add(L, ts_rgb_mul(beta, emitted(s, &si, si.wo)));
+            else L = ts_rgb_add(L, ts_rgb_mul(beta, escaped(s, &ray)));
+        }
+        if (!found || bounces >= max_depth) break;
+        ts_bsdf bsdf;
+        ts_material_bsdf(&s->materials[s->shapes[si.shape].material], &si, &bsdf);
+        uint32_t flags = ts_bsdf_flags(&bsdf);
+        if (flags & ~TS_BXDF_SPECULAR & (TS_BXDF_DIFFUSE | TS_BXDF_GLOSSY))
+            L = ts_rgb_add(L, ts_rgb_mul(beta, sample_one_light(s, &si, &bsdf, st, c)));
+        else
+            st->dim += 4; /* keep later dimensions where they would be */
+        float u_lobe = ts_sample_1d(st);
+        ts_vec2 u = ts_sample_2d(st);
+        float u_rr = ts_sample_1d(st);
+        ts_bsdf_sample bs;
+        if (!ts_bsdf_sample_f(&bsdf, si.wo, u_lobe, u, &bs) || !(bs.pdf > 0) || ts_rgb_is_black(bs.f)) break;
+        beta = ts_rgb_mul(beta, ts_rgb_scale(bs.f, ts_vec3_absdot(bs.wi, si.ns) / bs.pdf));
+        specular_bounce = (bs.flags & TS_BXDF_SPECULAR) != 0;
+        /* bs.eta is η(wi side)/η(wo side): entering glass it is 1.5 and the BTDF scaled
+         * radiance by 1/1.5², which this undoes for roulette (pbrt's etaScale). */
+        if (specular_bounce && (bs.flags & TS_BXDF_TRANSMISSION)) eta_scale *= bs.eta * bs.eta;
+        ray = ts_spawn_ray(&si, s->shapes, bs.wi);
+        ts_rgb rr_beta = ts_rgb_scale(beta, eta_scale);
+        float m = ts_rgb_max(rr_beta);
+        if (m < 1 && bounces > rr_depth) {
+            float q = ts_maxf(0.05f, 1 - m);
+            if (u_rr < q) break;
+            beta = ts_rgb_scale(beta, 1.0f / (1 - q));
+        }
+        if (!ts_rgb_is_finite(beta)) break;
+    }
+    return L;
+}
+
+/* ---------------------------------------------------------------- direct */
+
+/* pbrt-v3's DirectLightingIntegrator: emission at the hit, direct light from all lights
+ * or one, and specular reflection/transmission followed up to max_depth. */
+static ts_rgb li_direct(const ts_scene *s, ts_ray ray, ts_sample_stream *st, ts_counters *c, int depth)
+{
+    ts_interaction si;
+    if (depth > 0) c->other_rays++;
+    if (!ts_accel_intersect(s->accel, &ray, &si)) return escaped(s, &ray);
+    ts_rgb L = emitted(s, &si, si.wo);
+    ts_bsdf bsdf;
+    ts_material_bsdf(&s->materials[s->shapes[si.shape].material], &si, &bsdf);
+    uint32_t flags = ts_bsdf_flags(&bsdf);
+    if (s->n_lights > 0 && (flags & (TS_BXDF_DIFFUSE | TS_BXDF_GLOSSY))) {
+        if (s->integrator.strategy == TS_LIGHTS_ALL) L = ts_rgb_add(L, sample_all_lights(s, &si, &bsdf, st, c));
+        else L = ts_rgb_add(L, sample_one_light(s, &si, &bsdf, st, c));
+    }
+    if (depth + 1 < s->integrator.max_depth && (flags & TS_BXDF_SPECULAR)) {
+        float u_lobe = ts_sample_1d(st);
+        ts_vec2 u = ts_sample_2d(st);
+        ts_bsdf_sample bs;
+        if (ts_bsdf_sample_f(&bsdf, si.wo, u_lobe, u, &bs) && (bs.flags & TS_BXDF_SPECULAR) && bs.pdf > 0 &&
+            !ts_rgb_is_black(bs.f)) {
+            float cos = ts_vec3_absdot(bs.wi, si.ns);
+            ts_rgb Li = li_direct(s, ts_spawn_ray(&si, s->shapes, bs.wi), st, c, depth + 1);
+            L = ts_rgb_add(L, ts_rgb_scale(ts_rgb_mul(bs.f, Li), cos / bs.pdf));
+        }
+    }
+    return L;
+}
+
+/* ---------------------------------------------------------------- dispatch */
+
 ts_rgb ts_integrator_li(const ts_scene *s, ts_integrator_type type, const ts_ray *ray, ts_sample_stream *st,
                         ts_counters *c)
 {
@@ -43,8 +242,8 @@ ts_rgb ts_integrator_li(const ts_scene *s, ts_integrator_type type, const ts_ray
     switch (type) {
     case TS_INTEGRATOR_AO: return li_ao(s, ray, st, c);
     case TS_INTEGRATOR_NORMALS: return li_normals(s, ray);
-    case TS_INTEGRATOR_PATH:
-    case TS_INTEGRATOR_DIRECT: break;
+    case TS_INTEGRATOR_PATH: return li_path(s, *ray, st, c);
+    case TS_INTEGRATOR_DIRECT: return li_direct(s, *ray, st, c, 0);
     }
     return ts_rgb_gray(0);
 }

@@ -26,11 +26,11 @@ typedef struct job {
     ts_render_stats *stats;
 } job;
 
-static void render_tile(const ts_render_request *req, const tile *t, ts_counters *c)
+void ts_render_tile(const ts_render_request *req, int x0, int y0, int w, int h, ts_counters *c)
 {
     const ts_scene *s = req->scene;
-    for (int y = t->y; y < t->y + t->h; y++)
-        for (int x = t->x; x < t->x + t->w; x++)
+    for (int y = y0; y < y0 + h; y++)
+        for (int x = x0; x < x0 + w; x++)
             for (uint32_t i = req->sample_begin; i < req->sample_end; i++) {
                 ts_sample_stream st;
                 ts_sampler_begin(&s->sampler, (uint32_t)x, (uint32_t)y, i, &st);
@@ -60,7 +60,7 @@ static void *worker(void *arg)
         int k = atomic_fetch_add(&j->next, 1);
         if (k >= j->n_tiles) break;
         const tile *t = &j->tiles[k];
-        render_tile(req, t, &c);
+        ts_render_tile(req, t->x, t->y, t->w, t->h, &c);
         if (req->on_tile) req->on_tile(req->user, t->x, t->y, t->w, t->h);
     }
     pthread_mutex_lock(&j->lock);

@@ -43,6 +43,13 @@ typedef struct ts_render_stats {
  * only when threads cannot be started. */
 ts_status ts_render(const ts_render_request *req, ts_render_stats *stats, ts_error *err);
 
+/* Renders sample indices [req->sample_begin, req->sample_end) of every pixel of the
+ * rectangle (x0, y0, w, h) (full-image pixels, inside the film's window) into req->film,
+ * adding its counters to *c. The one tile loop: ts_render and the scheduler (scheduler.h)
+ * both use it. Only req's scene, integrator, film and sample range are read. The caller
+ * must be the only writer of those pixels meanwhile. */
+void ts_render_tile(const ts_render_request *req, int x0, int y0, int w, int h, ts_counters *c);
+
 /* Relative RMS error estimate of the film's image: sqrt(mean over pixels of
  * Var[Y] / (Y² + 1e-3)) on luminance Y, from the per-pixel sample variance (see
  * proto/ for the definition). */

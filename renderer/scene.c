@@ -270,11 +270,13 @@ static ts_status parse_integrator(loader *ld, const cJSON *doc)
     int64_t v;
     switch (in->type) {
     case TS_INTEGRATOR_PATH: {
+        /* The path loop is iterative, so depth costs no stack; `direct` recurses on
+         * specular chains and keeps a lower cap. */
         v = in->max_depth;
-        TRY(ts_json_int(it, "integrator", "max_depth", false, 0, 1000, &v, ld->err));
+        TRY(ts_json_int(it, "integrator", "max_depth", false, 0, 65535, &v, ld->err));
         in->max_depth = (int)v;
         v = in->rr_depth;
-        TRY(ts_json_int(it, "integrator", "rr_depth", false, 0, 1000, &v, ld->err));
+        TRY(ts_json_int(it, "integrator", "rr_depth", false, 0, 65535, &v, ld->err));
         in->rr_depth = (int)v;
         static const char *const sel[] = {"uniform", "power", NULL};
         int k = 1;

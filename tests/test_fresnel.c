@@ -31,10 +31,12 @@ static void test_dielectric(void **state)
         assert_true(f >= prev - 1e-6f && f >= 0 && f <= 1);
         prev = f;
     }
-    /* Reciprocity of the interface: F(θi) from outside = F(θt) from inside (Stokes). */
+    /* Reciprocity of the interface: F(θi) from outside = F(θt) from inside (Stokes).
+     * Float: cosθt is recomputed from a rounded sine, and dF/dcos reaches ~10 near
+     * grazing, so 2e-5. */
     for (float c = 0.05f; c <= 1; c += 0.05f) {
         float s = sqrtf(1 - c * c) / 1.5f, ct = sqrtf(1 - s * s);
-        assert_close(ts_fresnel_dielectric(c, 1, 1.5f), ts_fresnel_dielectric(-ct, 1, 1.5f), 2e-6);
+        assert_close(ts_fresnel_dielectric(c, 1, 1.5f), ts_fresnel_dielectric(-ct, 1, 1.5f), 2e-5);
     }
 }
 
