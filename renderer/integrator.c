@@ -2,6 +2,7 @@
 #include "integrator.h"
 
 #include "bsdf.h"
+#include "effects.h"
 #include "light.h"
 #include "material.h"
 #include "sampling.h"
@@ -157,19 +158,28 @@ static ts_rgb sample_all_lights(const ts_scene *s, const ts_interaction *si, con
 /* pbrt-v3's PathIntegrator: emission added at the camera vertex and after specular
  * bounces (elsewhere next-event estimation counts it), MIS next-event estimation at every
  * vertex with a non-specular lobe, Russian roulette after rr_depth on β·η-scale. */
-static ts_rgb li_path(const ts_scene *s, ts_ray ray, ts_sample_stream *st, ts_counters *c)
+static ts_rgb li_path(const ts_scene *s, uint32_t fx, ts_ray ray, ts_sample_stream *st, ts_counters *c)
 {
     ts_rgb L = ts_rgb_gray(0), beta = ts_rgb_gray(1);
     bool specular_bounce = false;
     float eta_scale = 1;
-    const int max_depth = s->integrator.max_depth, rr_depth = s->integrator.rr_depth;
+    const int rr_depth = s->integrator.rr_depth;
+    /* Depth cap where further bounces cannot carry light: nothing emits → nothing to see;
+     * nothing scatters → only emission seen directly; no indirect → direct light only. */
+    if (!(fx & TS_EFFECTS_LIGHTS)) return L;
+    int max_depth = s->integrator.max_depth;
+    if (!(fx & TS_EFFECTS_SCATTERING)) max_depth = 0;
+    else if (!(fx & TS_EFFECT_INDIRECT) && max_depth > 1) max_depth = 1;
     for (int bounces = 0;; bounces++) {
         ts_interaction si;
         bool found = ts_accel_intersect(s->accel, &ray, &si);
         if (bounces > 0) c->other_rays++;
         if (bounces == 0 || specular_bounce) {
-            if (found) L = ts_rgb_add(L, ts_rgb_mul(beta, emitted(s, &si, si.wo)));
-            else L = ts_rgb_add(L, ts_rgb_mul(beta, escaped(s, &ray)));
+            if (found) {
+                if (fx & TS_EFFECT_AREA_LIGHTS) L = ts_rgb_add(L, ts_rgb_mul(beta, emitted(s, &si, si.wo)));
+            } else if (fx & TS_EFFECT_ENVIRONMENT) {
+                L = ts_rgb_add(L, ts_rgb_mul(beta, escaped(s, &ray)));
+            }
         }
         if (!found || bounces >= max_depth) break;
         ts_bsdf bsdf;
@@ -188,7 +198,8 @@ static ts_rgb li_path(const ts_scene *s, ts_ray ray, ts_sample_stream *st, ts_co
         specular_bounce = (bs.flags & TS_BXDF_SPECULAR) != 0;
         /* bs.eta is η(wi side)/η(wo side): entering glass it is 1.5 and the BTDF scaled
          * radiance by 1/1.5², which this undoes for roulette (pbrt's etaScale). */
-        if (specular_bounce && (bs.flags & TS_BXDF_TRANSMISSION)) eta_scale *= bs.eta * bs.eta;
+        if ((fx & TS_EFFECT_SPECULAR_TRANSMISSION) && specular_bounce && (bs.flags & TS_BXDF_TRANSMISSION))
+            eta_scale *= bs.eta * bs.eta;
         ray = ts_spawn_ray(&si, s->shapes, bs.wi);
         ts_rgb rr_beta = ts_rgb_scale(beta, eta_scale);
         float m = ts_rgb_max(rr_beta);
@@ -206,12 +217,15 @@ static ts_rgb li_path(const ts_scene *s, ts_ray ray, ts_sample_stream *st, ts_co
 
 /* pbrt-v3's DirectLightingIntegrator: emission at the hit, direct light from all lights
  * or one, and specular reflection/transmission followed up to max_depth. */
-static ts_rgb li_direct(const ts_scene *s, ts_ray ray, ts_sample_stream *st, ts_counters *c, int depth)
+static ts_rgb li_direct(const ts_scene *s, uint32_t fx, ts_ray ray, ts_sample_stream *st, ts_counters *c, int depth)
 {
     ts_interaction si;
+    if (!(fx & TS_EFFECTS_LIGHTS)) return ts_rgb_gray(0); /* nothing emits: nothing to see */
     if (depth > 0) c->other_rays++;
-    if (!ts_accel_intersect(s->accel, &ray, &si)) return escaped(s, &ray);
-    ts_rgb L = emitted(s, &si, si.wo);
+    if (!ts_accel_intersect(s->accel, &ray, &si))
+        return (fx & TS_EFFECT_ENVIRONMENT) ? escaped(s, &ray) : ts_rgb_gray(0);
+    ts_rgb L = (fx & TS_EFFECT_AREA_LIGHTS) ? emitted(s, &si, si.wo) : ts_rgb_gray(0);
+    if (!(fx & TS_EFFECTS_SCATTERING)) return L;
     ts_bsdf bsdf;
     ts_material_bsdf(&s->materials[s->shapes[si.shape].material], &si, &bsdf);
     uint32_t flags = ts_bsdf_flags(&bsdf);
@@ -219,14 +233,14 @@ static ts_rgb li_direct(const ts_scene *s, ts_ray ray, ts_sample_stream *st, ts_
         if (s->integrator.strategy == TS_LIGHTS_ALL) L = ts_rgb_add(L, sample_all_lights(s, &si, &bsdf, st, c));
         else L = ts_rgb_add(L, sample_one_light(s, &si, &bsdf, st, c));
     }
-    if (depth + 1 < s->integrator.max_depth && (flags & TS_BXDF_SPECULAR)) {
+    if ((fx & TS_EFFECT_INDIRECT) && depth + 1 < s->integrator.max_depth && (flags & TS_BXDF_SPECULAR)) {
         float u_lobe = ts_sample_1d(st);
         ts_vec2 u = ts_sample_2d(st);
         ts_bsdf_sample bs;
         if (ts_bsdf_sample_f(&bsdf, si.wo, u_lobe, u, &bs) && (bs.flags & TS_BXDF_SPECULAR) && bs.pdf > 0 &&
             !ts_rgb_is_black(bs.f)) {
             float cos = ts_vec3_absdot(bs.wi, si.ns);
-            ts_rgb Li = li_direct(s, ts_spawn_ray(&si, s->shapes, bs.wi), st, c, depth + 1);
+            ts_rgb Li = li_direct(s, fx, ts_spawn_ray(&si, s->shapes, bs.wi), st, c, depth + 1);
             L = ts_rgb_add(L, ts_rgb_scale(ts_rgb_mul(bs.f, Li), cos / bs.pdf));
         }
     }
@@ -235,15 +249,15 @@ static ts_rgb li_direct(const ts_scene *s, ts_ray ray, ts_sample_stream *st, ts_
 
 /* ---------------------------------------------------------------- dispatch */
 
-ts_rgb ts_integrator_li(const ts_scene *s, ts_integrator_type type, const ts_ray *ray, ts_sample_stream *st,
-                        ts_counters *c)
+ts_rgb ts_integrator_li(const ts_scene *s, ts_integrator_type type, uint32_t fx, const ts_ray *ray,
+                        ts_sample_stream *st, ts_counters *c)
 {
     c->camera_rays++;
     switch (type) {
     case TS_INTEGRATOR_AO: return li_ao(s, ray, st, c);
     case TS_INTEGRATOR_NORMALS: return li_normals(s, ray);
-    case TS_INTEGRATOR_PATH: return li_path(s, *ray, st, c);
-    case TS_INTEGRATOR_DIRECT: return li_direct(s, *ray, st, c, 0);
+    case TS_INTEGRATOR_PATH: return li_path(s, fx, *ray, st, c);
+    case TS_INTEGRATOR_DIRECT: return li_direct(s, fx, *ray, st, c, 0);
     }
     return ts_rgb_gray(0);
 }

@@ -24,8 +24,9 @@ typedef struct ts_counters {
 /* True when the integrator type is implemented in this build. */
 bool ts_integrator_available(ts_integrator_type type);
 
-/* Radiance arriving along ray (from the camera). */
-ts_rgb ts_integrator_li(const ts_scene *s, ts_integrator_type type, const ts_ray *ray, ts_sample_stream *st,
-                        ts_counters *c);
+/* Radiance arriving along ray (from the camera), simulating the effects in `effects`
+ * (effects.h: the scene's own set, or all of them; never more than the scene has). */
+ts_rgb ts_integrator_li(const ts_scene *s, ts_integrator_type type, uint32_t effects, const ts_ray *ray,
+                        ts_sample_stream *st, ts_counters *c);
 
 #endif

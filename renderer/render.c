@@ -7,6 +7,7 @@
 #include <time.h>
 
 #include "camera.h"
+#include "effects.h"
 
 double ts_now_seconds(void)
 {
@@ -29,6 +30,9 @@ typedef struct job {
 void ts_render_tile(const ts_render_request *req, int x0, int y0, int w, int h, ts_counters *c)
 {
     const ts_scene *s = req->scene;
+    uint32_t fx = req->generic ? TS_EFFECTS_ALL & ~s->job.effects_off : s->effects;
+    ts_camera cam = s->camera;
+    if (!(fx & TS_EFFECT_DEPTH_OF_FIELD)) cam.lens_radius = 0; /* the lens sample is still drawn */
     for (int y = y0; y < y0 + h; y++)
         for (int x = x0; x < x0 + w; x++)
             for (uint32_t i = req->sample_begin; i < req->sample_end; i++) {
@@ -39,8 +43,8 @@ void ts_render_tile(const ts_render_request *req, int x0, int y0, int w, int h, 
                 float weight;
                 ts_vec2 off = ts_filter_sample(&s->filter, u_film, &weight);
                 ts_vec2 p_raster = {(float)x + 0.5f + off.x, (float)y + 0.5f + off.y};
-                ts_ray ray = ts_camera_ray(&s->camera, p_raster, u_lens);
-                ts_rgb L = ts_integrator_li(s, req->integrator, &ray, &st, c);
+                ts_ray ray = ts_camera_ray(&cam, p_raster, u_lens);
+                ts_rgb L = ts_integrator_li(s, req->integrator, fx, &ray, &st, c);
                 c->samples++;
                 if (!ts_rgb_is_finite(L) || L.r < 0 || L.g < 0 || L.b < 0) {
                     c->nonfinite++;

@@ -31,6 +31,9 @@ typedef struct ts_render_request {
      * pixels); must be thread-safe and quick. */
     void (*on_tile)(void *user, int x, int y, int w, int h);
     void *user;
+    /* true: simulate every effect whatever the scene calls for (the specialisation off;
+     * same estimate, for tests and benchmarks). Job switches (job.effects) still apply. */
+    bool generic;
 } ts_render_request;
 
 typedef struct ts_render_stats {

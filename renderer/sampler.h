@@ -40,6 +40,7 @@ typedef struct ts_sampler {
 typedef struct ts_sample_stream {
     ts_sampler_type type;
     uint32_t seed, px, py, index, dim; /* dim = next dimension to be drawn */
+    uint32_t hash; /* set by ts_sampler_begin: hash of what all dimensions share */
 } ts_sample_stream;
 
 /* Starts sample `index` of pixel (px, py) at dimension 0. */

@@ -14,11 +14,13 @@
 
 #include <cjson/cJSON.h>
 
+#include "effects.h"
 #include "envmap.h"
 #include "fourier_bsdf.h"
 #include "json_check.h"
 #include "mesh_file.h"
 #include "scene_path.h"
+#include "scene_digest.h"
 
 extern const char ts_builtin_cornell_box[];
 extern const size_t ts_builtin_cornell_box_size;
@@ -314,8 +316,30 @@ static ts_status parse_job(loader *ld, const cJSON *doc)
     const cJSON *job;
     TRY(ts_json_object(doc, "", "job", false, &job, ld->err));
     if (!job) return TS_OK;
-    static const char *const keys[] = {"name", "priority", "spp", "time_limit_s", "target_error", NULL};
+    static const char *const keys[] = {"name", "priority", "spp", "time_limit_s", "target_error", "effects", NULL};
     TRY(ts_json_check_object(job, "job", keys, ld->err));
+    const cJSON *fx;
+    TRY(ts_json_object(job, "job", "effects", false, &fx, ld->err));
+    for (const cJSON *e = fx ? fx->child : NULL; e; e = e->next) {
+        ts_jpath p = ts_jpath_key("job.effects", e->string);
+        uint32_t bit = ts_effect_from_key(e->string);
+        if (!bit) {
+            char keys_text[400];
+            ts_effects_format(TS_EFFECTS_ALL, keys_text, sizeof keys_text);
+            return ts_error_set(ld->err, TS_ERR_INVALID, "%s: unknown effect (effects are: %s)", p.s, keys_text);
+        }
+        if (!cJSON_IsBool(e)) {
+            char d[64];
+            ts_json_describe(e, d, sizeof d);
+            return ts_error_set(ld->err, TS_ERR_INVALID, "%s: expected true or false, got %s", p.s, d);
+        }
+        /* Switching a light type or a lobe off consistently would need the light
+         * distribution and materials rebuilt; these two are switched off exactly. */
+        if (cJSON_IsFalse(e) && bit != TS_EFFECT_INDIRECT && bit != TS_EFFECT_DEPTH_OF_FIELD)
+            return ts_error_set(ld->err, TS_ERR_INVALID,
+                                "%s: only 'indirect' and 'depth_of_field' can be switched off", p.s);
+        if (cJSON_IsFalse(e)) j->effects_off |= bit;
+    }
     const char *name = NULL;
     TRY(ts_json_string(job, "job", "name", false, &name, ld->err));
     if (name && !(j->name = ts_arena_strdup(&ld->s->arena, name))) return nomem(ld, "job.name");
@@ -878,6 +902,7 @@ static ts_status build(loader *ld)
     if (!s->infinite_lights) return nomem(ld, "lights");
     for (uint32_t i = 0; i < s->n_lights; i++)
         if (s->lights[i].type == TS_LIGHT_INFINITE) s->infinite_lights[s->n_infinite_lights++] = i;
+    s->effects = ts_effects_analyse(s) & ~s->job.effects_off;
     return TS_OK;
 }
 
@@ -908,6 +933,8 @@ ts_status ts_scene_load_text(const char *text, size_t len, const char *base_dir,
         goto fail;
     }
     st = parse_document(&ld, doc);
+    if (st) goto fail;
+    st = ts_scene_digest(doc, s->digest, err);
     if (st) goto fail;
     if (!s->name && !(s->name = ts_arena_strdup(&s->arena, name ? name : "untitled"))) {
         st = nomem(&ld, "the scene");

@@ -61,6 +61,7 @@ typedef struct ts_integrator_desc {
 /* The optional top-level "job" object: halt conditions and bookkeeping. */
 typedef struct ts_job_desc {
     const char *name;     /* or NULL */
+    uint32_t effects_off; /* effects switched off on purpose (job.effects), effects.h bits */
     int priority;         /* higher first; default 0 */
     uint32_t spp;         /* 0 = the sampler's spp */
     double time_limit_s;  /* 0 = none */
@@ -71,6 +72,7 @@ typedef struct ts_scene {
     ts_arena arena;
     const char *name;      /* scene name: the document's "name", else the file name */
     const char *base_dir;  /* folder that relative file paths resolve against, or NULL */
+    char digest[65];       /* SHA-256 (hex) of the canonical document, set at load (scene_digest.h) */
 
     ts_camera camera;
     int width, height;                         /* full film */
@@ -92,6 +94,9 @@ typedef struct ts_scene {
 
     ts_accel *accel;
     ts_bounds3 bounds;
+    /* What the scene calls for (effects.h), less what the job switched off; the
+     * integrators simulate only these. */
+    uint32_t effects;
     /* Light selection for next-event estimation: integrator.light_sampling for `path`,
      * power for `direct`. */
     ts_light_distribution light_distribution;

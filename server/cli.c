@@ -17,6 +17,7 @@
 #include <strings.h>
 #include <unistd.h>
 
+#include "effects.h"
 #include "exr.h"
 #include "film.h"
 #include "film_image.h"
@@ -224,6 +225,13 @@ static int cmd_render(int argc, char **argv)
         fprintf(stderr, "tessera: note: the '%s' integrator is not implemented yet; rendering the 'ao' debugging view\n",
                 integrator_name(integ));
         integ = TS_INTEGRATOR_AO;
+    }
+
+    if (!quiet) {
+        char on[400], off[400];
+        ts_effects_format(scene->effects, on, sizeof on);
+        ts_effects_format(TS_EFFECTS_ALL & ~scene->effects, off, sizeof off);
+        fprintf(stderr, "tessera: effects simulated: %s; skipped: %s\n", on, off);
     }
 
     ts_film *film = ts_film_create(scene->width, scene->height, scene->crop_x0, scene->crop_y0,

@@ -9,7 +9,6 @@
 
 #define KEEP_PER_CELL 8      /* samples kept per cell to guide refinement */
 #define NEAR_MAX (9 * KEEP_PER_CELL) /* a cell's and its 8 neighbours' */
-#define MAX_DEPTH 64         /* binary splits below a cell half */
 #define ZERO_EXPECTED 1e-8   /* a cell this empty should never see a sample */
 #define NOISE_FRACTION 0.03  /* quadrature error target: 0.03 √E counts per cell ... */
 #define MAX_COUNT_ERROR 1e-3 /* ... and at most 0.001 counts */
@@ -40,6 +39,8 @@ typedef struct quad {
     uint64_t cell_evals;
     uint64_t budget;    /* per cell */
     bool over_budget;
+    struct rect *heap;  /* scratch for the adaptive quadrature */
+    int heap_cap;
     bool bad_value;     /* a negative or non-finite pdf was seen */
     ts_vec3 bad_w;
     double bad_pdf;
@@ -145,62 +146,121 @@ static int near_points(double z0, double z1, double p0, double p1, const kept_po
     return m;
 }
 
-/* Integral over the rectangle, whose one-rule estimate is `whole`. pts[0..n) are the kept
- * samples near it; *err accumulates the error estimates of the accepted pieces. */
-static double refine(quad *q, double z0, double z1, double p0, double p1, double whole, double tol,
-                     const kept_point *const *pts, int n, int depth, double *err)
+/* One rectangle of the adaptive quadrature: its estimate, error estimate, and how it
+ * would be split (with the children's one-rule estimates already computed). */
+typedef struct rect {
+    double z0, z1, p0, p1;
+    double whole;       /* one-rule estimate (from the parent's split) */
+    double best, err;   /* refined estimate and its error estimate */
+    double child[2];    /* one-rule estimates of the two halves along the chosen axis */
+    bool split_z;
+    bool unresolved;    /* a kept sample nearby has a pdf the nodes never approached */
+} rect;
+
+static void evaluate_rect(quad *q, rect *r, const kept_point *const *pts, int n)
 {
+    double z0 = r->z0, z1 = r->z1, p0 = r->p0, p1 = r->p1;
     double zm = 0.5 * (z0 + z1), pm = 0.5 * (p0 + p1);
     double maxv = 0;
     double za = gl_rect(q, z0, zm, p0, p1, &maxv), zb = gl_rect(q, zm, z1, p0, p1, &maxv);
     double pa = gl_rect(q, z0, z1, p0, pm, &maxv), pb = gl_rect(q, z0, z1, pm, p1, &maxv);
     double var_z, var_p;
     double lob = lobatto_rect(q, z0, z1, p0, p1, &maxv, &var_z, &var_p);
-    double ez = fabs(za + zb - whole), ep = fabs(pa + pb - whole), el = fabs(lob - whole);
-    double best = 0.5 * (za + zb + pa + pb);
-    double e = fmax(el, fmax(ez, ep));
-
-    /* Unresolved: a sample nearby has a pdf the nodes never came close to. */
-    bool unresolved = false;
-    for (int i = 0; i < n; i++)
-        if (pts[i]->pdf > 2.0 * maxv) unresolved = true;
-
-    bool converged = !unresolved && e <= tol;
-    if (converged) {
-        *err += e;
-        return best;
-    }
-    if (depth >= MAX_DEPTH || q->cell_evals >= q->budget || (z1 - z0) < 1e-15 || (p1 - p0) < 1e-15) {
-        /* Cannot refine further: accept, report, and let the error estimate widen the
-         * bin's variance. */
-        *err += e;
-        return best;
-    }
-    bool split_z;
-    if (fmax(ez, ep) > tol && fmax(ez, ep) >= el && fabs(ez - ep) > 1e-3 * fmax(ez, ep))
-        split_z = ez > ep; /* the halves say where the variation is */
-    else if (el > tol && fabs(var_z - var_p) > 1e-3 * fmax(var_z, var_p))
-        split_z = var_z > var_p; /* a step near an edge: split across it */
-    else
-        split_z = split_z_by_geometry(z0, z1, p0, p1);
-
+    double ez = fabs(za + zb - r->whole), ep = fabs(pa + pb - r->whole), el = fabs(lob - r->whole);
+    r->best = 0.5 * (za + zb + pa + pb);
+    r->err = fmax(el, fmax(ez, ep));
     const kept_point *near[NEAR_MAX] = {0};
-    double ctol = tol * 0.70710678118654752440; /* tol ∝ √area: see the design note */
-    double sum = 0;
-    for (int k = 0; k < 2; k++) {
-        double cz0 = z0, cz1 = z1, cp0 = p0, cp1 = p1, cw;
-        if (split_z) {
-            if (k == 0) cz1 = zm;
-            else cz0 = zm;
-            cw = k == 0 ? za : zb;
-        } else {
-            if (k == 0) cp1 = pm;
-            else cp0 = pm;
-            cw = k == 0 ? pa : pb;
-        }
-        int m = near_points(cz0, cz1, cp0, cp1, pts, n, near);
-        sum += refine(q, cz0, cz1, cp0, cp1, cw, ctol, near, m, depth + 1, err);
+    int m = near_points(z0, z1, p0, p1, pts, n, near);
+    r->unresolved = false;
+    for (int i = 0; i < m; i++)
+        if (near[i]->pdf > 2.0 * maxv) r->unresolved = true;
+    if ((z1 - z0) < 1e-13 || (p1 - p0) < 1e-13) r->unresolved = false; /* cannot resolve further */
+    if (fmax(ez, ep) >= el && fabs(ez - ep) > 1e-3 * fmax(ez, ep))
+        r->split_z = ez > ep; /* the halves say where the variation is */
+    else if (el > 0 && fabs(var_z - var_p) > 1e-3 * fmax(var_z, var_p))
+        r->split_z = var_z > var_p; /* a step near an edge: split across it */
+    else
+        r->split_z = split_z_by_geometry(z0, z1, p0, p1);
+    r->child[0] = r->split_z ? za : pa;
+    r->child[1] = r->split_z ? zb : pb;
+}
+
+static double priority(const rect *r) { return r->unresolved ? INFINITY : r->err; }
+
+static void heap_push(rect *h, int *n, rect r)
+{
+    int i = (*n)++;
+    h[i] = r;
+    while (i > 0) {
+        int parent = (i - 1) / 2;
+        if (priority(&h[parent]) >= priority(&h[i])) break;
+        rect t = h[parent];
+        h[parent] = h[i];
+        h[i] = t;
+        i = parent;
     }
+}
+
+static rect heap_pop(rect *h, int *n)
+{
+    rect top = h[0];
+    h[0] = h[--(*n)];
+    int i = 0;
+    for (;;) {
+        int l = 2 * i + 1, r = l + 1, m = i;
+        if (l < *n && priority(&h[l]) > priority(&h[m])) m = l;
+        if (r < *n && priority(&h[r]) > priority(&h[m])) m = r;
+        if (m == i) break;
+        rect t = h[m];
+        h[m] = h[i];
+        h[i] = t;
+        i = m;
+    }
+    return top;
+}
+
+/* Globally adaptive integration of one rectangle: always split the piece with the
+ * largest error (or an unresolved peak) until the summed error estimate is below tol or
+ * the budget is spent — so running out of budget degrades gracefully. */
+static double adaptive(quad *q, double z0, double z1, double p0, double p1, double tol, const kept_point *const *pts,
+                       int n, double *err_out)
+{
+    int cap = (int)(q->budget / 89) + 2;
+    if (cap > q->heap_cap) cap = q->heap_cap;
+    rect *h = q->heap;
+    int nh = 0;
+    double maxv = 0;
+    rect root = {z0, z1, p0, p1, gl_rect(q, z0, z1, p0, p1, &maxv), 0, 0, {0, 0}, false, false};
+    evaluate_rect(q, &root, pts, n);
+    heap_push(h, &nh, root);
+    double total_err = root.err;
+    while (nh > 0 && nh + 1 < cap) {
+        if (!h[0].unresolved && total_err <= tol) break;
+        rect r = heap_pop(h, &nh);
+        total_err -= r.err;
+        double zm = 0.5 * (r.z0 + r.z1), pm = 0.5 * (r.p0 + r.p1);
+        for (int k = 0; k < 2; k++) {
+            rect c = r;
+            if (r.split_z) {
+                if (k == 0) c.z1 = zm;
+                else c.z0 = zm;
+            } else {
+                if (k == 0) c.p1 = pm;
+                else c.p0 = pm;
+            }
+            c.whole = r.child[k];
+            evaluate_rect(q, &c, pts, n);
+            total_err += c.err;
+            heap_push(h, &nh, c);
+        }
+    }
+    double sum = 0, e = 0;
+    for (int i = 0; i < nh; i++) {
+        sum += h[i].best;
+        e += h[i].err;
+    }
+    *err_out = e;
+    if (e > 10 * tol) q->over_budget = true; /* did not converge: reported */
     return sum;
 }
 
@@ -216,27 +276,20 @@ static double integrate_cell(quad *q, double z0, double z1, double p0, double p1
         bounds[1] = 0;
         parts = 2;
     }
-    q->cell_evals = 0;
     q->over_budget = false;
     double total = 0;
     for (int k = 0; k < parts; k++) {
         double a = bounds[k], b = bounds[k + 1];
-        const kept_point *near[NEAR_MAX] = {0};
-        int m = near_points(a, b, p0, p1, pts, n, near);
-        double maxv = 0;
-        double whole = gl_rect(q, a, b, p0, p1, &maxv);
-        double tol = abs_tol;
+        double tol = abs_tol / parts;
         if (n_samples > 0) {
             /* Target |ΔE| ≤ min(0.03 √E, 0.001) counts: negligible in the cell's term
              * and, summed over all cells, in the no-direction bin's. */
-            double e = fmax(whole * n_samples, 1.0);
+            double maxv = 0;
+            double e = fmax(gl_rect(q, a, b, p0, p1, &maxv) * n_samples, 1.0);
             tol = fmin(NOISE_FRACTION * sqrt(e), MAX_COUNT_ERROR) / n_samples / parts;
         }
         double e = 0;
-        total += refine(q, a, b, p0, p1, whole, tol, near, m, 0, &e);
-        /* Unconverged: the error estimate ended far above the target (budget or depth
-         * exhausted, typically along a curved discontinuity). */
-        if (e > 10 * tol) q->over_budget = true;
+        total += adaptive(q, a, b, p0, p1, tol, pts, n, &e);
         *err += e;
     }
     return total;
@@ -245,6 +298,9 @@ static double integrate_cell(quad *q, double z0, double z1, double p0, double p1
 double ts_chi2_integrate(ts_chi2_pdf_fn pdf, void *ctx, int cos_theta_res, int phi_res, double abs_tol)
 {
     quad q = {.pdf = pdf, .ctx = ctx, .budget = 4000000};
+    q.heap_cap = (int)(q.budget / 89) + 2;
+    q.heap = malloc(sizeof(rect) * (size_t)q.heap_cap);
+    if (!q.heap) return NAN;
     double cells = (double)cos_theta_res * phi_res;
     double total = 0;
     for (int i = 0; i < cos_theta_res; i++) {
@@ -256,6 +312,7 @@ double ts_chi2_integrate(ts_chi2_pdf_fn pdf, void *ctx, int cos_theta_res, int p
             total += integrate_cell(&q, z0, z1, p0, p1, NULL, 0, 0, abs_tol / cells, &err);
         }
     }
+    free(q.heap);
     return total;
 }
 
@@ -399,6 +456,12 @@ bool ts_chi2_test(const ts_chi2_params *p, ts_chi2_sample_fn sample, ts_chi2_pdf
     /* 2. Expected counts. */
     double n = (double)p->sample_count;
     quad q = {.pdf = pdf, .ctx = ctx, .budget = (uint64_t)p->max_node_evals};
+    q.heap_cap = (int)(q.budget / 89) + 2;
+    q.heap = malloc(sizeof(rect) * (size_t)q.heap_cap);
+    if (!q.heap) {
+        snprintf(r->message, sizeof r->message, "out of memory");
+        goto fail;
+    }
     double total = 0, total_err = 0;
     for (int i = 0; i < nz; i++) {
         double z0 = -1.0 + 2.0 * i / nz, z1 = i == nz - 1 ? 1.0 : -1.0 + 2.0 * (i + 1) / nz;
@@ -440,6 +503,7 @@ bool ts_chi2_test(const ts_chi2_params *p, ts_chi2_sample_fn sample, ts_chi2_pdf
         }
     }
     r->pdf_evals = q.evals;
+    free(q.heap);
     r->pdf_integral = total;
     if (q.bad_value) {
         snprintf(r->message, sizeof r->message, "pdf(%g, %g, %g) = %g: negative or not finite", q.bad_w.x,
