@@ -17,7 +17,11 @@
  * Embree errors during the build are caught by the device error callback into the
  * accel's (build-time only) message and returned as a ts_error sentence. Queries are
  * thread-safe (the scene is immutable after rtcCommitScene, the context lives on the
- * caller's stack) and allocate nothing. */
+ * caller's stack) and allocate nothing.
+ *
+ * Benchmarks may attach a ray log (accel.h): the one field set after the build, only
+ * between renders. When it is NULL a query tests it and goes on (the logging itself is a
+ * separate cold function). */
 #include "accel.h"
 
 #include <embree3/rtcore.h>
@@ -32,6 +36,7 @@ struct ts_accel {
     const ts_shape *shapes; /* caller-owned, outlives the accel */
     uint32_t n_shapes;
     ts_bounds3 bounds;
+    ts_ray_log *log; /* NULL, or set by ts_accel_set_ray_log while no query runs */
     /* Written only by the Embree error callback while the creating thread builds; never
      * touched once ts_accel_create has returned. */
     char build_error[256];
@@ -240,6 +245,16 @@ void ts_accel_destroy(ts_accel *a)
 
 /* ---- queries ---- */
 
+void ts_accel_set_ray_log(ts_accel *a, ts_ray_log *log) { a->log = log; }
+
+__attribute__((noinline, cold)) static void log_ray(ts_ray_log *log, const ts_ray *ray, uint8_t kind)
+{
+    size_t i = atomic_fetch_add_explicit(&log->n, 1, memory_order_relaxed);
+    if (i >= log->capacity) return;
+    log->rays[i] = *ray;
+    log->kinds[i] = kind;
+}
+
 static void ray_to_rtc(const ts_ray *ray, struct RTCRay *r)
 {
     r->org_x = ray->o.x, r->org_y = ray->o.y, r->org_z = ray->o.z;
@@ -255,6 +270,7 @@ static void ray_to_rtc(const ts_ray *ray, struct RTCRay *r)
 bool ts_accel_intersect(const ts_accel *a, const ts_ray *ray, ts_interaction *si)
 {
     if (!(ray->tmax > 0)) return false;
+    if (__builtin_expect(a->log != NULL, 0)) log_ray(a->log, ray, TS_RAY_LOG_INTERSECT);
     query_ctx q;
     rtcInitIntersectContext(&q.rtc);
     q.ray = ray;
@@ -273,6 +289,7 @@ bool ts_accel_intersect(const ts_accel *a, const ts_ray *ray, ts_interaction *si
 bool ts_accel_occluded(const ts_accel *a, const ts_ray *ray)
 {
     if (!(ray->tmax > 0)) return false;
+    if (__builtin_expect(a->log != NULL, 0)) log_ray(a->log, ray, TS_RAY_LOG_OCCLUDED);
     query_ctx q;
     rtcInitIntersectContext(&q.rtc);
     q.ray = ray;

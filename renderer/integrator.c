@@ -71,15 +71,17 @@ static ts_rgb estimate_direct(const ts_scene *s, const ts_interaction *si, const
                               ts_vec2 u_light, float u_lobe, ts_vec2 u_bsdf, ts_counters *c)
 {
     const ts_light *light = &s->lights[li];
+    const ts_direct_sampling sampling = s->integrator.sampling;
+    bool delta = light->type == TS_LIGHT_POINT || light->type == TS_LIGHT_SPOT || light->type == TS_LIGHT_DISTANT;
     ts_rgb Ld = ts_rgb_gray(0);
-    ts_light_sample ls;
-    if (ts_light_sample_li(light, s->shapes, si, u_light, &ls)) {
+    ts_light_sample ls = {0};
+    if ((delta || sampling != TS_SAMPLING_BSDF) && ts_light_sample_li(light, s->shapes, si, u_light, &ls)) {
         ts_rgb f = ts_rgb_scale(ts_bsdf_f(bsdf, si->wo, ls.wi), ts_vec3_absdot(ls.wi, si->ns));
         if (!ts_rgb_is_black(f)) {
             ts_ray shadow = ts_spawn_ray_to(si, s->shapes, ls.p_light, ls.p_light_error, ls.n_light);
             c->other_rays++;
             if (!ts_accel_occluded(s->accel, &shadow)) {
-                if (ls.is_delta) Ld = ts_rgb_scale(ts_rgb_mul(f, ls.L), 1.0f / ls.pdf);
+                if (ls.is_delta || sampling == TS_SAMPLING_LIGHT) Ld = ts_rgb_scale(ts_rgb_mul(f, ls.L), 1.0f / ls.pdf);
                 else {
                     float w = power_heuristic(ls.pdf, ts_bsdf_pdf(bsdf, si->wo, ls.wi));
                     Ld = ts_rgb_scale(ts_rgb_mul(f, ls.L), w / ls.pdf);
@@ -87,8 +89,7 @@ static ts_rgb estimate_direct(const ts_scene *s, const ts_interaction *si, const
             }
         }
     }
-    if (ls.is_delta || light->type == TS_LIGHT_POINT || light->type == TS_LIGHT_SPOT || light->type == TS_LIGHT_DISTANT)
-        return Ld;
+    if (delta || sampling == TS_SAMPLING_LIGHT) return Ld;
     ts_bsdf_sample bs;
     if (!ts_bsdf_sample_f(bsdf, si->wo, u_lobe, u_bsdf, &bs) || (bs.flags & TS_BXDF_SPECULAR) || !(bs.pdf > 0))
         return Ld;
@@ -111,7 +112,7 @@ static ts_rgb estimate_direct(const ts_scene *s, const ts_interaction *si, const
         Li = ts_light_le(light, &ray);
     }
     if (ts_rgb_is_black(Li) || !(light_pdf > 0)) return Ld;
-    float w = power_heuristic(bs.pdf, light_pdf);
+    float w = sampling == TS_SAMPLING_BSDF ? 1.0f : power_heuristic(bs.pdf, light_pdf);
     return ts_rgb_add(Ld, ts_rgb_scale(ts_rgb_mul(f, Li), w / bs.pdf));
 }
 

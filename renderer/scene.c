@@ -255,7 +255,14 @@ static ts_status parse_sampler(loader *ld, const cJSON *doc)
 static ts_status parse_integrator(loader *ld, const cJSON *doc)
 {
     ts_integrator_desc *in = &ld->s->integrator;
-    *in = (ts_integrator_desc){TS_INTEGRATOR_PATH, 5, 3, TS_LIGHT_SELECT_POWER, TS_LIGHTS_ALL, 1, INFINITY};
+    *in = (ts_integrator_desc){.type = TS_INTEGRATOR_PATH,
+                               .max_depth = 5,
+                               .rr_depth = 3,
+                               .light_sampling = TS_LIGHT_SELECT_POWER,
+                               .strategy = TS_LIGHTS_ALL,
+                               .sampling = TS_SAMPLING_MIS,
+                               .samples_per_light = 1,
+                               .ao_distance = INFINITY};
     const cJSON *it;
     TRY(ts_json_object(doc, "", "integrator", false, &it, ld->err));
     if (!it) return TS_OK;
@@ -263,13 +270,19 @@ static ts_status parse_integrator(loader *ld, const cJSON *doc)
     int type = 0;
     TRY(ts_json_enum(it, "integrator", "type", true, types, &type, ld->err));
     in->type = (ts_integrator_type)type;
-    static const char *const path_keys[] = {"type", "max_depth", "rr_depth", "light_sampling", NULL};
-    static const char *const direct_keys[] = {"type", "strategy", "max_depth", "samples_per_light", NULL};
+    static const char *const path_keys[] = {"type", "max_depth", "rr_depth", "light_sampling", "sampling", NULL};
+    static const char *const direct_keys[] = {"type", "strategy", "max_depth", "samples_per_light", "sampling", NULL};
     static const char *const ao_keys[] = {"type", "max_distance", NULL};
     static const char *const normals_keys[] = {"type", NULL};
     const char *const *keys[] = {path_keys, direct_keys, ao_keys, normals_keys};
     TRY(ts_json_check_object(it, "integrator", keys[type], ld->err));
     int64_t v;
+    if (in->type == TS_INTEGRATOR_PATH || in->type == TS_INTEGRATOR_DIRECT) {
+        static const char *const sampling[] = {"mis", "light", "bsdf", NULL};
+        int k = 0;
+        TRY(ts_json_enum(it, "integrator", "sampling", false, sampling, &k, ld->err));
+        in->sampling = (ts_direct_sampling)k;
+    }
     switch (in->type) {
     case TS_INTEGRATOR_PATH: {
         /* The path loop is iterative, so depth costs no stack; `direct` recurses on

@@ -48,12 +48,17 @@ typedef enum ts_integrator_type {
 
 typedef enum ts_light_strategy { TS_LIGHTS_ALL, TS_LIGHTS_ONE } ts_light_strategy;
 typedef enum ts_light_selection { TS_LIGHT_SELECT_UNIFORM, TS_LIGHT_SELECT_POWER } ts_light_selection;
+/* How direct light is estimated at a vertex: both strategies combined by the power
+ * heuristic, light sampling only, or BSDF sampling only (delta lights are always light
+ * sampled: no BSDF sample can hit them). The last two exist to compare strategies. */
+typedef enum ts_direct_sampling { TS_SAMPLING_MIS, TS_SAMPLING_LIGHT, TS_SAMPLING_BSDF } ts_direct_sampling;
 
 typedef struct ts_integrator_desc {
     ts_integrator_type type;
     int max_depth, rr_depth;            /* path; direct: max_depth of specular recursion */
     ts_light_selection light_sampling;  /* path */
     ts_light_strategy strategy;         /* direct */
+    ts_direct_sampling sampling;        /* path, direct */
     int samples_per_light;              /* direct, all */
     float ao_distance;                  /* ao: occluders farther than this are ignored (inf = any) */
 } ts_integrator_desc;

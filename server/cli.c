@@ -10,6 +10,7 @@
 #include <getopt.h>
 #include <limits.h>
 #include <pthread.h>
+#include <signal.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -22,9 +23,11 @@
 #include "film.h"
 #include "film_image.h"
 #include "image.h"
+#include "merge.h"
 #include "png_encode.h"
 #include "render.h"
 #include "scene.h"
+#include "shard.h"
 
 #define MAX_OUTPUTS 8
 
@@ -33,7 +36,8 @@ static void usage(FILE *f)
     fprintf(f, "usage:\n"
                "  tessera render [SCENE] [-o OUT.exr] [-o OUT.png] [--spp N] [--threads N] [--seed N]\n"
                "                 [--time-limit SECONDS] [--target-error E] [--quiet]\n"
-               "  tessera merge  SHARD.exr... [-o OUT.exr] [-o OUT.png]\n"
+               "                 [--shard I/N|auto [--shard-count N]] [--checkpoint FILE [--checkpoint-interval S]]\n"
+               "  tessera merge  SHARD.exr... [-o OUT.exr] [-o OUT.png] [--allow-partial]\n"
                "  tessera serve  [--bind 127.0.0.1] [--port 8080] [--threads N] [--data DIR] [--token TOKEN]\n"
                "  tessera --version\n"
                "With no SCENE, `render` renders the built-in Cornell box.\n");
@@ -143,22 +147,72 @@ static const char *integrator_name(ts_integrator_type t)
     return "?";
 }
 
+/* ---------------------------------------------------------------- farm shards
+
+ * With --checkpoint, SIGTERM and SIGINT stop the render between tiles and the last
+ * complete pass is saved before exiting (DESIGN.md §7). A signal handler can reach only
+ * process-wide state, so these two atomics are the one exception to "no global mutable
+ * state": written by the handler, read by the render loop and the workers. */
+static atomic_bool g_cancel;
+static volatile sig_atomic_t g_signal;
+
+static void on_stop_signal(int sig)
+{
+    g_signal = sig;
+    atomic_store(&g_cancel, true);
+}
+
+static void catch_stop_signals(void)
+{
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_stop_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGTERM, &sa, NULL);
+    sigaction(SIGINT, &sa, NULL);
+}
+
+/* The shard's outputs: .exr in the mergeable SHARD layout, .png as the colour view. */
+static ts_status write_shard_outputs(const ts_film *film, const ts_shard_info *info, char **outputs, int n_outputs,
+                                     ts_error *err)
+{
+    ts_status st = TS_OK;
+    for (int i = 0; !st && i < n_outputs; i++) {
+        if (strcasecmp(extension(outputs[i]), "exr") == 0) {
+            st = ts_shard_write(outputs[i], film, info, err);
+        } else {
+            ts_image img;
+            st = ts_film_to_image(film, TS_FILM_IMAGE_RGB, &img, err);
+            if (!st) st = ts_png_write(outputs[i], &img, 0.0f, err);
+            ts_image_fini(&img);
+        }
+    }
+    return st;
+}
+
 /* ---------------------------------------------------------------- render */
 
 static int cmd_render(int argc, char **argv)
 {
-    enum { OPT_SPP = 256, OPT_THREADS, OPT_SEED, OPT_TIME, OPT_TARGET, OPT_QUIET, OPT_HELP };
+    enum { OPT_SPP = 256, OPT_THREADS, OPT_SEED, OPT_TIME, OPT_TARGET, OPT_QUIET, OPT_HELP, OPT_SHARD, OPT_SHARD_COUNT,
+           OPT_CHECKPOINT, OPT_CHECKPOINT_INTERVAL };
     static const struct option opts[] = {
         {"output", required_argument, NULL, 'o'},    {"spp", required_argument, NULL, OPT_SPP},
         {"threads", required_argument, NULL, OPT_THREADS}, {"seed", required_argument, NULL, OPT_SEED},
         {"time-limit", required_argument, NULL, OPT_TIME}, {"target-error", required_argument, NULL, OPT_TARGET},
         {"quiet", no_argument, NULL, OPT_QUIET},     {"help", no_argument, NULL, OPT_HELP},
+        {"shard", required_argument, NULL, OPT_SHARD}, {"shard-count", required_argument, NULL, OPT_SHARD_COUNT},
+        {"checkpoint", required_argument, NULL, OPT_CHECKPOINT},
+        {"checkpoint-interval", required_argument, NULL, OPT_CHECKPOINT_INTERVAL},
         {NULL, 0, NULL, 0}};
     char *outputs[MAX_OUTPUTS];
     int n_outputs = 0;
     unsigned long long spp = 0, threads = 0, seed = 0;
     bool have_seed = false, quiet = false;
     double time_limit = 0, target_error = 0;
+    const char *shard_text = NULL, *checkpoint = NULL;
+    unsigned long long shard_count = 0;
+    double checkpoint_interval = 60;
     optind = 1;
     opterr = 0;
     int c;
@@ -191,6 +245,16 @@ static int cmd_render(int argc, char **argv)
             break;
         case OPT_QUIET: quiet = true; break;
         case OPT_HELP: usage(stdout); return 0;
+        case OPT_SHARD: shard_text = optarg; break;
+        case OPT_SHARD_COUNT:
+            if (!parse_uint(optarg, 1000000, &shard_count) || shard_count == 0)
+                return usage_error("--shard-count: expected a whole number from 1 to 1000000, got '%s'", optarg);
+            break;
+        case OPT_CHECKPOINT: checkpoint = optarg; break;
+        case OPT_CHECKPOINT_INTERVAL:
+            if (!parse_positive(optarg, &checkpoint_interval))
+                return usage_error("--checkpoint-interval: expected a positive number of seconds, got '%s'", optarg);
+            break;
         case ':': return usage_error("option '%s' needs a value", argv[optind - 1]);
         default: return usage_error("unknown option '%s'", argv[optind - 1]);
         }
@@ -201,6 +265,23 @@ static int cmd_render(int argc, char **argv)
         const char *ext = extension(outputs[i]);
         if (strcasecmp(ext, "exr") != 0 && strcasecmp(ext, "png") != 0)
             return usage_error("-o %s: the extension must be .exr or .png", outputs[i]);
+    }
+    if (shard_count && !shard_text) return usage_error("%s", "--shard-count goes with --shard auto");
+    if (checkpoint && strcasecmp(extension(checkpoint), "exr") != 0)
+        return usage_error("--checkpoint %s: the checkpoint is an EXR file; give it the .exr extension", checkpoint);
+
+    /* Which shard (DESIGN.md §7): I/N given, or from the scheduler's environment. */
+    uint32_t shard_i = 0, shard_n = 1;
+    char shard_how[256] = "";
+    if (shard_text) {
+        ts_error serr = {0};
+        ts_status sst = strcmp(shard_text, "auto") == 0
+                            ? ts_shard_auto(getenv("JOB_COMPLETION_INDEX"), getenv("SLURM_ARRAY_TASK_ID"),
+                                            getenv("SLURM_ARRAY_TASK_COUNT"), getenv("SLURM_ARRAY_TASK_MIN"),
+                                            (uint32_t)shard_count, &shard_i, &shard_n, shard_how, sizeof shard_how, &serr)
+                            : ts_shard_parse(shard_text, &shard_i, &shard_n, &serr);
+        if (sst) return usage_error("--shard: %s", serr.message);
+        if (!shard_how[0]) snprintf(shard_how, sizeof shard_how, "shard %u/%u", shard_i, shard_n);
     }
 
     ts_error err = {0};
@@ -217,6 +298,13 @@ static int cmd_render(int argc, char **argv)
     uint32_t target_spp = spp ? (uint32_t)spp : (scene->job.spp ? scene->job.spp : scene->spp);
     if (!time_limit) time_limit = scene->job.time_limit_s;
     if (!target_error) target_error = scene->job.target_error;
+    if (shard_n > target_spp) {
+        fprintf(stderr, "tessera: %u shards of a %u-spp render would leave some without samples; use at most %u shards\n",
+                shard_n, target_spp, target_spp);
+        ts_scene_destroy(scene);
+        return 1;
+    }
+    ts_sample_range range = ts_shard_range(shard_i, shard_n, target_spp);
     int n_threads = threads ? (int)threads : (int)sysconf(_SC_NPROCESSORS_ONLN);
     if (n_threads < 1) n_threads = 1;
 
@@ -241,21 +329,60 @@ static int cmd_render(int argc, char **argv)
         ts_scene_destroy(scene);
         return 1;
     }
+    uint32_t span = range.end - range.begin; /* samples per pixel this process must hold */
+    uint32_t done = 0;                        /* of them, [range.begin, range.begin + done) are in the film */
+    ts_shard_info info;
+    if (checkpoint) {
+        ts_shard_info_init(&info, scene, film, integrator_name(integ), NULL, 0, target_spp, 0);
+        ts_film *resumed = NULL;
+        uint32_t at = range.begin;
+        st = ts_shard_checkpoint_load(checkpoint, &info, range, &resumed, &at, &err);
+        if (st) {
+            fprintf(stderr, "tessera: %s\n", err.message);
+            ts_film_destroy(film);
+            ts_scene_destroy(scene);
+            return 1;
+        }
+        if (resumed) {
+            ts_film_destroy(film);
+            film = resumed;
+            done = at - range.begin;
+            if (!quiet)
+                fprintf(stderr, "tessera: resuming from checkpoint %s: samples [%u,%u) of [%u,%u) already done\n",
+                        checkpoint, range.begin, at, range.begin, range.end);
+        }
+    }
+    if (shard_text && !quiet)
+        fprintf(stderr, "tessera: %s: samples [%u,%u) of %u\n", shard_how, range.begin, range.end, target_spp);
+    /* With a checkpoint, each pass starts from a copy of the film so a signal mid-pass can
+     * save the last complete state. */
+    ts_film *snapshot = NULL;
+    if (checkpoint) {
+        snapshot = ts_film_create(film->full_width, film->full_height, film->x0, film->y0, film->width, film->height, &err);
+        if (!snapshot) {
+            fprintf(stderr, "tessera: %s\n", err.message);
+            ts_film_destroy(film);
+            ts_scene_destroy(scene);
+            return 1;
+        }
+        catch_stop_signals();
+    }
     progress prog = {0};
     prog.enabled = !quiet && isatty(STDERR_FILENO);
     pthread_mutex_init(&prog.lock, NULL);
-    prog.total = (uint64_t)film->width * (uint64_t)film->height * target_spp;
+    prog.total = (uint64_t)film->width * (uint64_t)film->height * (span - done);
     prog.t0 = ts_now_seconds();
 
     ts_render_stats stats = {0};
-    uint32_t done = 0, pass = 1;
-    double error = 0;
+    uint32_t done0 = done, pass = done > 1 ? done : 1;
+    double error = 0, last_checkpoint = prog.t0;
     const char *stop_reason = "sample count reached";
-    while (done < target_spp) {
-        uint32_t n = pass < target_spp - done ? pass : target_spp - done;
-        if (time_limit > 0 && done > 0) {
+    while (done < span && !g_signal) {
+        uint32_t n = pass < span - done ? pass : span - done;
+        uint32_t here = done - done0; /* rendered by this process */
+        double per_spp = here ? stats.seconds / here : 0;
+        if (time_limit > 0 && here > 0) {
             double elapsed = ts_now_seconds() - prog.t0;
-            double per_spp = stats.seconds / done;
             if (elapsed >= time_limit) {
                 stop_reason = "time limit reached";
                 break;
@@ -264,10 +391,21 @@ static int cmd_render(int argc, char **argv)
             double fit = (time_limit - elapsed) / (per_spp > 0 ? per_spp : 1e-9);
             if (fit < n) n = fit >= 1 ? (uint32_t)fit : 1;
         }
+        if (checkpoint && per_spp > 0) { /* a pass fits in one checkpoint interval */
+            double fit = checkpoint_interval / per_spp;
+            if (fit < n) n = fit >= 1 ? (uint32_t)fit : 1;
+        }
+        if (snapshot) memcpy(snapshot->pixels, film->pixels, (size_t)film->width * film->height * sizeof *film->pixels);
         prog.pass_spp = n;
-        ts_render_request req = {scene, integ, film, done, done + n, n_threads, NULL, on_tile, &prog};
+        ts_render_request req = {scene, integ, film, range.begin + done, range.begin + done + n, n_threads,
+                                 checkpoint ? &g_cancel : NULL, on_tile, &prog};
         st = ts_render(&req, &stats, &err);
         if (st) break;
+        if (stats.cancelled) { /* part of the pass is in the film: go back to its start */
+            ts_film *t = film;
+            film = snapshot, snapshot = t;
+            break;
+        }
         done += n;
         if (done > 1) pass = done; /* 1, 1, 2, 4, 8, ... */
         if (target_error > 0 && done >= 4) {
@@ -277,18 +415,50 @@ static int cmd_render(int argc, char **argv)
                 break;
             }
         }
+        if (checkpoint && done < span && ts_now_seconds() - last_checkpoint >= checkpoint_interval) {
+            ts_sample_range held = {range.begin, range.begin + done};
+            ts_shard_info_init(&info, scene, film, integrator_name(integ), &held, 1, target_spp, stats.seconds);
+            st = ts_shard_write(checkpoint, film, &info, &err);
+            if (st) break;
+            last_checkpoint = ts_now_seconds();
+        }
     }
     if (prog.enabled) fprintf(stderr, "\n");
+    if (!st && g_signal) { /* stopped by SIGTERM/SIGINT: save, then exit as the signal would */
+        ts_sample_range held = {range.begin, range.begin + done};
+        ts_shard_info_init(&info, scene, film, integrator_name(integ), &held, done ? 1 : 0, target_spp, stats.seconds);
+        st = ts_shard_write(checkpoint, film, &info, &err);
+        int sig = g_signal;
+        if (st) fprintf(stderr, "tessera: %s; could not save the checkpoint: %s\n", strsignal(sig), err.message);
+        else
+            fprintf(stderr, "tessera: %s: saved samples [%u,%u) to checkpoint %s; run the same command to resume\n",
+                    strsignal(sig), range.begin, range.begin + done, checkpoint);
+        pthread_mutex_destroy(&prog.lock);
+        ts_film_destroy(snapshot);
+        ts_film_destroy(film);
+        ts_scene_destroy(scene);
+        return 128 + sig;
+    }
+    ts_film_destroy(snapshot);
     error = ts_film_relative_error(film);
     int rc = 0;
     if (st) {
         fprintf(stderr, "tessera: %s\n", err.message);
         rc = 1;
     } else {
-        st = write_outputs(scene, film, outputs, n_outputs, &stats, done, error, integrator_name(integ), &err);
+        if (shard_text) {
+            ts_sample_range held = {range.begin, range.begin + done};
+            ts_shard_info_init(&info, scene, film, integrator_name(integ), &held, done ? 1 : 0, target_spp,
+                               stats.seconds);
+            st = write_shard_outputs(film, &info, outputs, n_outputs, &err);
+        } else {
+            st = write_outputs(scene, film, outputs, n_outputs, &stats, done, error, integrator_name(integ), &err);
+        }
         if (st) {
             fprintf(stderr, "tessera: %s\n", err.message);
             rc = 1;
+        } else if (checkpoint && done == span) {
+            unlink(checkpoint); /* finished: the outputs hold everything the checkpoint did */
         }
     }
     if (!quiet && rc == 0) {
@@ -322,7 +492,8 @@ int ts_cli_main(int argc, char **argv)
         usage(stdout);
         return 0;
     }
-    if (strcmp(cmd, "serve") == 0 || strcmp(cmd, "merge") == 0) {
+    if (strcmp(cmd, "merge") == 0) return ts_cli_merge(argc - 1, argv + 1);
+    if (strcmp(cmd, "serve") == 0) {
         fprintf(stderr, "tessera: '%s' is not available in this build yet\n", cmd);
         return 2;
     }

@@ -145,12 +145,105 @@ static void test_point_light_in_sphere(void **state)
     }
 }
 
+
+/* Hard case 4: a sphere light of radius r and radiance L whose centre is at distance D
+ * from a point of a diffuse plane of albedo ρ, at angle θ from its normal: the reflected
+ * radiance there is ρ·L·(r/D)²·cosθ (irradiance πL(r/D)²cosθ from a sphere entirely
+ * above the horizon). The light sits at (1.5, 2, 0)·scale so that D = 2.5, cosθ = 0.8 at
+ * the origin and the camera above the origin does not see it. An
+ * orthographic camera looks at a tiny patch around that point; the irradiance varies over
+ * the patch by at most 1.5·(x/d)² ≈ 1e-4 relative for the patches below. Tolerance: the
+ * issue's 1% and 4 standard errors (cone sampling of the light varies only with cosθ). */
+static void sphere_over_plane(char *doc, size_t n, double scale, double shift, double r, double L, double view_deg,
+                              double patch)
+{
+    double d = 2 * scale, dx = 1.5 * scale, c = shift;
+    double th = view_deg * 3.14159265358979323846 / 180, dist = 3 * scale;
+    snprintf(doc, n,
+             "{\"tessera\":1,\"camera\":{\"type\":\"orthographic\",\"from\":[%.17g,%.17g,%.17g],\"to\":[%.17g,%.17g,%.17g],\"up\":[0,0,1],"
+             "\"height\":%.17g},\"film\":{\"width\":4,\"height\":4,\"filter\":{\"type\":\"box\"}},"
+             "\"integrator\":{\"type\":\"path\",\"max_depth\":1},\"materials\":{\"m\":{\"type\":\"diffuse\",\"reflectance\":0.5},"
+             "\"black\":{\"type\":\"diffuse\",\"reflectance\":0}},\"shapes\":[{\"type\":\"disk\",\"center\":[%.17g,%.17g,%.17g],"
+             "\"normal\":[0,1,0],\"radius\":%.17g,\"material\":\"m\"},{\"type\":\"sphere\",\"center\":[%.17g,%.17g,%.17g],"
+             "\"radius\":%.17g,\"material\":\"black\",\"emission\":%.17g}]}",
+             c - dist * sin(th), c + dist * cos(th), c, c, c, c, patch * scale, c, c, c, 10 * scale, c + dx, c + d, c,
+             r * scale, L);
+}
+
+static void test_sphere_light_over_plane(void **state)
+{
+    (void)state;
+    char doc[4096], what[96];
+    struct { const char *name; double scale, shift, r, L, view, patch; int spp; } cases[] = {
+        {"at the origin", 1, 0, 0.5, 32, 0, 1e-3, 64},
+        {"translated by 1e5", 1, 1e5, 0.5, 32, 0, 2e-2, 64},
+        {"scaled by 1e-3", 1e-3, 0, 0.5, 32, 0, 1e-3, 64},
+        {"scaled by 1e3", 1e3, 0, 0.5, 32, 0, 1e-3, 64},
+        {"light radius 1e-3, radiance 9e6", 1, 0, 1e-3, 9e6, 0, 1e-3, 64},
+        {"viewed at 89.9 degrees", 1, 0, 0.5, 32, 89.9, 1e-6, 64},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+        sphere_over_plane(doc, sizeof doc, cases[i].scale, cases[i].shift, cases[i].r, cases[i].L, cases[i].view,
+                          cases[i].patch);
+        double expected = 0.5 * cases[i].L * (cases[i].r / 2.5) * (cases[i].r / 2.5) * 0.8;
+        snprintf(what, sizeof what, "sphere light over a plane, %s", cases[i].name);
+        result res = render_doc(doc, cases[i].spp);
+        check(what, res, expected, 0, 4);
+        if (!(fabs(res.mean - expected) < 0.01 * expected)) fail_msg("%s: not within 1%%", what);
+    }
+}
+
+/* Hard case 6: `direct` with `all` and `one`, and the path tracer at depth 1 with MIS,
+ * light-only and BSDF-only sampling, all estimate emission + direct light of the same
+ * scene (diffuse surfaces; a sphere light, a quad light and a point light). Each image's
+ * mean over pixels must agree with the MIS image within 3 standard errors of the
+ * difference (the two renders are independent estimates: se² = se_a² + se_b²). */
+static void test_strategies_converge_alike(void **state)
+{
+    (void)state;
+    const char *fmt =
+        "{\"tessera\":1,\"camera\":{\"from\":[0,2,7],\"to\":[0,1,0],\"fov\":45},\"film\":{\"width\":16,\"height\":12},"
+        "\"sampler\":{\"seed\":11},\"integrator\":%s,\"materials\":{\"w\":{\"type\":\"diffuse\",\"reflectance\":0.7},"
+        "\"k\":{\"type\":\"diffuse\",\"reflectance\":0}},\"shapes\":[{\"type\":\"disk\",\"normal\":[0,1,0],\"radius\":6,"
+        "\"material\":\"w\"},{\"type\":\"disk\",\"center\":[0,0,-2],\"normal\":[0,0,1],\"radius\":6,\"material\":\"w\"},"
+        "{\"type\":\"sphere\",\"center\":[-1,1.6,0],\"radius\":0.5,\"material\":\"k\",\"emission\":4},"
+        "{\"type\":\"mesh\",\"positions\":[0.5,2.5,-0.5, 1.5,2.5,-0.5, 1.5,2.5,0.5, 0.5,2.5,0.5],\"indices\":[0,2,1,0,3,2],"
+        "\"material\":\"k\",\"emission\":3}],\"lights\":[{\"type\":\"point\",\"position\":[0,3,1],\"intensity\":2}]}";
+    const char *integrators[] = {
+        "{\"type\":\"direct\",\"strategy\":\"all\"}",
+        "{\"type\":\"direct\",\"strategy\":\"one\"}",
+        "{\"type\":\"path\",\"max_depth\":1}",
+        "{\"type\":\"path\",\"max_depth\":1,\"sampling\":\"light\"}",
+        "{\"type\":\"path\",\"max_depth\":1,\"sampling\":\"bsdf\"}",
+    };
+    char doc[4096];
+    result ref = {0};
+    for (size_t i = 0; i < sizeof integrators / sizeof *integrators; i++) {
+        snprintf(doc, sizeof doc, fmt, integrators[i]);
+        result r = render_doc(doc, 256);
+        if (r.nonfinite) fail_msg("%s: %llu non-finite samples", integrators[i], (unsigned long long)r.nonfinite);
+        if (i == 0) {
+            ref = r;
+            print_message("%-56s mean %.5f se %.2e\n", integrators[i], r.mean, r.se);
+            continue;
+        }
+        double se = sqrt(r.se * r.se + ref.se * ref.se);
+        print_message("%-56s mean %.5f se %.2e: %.2f se from direct/all\n", integrators[i], r.mean, r.se,
+                      fabs(r.mean - ref.mean) / se);
+        if (!(fabs(r.mean - ref.mean) < 3 * se))
+            fail_msg("%s: mean %.6f vs %.6f, %.2f standard errors apart", integrators[i], r.mean, ref.mean,
+                     fabs(r.mean - ref.mean) / se);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_emitting_sphere_fixed_depth),
         cmocka_unit_test(test_point_light_in_sphere),
         cmocka_unit_test(test_emitting_sphere_roulette),
+        cmocka_unit_test(test_sphere_light_over_plane),
+        cmocka_unit_test(test_strategies_converge_alike),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

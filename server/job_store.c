@@ -1,0 +1,444 @@
+/* job_store.c — jobs, their events and status documents; see job_store.h. */
+#include "job_store.h"
+
+#include <fcntl.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/random.h>
+#include <time.h>
+
+#include "effects.h"
+
+struct srv_store {
+    srv_server *srv;
+    pthread_mutex_t mu;
+    srv_job *jobs; /* guarded by mu: newest first */
+};
+
+static const char *integrator_name(ts_integrator_type t)
+{
+    switch (t) {
+    case TS_INTEGRATOR_PATH: return "path";
+    case TS_INTEGRATOR_DIRECT: return "direct";
+    case TS_INTEGRATOR_AO: return "ao";
+    case TS_INTEGRATOR_NORMALS: return "normals";
+    }
+    return "unknown";
+}
+
+srv_store *srv_store_create(srv_server *srv)
+{
+    srv_store *st = calloc(1, sizeof *st);
+    if (!st) return NULL;
+    st->srv = srv;
+    pthread_mutex_init(&st->mu, NULL);
+    return st;
+}
+
+static void job_free(srv_job *j)
+{
+    ts_sched_job_release(j->sj);
+    srv_events_destroy(j->events);
+    free(j->name);
+    free(j->scene_text);
+    free(j);
+}
+
+void srv_job_release(srv_job *j)
+{
+    if (j && atomic_fetch_sub(&j->refs, 1) == 1) job_free(j);
+}
+
+void srv_store_destroy(srv_store *st)
+{
+    if (!st) return;
+    srv_job *j = st->jobs;
+    while (j) {
+        srv_job *next = j->next;
+        srv_job_release(j);
+        j = next;
+    }
+    pthread_mutex_destroy(&st->mu);
+    free(st);
+}
+
+static void store_add(srv_store *st, srv_job *j)
+{
+    atomic_fetch_add(&j->refs, 1); /* the store's reference */
+    pthread_mutex_lock(&st->mu);
+    j->next = st->jobs;
+    st->jobs = j;
+    pthread_mutex_unlock(&st->mu);
+}
+
+srv_job *srv_store_get(srv_store *st, const char *id)
+{
+    pthread_mutex_lock(&st->mu);
+    srv_job *j = st->jobs;
+    while (j && strcmp(j->id, id) != 0) j = j->next;
+    if (j) atomic_fetch_add(&j->refs, 1);
+    pthread_mutex_unlock(&st->mu);
+    return j;
+}
+
+srv_job **srv_store_list(srv_store *st, int *n)
+{
+    pthread_mutex_lock(&st->mu);
+    int count = 0;
+    for (srv_job *j = st->jobs; j; j = j->next) count++;
+    srv_job **a = malloc(sizeof *a * (size_t)(count ? count : 1));
+    *n = 0;
+    if (a)
+        for (srv_job *j = st->jobs; j; j = j->next) {
+            atomic_fetch_add(&j->refs, 1);
+            a[(*n)++] = j;
+        }
+    pthread_mutex_unlock(&st->mu);
+    return a;
+}
+
+/* ---------------------------------------------------------------- events */
+
+static char *print_and_delete(cJSON *o)
+{
+    char *s = o ? cJSON_PrintUnformatted(o) : NULL;
+    cJSON_Delete(o);
+    return s;
+}
+
+static void publish_json(srv_job *j, const char *name, cJSON *o)
+{
+    char *s = print_and_delete(o);
+    if (s) srv_events_publish(j->events, name, s);
+    free(s);
+}
+
+static cJSON *tile_json(const srv_job *j, int tx, int ty, int x, int y, int w, int h, uint32_t spp)
+{
+    cJSON *o = cJSON_CreateObject();
+    char url[160];
+    cJSON_AddNumberToObject(o, "tx", tx);
+    cJSON_AddNumberToObject(o, "ty", ty);
+    cJSON_AddNumberToObject(o, "x", x);
+    cJSON_AddNumberToObject(o, "y", y);
+    cJSON_AddNumberToObject(o, "w", w);
+    cJSON_AddNumberToObject(o, "h", h);
+    cJSON_AddNumberToObject(o, "spp", spp);
+    snprintf(url, sizeof url, "/api/v1/jobs/%s/tiles/%d/%d.png", j->id, tx, ty);
+    cJSON_AddStringToObject(o, "png", url);
+    snprintf(url, sizeof url, "/api/v1/jobs/%s/tiles/%d/%d.exr", j->id, tx, ty);
+    cJSON_AddStringToObject(o, "exr", url);
+    return o;
+}
+
+static void on_tile(void *user, ts_sched_job *sj, const ts_tile_event *ev)
+{
+    (void)sj;
+    srv_job *j = user;
+    atomic_fetch_add(&j->version, 1);
+    publish_json(j, "tile", tile_json(j, ev->tx, ev->ty, ev->x, ev->y, ev->w, ev->h, ev->spp));
+}
+
+static void on_pass(void *user, ts_sched_job *sj, const ts_job_progress *p)
+{
+    (void)sj;
+    srv_job *j = user;
+    publish_json(j, "progress", srv_job_progress_json(j, p));
+}
+
+static void on_done(void *user, ts_sched_job *sj, const ts_job_progress *p)
+{
+    (void)sj;
+    srv_job *j = user;
+    atomic_fetch_add(&j->version, 1);
+    publish_json(j, "progress", srv_job_progress_json(j, p));
+    publish_json(j, "done", srv_job_progress_json(j, p));
+    srv_events_close(j->events);
+    srv_server_kick(j->srv);
+}
+
+/* ---------------------------------------------------------------- creation */
+
+static void make_id(char *out, size_t n)
+{
+    unsigned char b[8];
+    if (getrandom(b, sizeof b, 0) != (ssize_t)sizeof b) {
+        struct timespec t;
+        clock_gettime(CLOCK_REALTIME, &t);
+        uint64_t v = (uint64_t)t.tv_sec * 1000000007ull ^ (uint64_t)t.tv_nsec ^ (uint64_t)(uintptr_t)out;
+        memcpy(b, &v, sizeof b);
+    }
+    snprintf(out, n, "%02x%02x%02x%02x%02x%02x%02x%02x", b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]);
+}
+
+static srv_job *job_new(srv_store *st, const char *id, const char *text, size_t len)
+{
+    srv_job *j = calloc(1, sizeof *j);
+    if (!j) return NULL;
+    atomic_init(&j->refs, 1);
+    atomic_init(&j->version, 1);
+    j->srv = st->srv;
+    j->events = srv_events_create();
+    j->scene_text = malloc(len + 1);
+    if (!j->events || !j->scene_text) {
+        job_free(j);
+        return NULL;
+    }
+    memcpy(j->scene_text, text, len);
+    j->scene_text[len] = '\0';
+    j->scene_len = len;
+    if (id) snprintf(j->id, sizeof j->id, "%s", id);
+    else make_id(j->id, sizeof j->id);
+    return j;
+}
+
+static void describe_scene(srv_job *j, const ts_scene *s)
+{
+    if (!j->name && s->job.name) j->name = strdup(s->job.name);
+    else if (!j->name && s->name) j->name = strdup(s->name);
+    snprintf(j->integrator, sizeof j->integrator, "%s", integrator_name(s->integrator.type));
+    ts_effects_format(s->effects, j->effects, sizeof j->effects);
+    j->full_w = s->width, j->full_h = s->height;
+    j->x0 = s->crop_x0, j->y0 = s->crop_y0, j->w = s->crop_x1 - s->crop_x0, j->h = s->crop_y1 - s->crop_y0;
+    j->nx = (j->w + TS_TILE_SIZE - 1) / TS_TILE_SIZE;
+    j->ny = (j->h + TS_TILE_SIZE - 1) / TS_TILE_SIZE;
+}
+
+srv_job *srv_store_submit(srv_store *st, const char *text, size_t len, int *http_status, ts_error *err)
+{
+    const srv_config *cfg = &st->srv->cfg;
+    /* Resolution and spp are checked here (422) against the server's limits; the loader
+     * gets the generous defaults for those and the server's for scene size (413). */
+    ts_scene_limits lim = cfg->limits, def;
+    ts_scene_limits_default(&def);
+    lim.max_width = def.max_width, lim.max_height = def.max_height;
+    lim.max_pixels = def.max_pixels, lim.max_spp = def.max_spp;
+    ts_scene *s = NULL;
+    ts_status stt = ts_scene_load_text(text, len, NULL, "scene", &lim, &s, err);
+    if (stt) {
+        *http_status = stt == TS_ERR_LIMIT ? 413 : stt == TS_ERR_NOMEM ? 500 : 400;
+        return NULL;
+    }
+    uint64_t pixels = (uint64_t)(s->crop_x1 - s->crop_x0) * (uint64_t)(s->crop_y1 - s->crop_y0);
+    uint32_t spp = s->job.spp ? s->job.spp : s->spp;
+    *http_status = 422;
+    if (s->width > (int)cfg->limits.max_width || s->height > (int)cfg->limits.max_height ||
+        pixels > cfg->limits.max_pixels) {
+        ts_error_set(err, TS_ERR_LIMIT,
+                     "film: %d × %d pixels is more than this server accepts (at most %u × %u and %llu pixels)",
+                     s->width, s->height, cfg->limits.max_width, cfg->limits.max_height,
+                     (unsigned long long)cfg->limits.max_pixels);
+        goto fail_scene;
+    }
+    if (spp > cfg->limits.max_spp) {
+        ts_error_set(err, TS_ERR_LIMIT, "%s: %u samples per pixel is more than this server accepts (%u)",
+                     s->job.spp ? "job.spp" : "sampler.spp", spp, cfg->limits.max_spp);
+        goto fail_scene;
+    }
+    if (!ts_integrator_available(s->integrator.type)) {
+        ts_error_set(err, TS_ERR_UNSUPPORTED, "integrator.type: the '%s' integrator is not available in this build",
+                     integrator_name(s->integrator.type));
+        goto fail_scene;
+    }
+    *http_status = 500;
+    srv_job *j = job_new(st, NULL, text, len);
+    if (!j) {
+        ts_error_set(err, TS_ERR_NOMEM, "out of memory for a job");
+        goto fail_scene;
+    }
+    describe_scene(j, s);
+    j->priority = s->job.priority;
+    j->spp_target = spp;
+    j->time_limit_s = s->job.time_limit_s;
+    j->target_error = s->job.target_error;
+    j->created_unix = (double)time(NULL);
+    ts_sched_job_desc d = {0};
+    d.scene = s;
+    d.integrator = s->integrator.type;
+    d.spp = spp;
+    d.priority = j->priority;
+    d.time_limit_s = j->time_limit_s;
+    d.target_error = j->target_error;
+    d.callbacks = (ts_job_callbacks){on_tile, on_pass, on_done, j};
+    /* The store holds the job before the scheduler can call back into it. */
+    store_add(st, j); /* the store's reference outlives the scheduler job and its callbacks */
+    j->sj = ts_scheduler_submit(st->srv->sched, &d, err);
+    if (!j->sj) {
+        /* Unlikely (out of memory): it stays in the store as failed. */
+        snprintf(j->failure, sizeof j->failure, "%s", err->message);
+        srv_events_close(j->events);
+        srv_job_release(j);
+        ts_scene_destroy(s);
+        return NULL;
+    }
+    *http_status = 201;
+    return j;
+fail_scene:
+    ts_scene_destroy(s);
+    return NULL;
+}
+
+srv_job *srv_store_restore(srv_store *st, const srv_restore *r, ts_error *err)
+{
+    srv_job *j = job_new(st, r->id, r->scene_text ? r->scene_text : "", r->scene_text ? r->scene_len : 0);
+    if (!j) {
+        ts_error_set(err, TS_ERR_NOMEM, "out of memory for a job");
+        return NULL;
+    }
+    j->priority = r->priority;
+    j->spp_target = r->spp_target;
+    j->time_limit_s = r->time_limit_s;
+    j->target_error = r->target_error;
+    j->created_unix = r->created_unix;
+    if (r->name) j->name = strdup(r->name);
+    if (r->scene) describe_scene(j, r->scene);
+    if (r->failure) snprintf(j->failure, sizeof j->failure, "%s", r->failure);
+    if (!r->scene && r->film) {
+        j->full_w = r->film->full_width, j->full_h = r->film->full_height;
+        j->x0 = r->film->x0, j->y0 = r->film->y0, j->w = r->film->width, j->h = r->film->height;
+        j->nx = (j->w + TS_TILE_SIZE - 1) / TS_TILE_SIZE;
+        j->ny = (j->h + TS_TILE_SIZE - 1) / TS_TILE_SIZE;
+    }
+    if (r->failure && !r->film) {
+        /* Nothing to show: a failed job without a scheduler job. */
+        srv_events_close(j->events);
+        store_add(st, j);
+        return j;
+    }
+    uint64_t samples = 0;
+    if (r->film)
+        for (size_t i = 0; i < (size_t)r->film->width * (size_t)r->film->height; i++) samples += r->film->pixels[i].count;
+    ts_sched_job_desc d = {0};
+    d.scene = r->scene;
+    d.integrator = r->scene ? r->scene->integrator.type : TS_INTEGRATOR_AO;
+    d.spp = r->spp_target;
+    d.priority = r->priority;
+    d.time_limit_s = r->time_limit_s;
+    d.target_error = r->target_error;
+    d.callbacks = (ts_job_callbacks){on_tile, on_pass, on_done, j};
+    d.film = r->film;
+    d.tile_spp = r->tile_spp;
+    d.elapsed_s = r->elapsed_s;
+    d.samples = samples;
+    d.nonfinite = r->nonfinite;
+    d.finished = r->failure ? TS_JOB_FAILED : ts_job_state_finished(r->state) ? r->state : TS_JOB_QUEUED;
+    if (r->film) {
+        d.full_width = r->film->full_width;
+        d.full_height = r->film->full_height;
+    }
+    store_add(st, j);
+    j->sj = ts_scheduler_submit(st->srv->sched, &d, err);
+    if (!j->sj) {
+        snprintf(j->failure, sizeof j->failure, "%s", err->message);
+        srv_events_close(j->events);
+        return j; /* the caller still owns scene and film */
+    }
+    if (ts_job_state_finished(d.finished)) srv_events_close(j->events);
+    j->saved_version = atomic_load(&j->version); /* just loaded: nothing new to save */
+    return j;
+}
+
+/* ---------------------------------------------------------------- status */
+
+ts_job_state srv_job_state(srv_job *j)
+{
+    if (!j->sj) return TS_JOB_FAILED;
+    ts_job_progress p;
+    ts_sched_job_progress(j->sj, &p);
+    return p.state;
+}
+
+static void add_number_or_null(cJSON *o, const char *k, double v, bool known)
+{
+    if (known) cJSON_AddNumberToObject(o, k, v);
+    else cJSON_AddNullToObject(o, k);
+}
+
+cJSON *srv_job_progress_json(srv_job *j, const ts_job_progress *p)
+{
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddStringToObject(o, "id", j->id);
+    cJSON_AddStringToObject(o, "state", j->failure[0] ? "failed" : ts_job_state_name(p->state));
+    cJSON_AddNumberToObject(o, "spp", p->spp_done);
+    cJSON_AddNumberToObject(o, "spp_target", p->spp_target);
+    cJSON_AddNumberToObject(o, "pass_spp", p->pass_end);
+    cJSON_AddNumberToObject(o, "elapsed_s", p->elapsed_s);
+    cJSON_AddNumberToObject(o, "samples", (double)p->samples);
+    cJSON_AddNumberToObject(o, "samples_per_s", p->samples_per_s);
+    add_number_or_null(o, "error_estimate", p->error_estimate, p->error_estimate >= 0);
+    cJSON_AddStringToObject(o, "halt_reason", ts_halt_reason_name(p->halt));
+    return o;
+}
+
+cJSON *srv_job_status_json(srv_job *j)
+{
+    ts_job_progress p = {0};
+    if (j->sj) ts_sched_job_progress(j->sj, &p);
+    else p.state = TS_JOB_FAILED, p.error_estimate = -1, p.spp_target = j->spp_target;
+    cJSON *o = cJSON_CreateObject();
+    char url[160];
+    cJSON_AddStringToObject(o, "id", j->id);
+    if (j->name) cJSON_AddStringToObject(o, "name", j->name);
+    else cJSON_AddNullToObject(o, "name");
+    cJSON_AddStringToObject(o, "state", j->failure[0] ? "failed" : ts_job_state_name(p.state));
+    if (j->failure[0]) cJSON_AddStringToObject(o, "error", j->failure);
+    cJSON_AddNumberToObject(o, "priority", j->priority);
+    cJSON_AddNumberToObject(o, "created_at", j->created_unix);
+    cJSON_AddNumberToObject(o, "spp_done", p.spp_done);
+    cJSON_AddNumberToObject(o, "spp_target", p.spp_target);
+    cJSON_AddNumberToObject(o, "pass_spp", p.pass_end);
+    cJSON_AddNumberToObject(o, "elapsed_s", p.elapsed_s);
+    cJSON_AddNumberToObject(o, "queued_s", p.queued_s);
+    cJSON_AddNumberToObject(o, "samples", (double)p.samples);
+    cJSON_AddNumberToObject(o, "samples_per_s", p.samples_per_s);
+    add_number_or_null(o, "error_estimate", p.error_estimate, p.error_estimate >= 0);
+    cJSON_AddNumberToObject(o, "nonfinite_samples", (double)p.nonfinite);
+    cJSON_AddNumberToObject(o, "camera_rays", (double)p.camera_rays);
+    cJSON_AddNumberToObject(o, "other_rays", (double)p.other_rays);
+    cJSON_AddStringToObject(o, "halt_reason", ts_halt_reason_name(p.halt));
+    add_number_or_null(o, "time_limit_s", j->time_limit_s, j->time_limit_s > 0);
+    add_number_or_null(o, "target_error", j->target_error, j->target_error > 0);
+    cJSON_AddStringToObject(o, "integrator", j->integrator);
+    cJSON *fx = cJSON_AddArrayToObject(o, "effects");
+    for (uint32_t b = 1; b < (1u << TS_EFFECT_COUNT); b <<= 1) {
+        const char *k = ts_effect_key(b);
+        /* j->effects lists the keys, comma-separated; match whole words. */
+        const char *at = k ? strstr(j->effects, k) : NULL;
+        while (at) {
+            size_t n = strlen(k);
+            bool start = at == j->effects || at[-1] == ' ' || at[-1] == ',';
+            bool end = at[n] == '\0' || at[n] == ',';
+            if (start && end) {
+                cJSON_AddItemToArray(fx, cJSON_CreateString(k));
+                break;
+            }
+            at = strstr(at + 1, k);
+        }
+    }
+    cJSON *film = cJSON_AddObjectToObject(o, "film");
+    cJSON_AddNumberToObject(film, "width", j->full_w);
+    cJSON_AddNumberToObject(film, "height", j->full_h);
+    cJSON_AddNumberToObject(film, "x0", j->x0);
+    cJSON_AddNumberToObject(film, "y0", j->y0);
+    cJSON_AddNumberToObject(film, "crop_width", j->w);
+    cJSON_AddNumberToObject(film, "crop_height", j->h);
+    cJSON_AddNumberToObject(film, "tile_size", TS_TILE_SIZE);
+    cJSON_AddNumberToObject(film, "tiles_x", j->nx);
+    cJSON_AddNumberToObject(film, "tiles_y", j->ny);
+    cJSON *urls = cJSON_AddObjectToObject(o, "urls");
+    snprintf(url, sizeof url, "/api/v1/jobs/%s", j->id);
+    cJSON_AddStringToObject(urls, "self", url);
+    snprintf(url, sizeof url, "/api/v1/jobs/%s/image.exr", j->id);
+    cJSON_AddStringToObject(urls, "exr", url);
+    snprintf(url, sizeof url, "/api/v1/jobs/%s/image.png", j->id);
+    cJSON_AddStringToObject(urls, "png", url);
+    snprintf(url, sizeof url, "/api/v1/jobs/%s/events", j->id);
+    cJSON_AddStringToObject(urls, "events", url);
+    snprintf(url, sizeof url, "/api/v1/jobs/%s/tiles/{tx}/{ty}.png", j->id);
+    cJSON_AddStringToObject(urls, "tile_png", url);
+    snprintf(url, sizeof url, "/api/v1/jobs/%s/tiles/{tx}/{ty}.exr", j->id);
+    cJSON_AddStringToObject(urls, "tile_exr", url);
+    return o;
+}

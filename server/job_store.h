@@ -1,0 +1,86 @@
+/* job_store.h — the server's jobs: reference-counted, listed newest first.
+ *
+ * Design note: a srv_job wraps one scheduler job (ts_sched_job) with what the API adds:
+ * an id, the scene document as posted (for checkpoints), the event hub of its SSE
+ * streams, and a version counter that checkpoints compare. The scheduler's callbacks turn
+ * into `tile`, `progress` and `done` events here. The store is the one piece of mutable
+ * state shared across the server (DESIGN.md §6); its list is guarded by one mutex, a
+ * job's immutable fields need no lock, and everything else about a job is read through
+ * the scheduler (which has its own lock) or is atomic. */
+#ifndef SRV_JOB_STORE_H
+#define SRV_JOB_STORE_H
+
+#include <cjson/cJSON.h>
+#include <stdatomic.h>
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "events.h"
+#include "scheduler.h"
+#include "serve.h"
+
+typedef struct srv_job {
+    atomic_int refs;
+    /* immutable once the job is in the store */
+    char id[24];
+    char *name;                  /* may be NULL */
+    char *scene_text;            /* the posted document */
+    size_t scene_len;
+    char integrator[16];
+    char effects[256];           /* "diffuse, area_lights, …" */
+    int priority;
+    uint32_t spp_target;
+    double time_limit_s, target_error;
+    double created_unix;
+    int full_w, full_h, x0, y0, w, h, nx, ny;
+    ts_sched_job *sj;
+    srv_events *events;
+    srv_server *srv;
+    char failure[512];           /* why a restored job failed, or "" */
+    /* atomic: bumped whenever the pixels or the state change */
+    atomic_uint_fast64_t version;
+    uint64_t saved_version;      /* maintenance thread only */
+    struct srv_job *next;        /* guarded by the store's mutex */
+} srv_job;
+
+typedef struct srv_store srv_store;
+
+srv_store *srv_store_create(srv_server *srv);
+/* Releases every job (after the scheduler and HTTP daemon stopped). */
+void srv_store_destroy(srv_store *st);
+
+/* Loads, checks and queues a posted scene. On failure NULL, *http_status (400, 413, 422,
+ * 500) and err's sentence say why. The returned job carries a reference for the caller. */
+srv_job *srv_store_submit(srv_store *st, const char *text, size_t len, int *http_status, ts_error *err);
+
+/* Restores a checkpointed job (persist.c): takes ownership of scene (may be NULL when
+ * finished) and film; tile_spp per tile. Returns a new reference or NULL. */
+typedef struct srv_restore {
+    const char *id, *name, *scene_text;
+    size_t scene_len;
+    double created_unix, elapsed_s;
+    uint64_t nonfinite;
+    ts_job_state state;          /* QUEUED/RUNNING: resume; else finished */
+    ts_scene *scene;
+    ts_film *film;               /* may be NULL: start from scratch */
+    const uint32_t *tile_spp;
+    int priority;
+    uint32_t spp_target;
+    double time_limit_s, target_error;
+    const char *failure;         /* non-NULL: register as failed with this message */
+} srv_restore;
+srv_job *srv_store_restore(srv_store *st, const srv_restore *r, ts_error *err);
+
+/* A new reference to the job with that id, or NULL. */
+srv_job *srv_store_get(srv_store *st, const char *id);
+/* New references to all jobs, newest first; *n of them (caller frees the array). */
+srv_job **srv_store_list(srv_store *st, int *n);
+void srv_job_release(srv_job *j);
+
+/* The job's status document (proto/job-status.schema.json). Caller deletes. */
+cJSON *srv_job_status_json(srv_job *j);
+/* The progress event document. Caller deletes. */
+cJSON *srv_job_progress_json(srv_job *j, const ts_job_progress *p);
+ts_job_state srv_job_state(srv_job *j);
+
+#endif

@@ -1,0 +1,25 @@
+/* persist.h — checkpoints of jobs under --data DIR, and restoring them at start.
+ *
+ * Design note: each job has a folder DIR/jobs/<id>/ with scene.json (the posted
+ * document), film.bin (the accumulated film: per-tile spp and every pixel's sums in
+ * double, exactly as the renderer holds them) and job.json (state, counters, halt
+ * settings). Files are written atomically (temporary file, fsync, rename), film first, so
+ * a crash leaves the previous checkpoint or the new one. Checkpoints read the scheduler's
+ * tile snapshots, never the working film, so they never stop rendering. */
+#ifndef SRV_PERSIST_H
+#define SRV_PERSIST_H
+
+#include "job_store.h"
+
+/* Creates DIR/jobs if needed. */
+ts_status srv_persist_init(const char *dir, ts_error *err);
+/* Checkpoints one job (whatever its version). */
+ts_status srv_persist_save(const char *dir, srv_job *j, ts_error *err);
+/* Checkpoints every job whose version changed since its last checkpoint; returns how
+ * many were written. Errors go to stderr (the server keeps running). */
+int srv_persist_save_changed(const char *dir, srv_store *st);
+/* Restores every job found under DIR/jobs into the store (unfinished ones resume).
+ * Returns how many; unreadable ones are listed as failed. */
+int srv_persist_restore_all(const char *dir, srv_store *st, const ts_scene_limits *limits);
+
+#endif
