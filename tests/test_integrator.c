@@ -236,6 +236,92 @@ static void test_strategies_converge_alike(void **state)
     }
 }
 
+/* Hard case 3: white furnace. Under a constant environment of radiance 1, a sphere of an
+ * energy-conserving material (Lambertian with albedo 1, a perfect mirror, smooth glass
+ * with unit reflectance and transmittance) is invisible: every pixel is 1. A camera
+ * inside a smooth glass sphere (η = 1.5) sees η² = 2.25: radiance inside a denser medium
+ * is higher by η², and the 4% reflected at normal incidence returns the same value
+ * (L = T·η²/(1 − R) = η²). Tolerance: the issue's 1% and 4 standard errors (256 spp put
+ * the Lambertian's 1% at about 5 se), with a 1e-5 floor for float rounding. */
+static void test_white_furnace(void **state)
+{
+    (void)state;
+    const char *fmt = "{\"tessera\":1,\"camera\":{\"from\":%s,\"to\":[0,0,0],\"fov\":%s},"
+                      "\"film\":{\"width\":8,\"height\":8,\"filter\":{\"type\":\"box\"}},\"sampler\":{\"seed\":5},"
+                      "\"integrator\":{\"type\":\"path\",\"max_depth\":200,\"rr_depth\":20},"
+                      "\"materials\":{\"m\":%s},\"shapes\":[{\"type\":\"sphere\",\"radius\":1,\"material\":\"m\"}],"
+                      "\"lights\":[{\"type\":\"infinite\",\"radiance\":1}]}";
+    struct { const char *name, *material, *from, *fov; double expected; int spp; } cases[] = {
+        {"furnace: Lambertian, albedo 1", "{\"type\":\"diffuse\",\"reflectance\":1}", "[0,0,4]", "20", 1, 256},
+        {"furnace: mirror", "{\"type\":\"mirror\",\"reflectance\":1}", "[0,0,4]", "20", 1, 16},
+        {"furnace: smooth glass", "{\"type\":\"dielectric\",\"eta\":1.5}", "[0,0,4]", "20", 1, 64},
+        {"camera inside smooth glass (eta^2)", "{\"type\":\"dielectric\",\"eta\":1.5}", "[0,0,0.001]", "20", 2.25, 64},
+    };
+    char doc[2048];
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+        snprintf(doc, sizeof doc, fmt, cases[i].from, cases[i].fov, cases[i].material);
+        result r = render_doc(doc, cases[i].spp);
+        /* Specular cases have (near) zero variance: a 1e-5 floor covers float rounding. */
+        check(cases[i].name, r, cases[i].expected, 1e-5, 4);
+        if (!(fabs(r.mean - cases[i].expected) < 0.01 * cases[i].expected)) fail_msg("%s: not within 1%%", cases[i].name);
+    }
+}
+
+/* Hard case 5a: total internal reflection. A camera inside a wide glass slab (η = 1.5,
+ * 1 unit thick) looks up at 60° from the vertical, beyond the critical angle of 41.8°:
+ * the ray is reflected between the faces and never leaves within max_depth, so the
+ * emitter above the slab contributes exactly nothing. At 30° it refracts out and sees it. */
+static void test_total_internal_reflection(void **state)
+{
+    (void)state;
+    const char *fmt =
+        "{\"tessera\":1,\"camera\":{\"type\":\"orthographic\",\"from\":[0,0,0],\"to\":[%.17g,%.17g,0],\"up\":[0,0,1],"
+        "\"height\":0.01},\"film\":{\"width\":4,\"height\":4,\"filter\":{\"type\":\"box\"}},"
+        "\"integrator\":{\"type\":\"path\",\"max_depth\":20,\"rr_depth\":100},"
+        "\"materials\":{\"glass\":{\"type\":\"dielectric\",\"eta\":1.5},\"k\":{\"type\":\"diffuse\",\"reflectance\":0}},"
+        "\"shapes\":[{\"type\":\"mesh\",\"material\":\"glass\",\"positions\":[-100,-0.5,-100, 100,-0.5,-100, 100,-0.5,100,"
+        " -100,-0.5,100, -100,0.5,-100, 100,0.5,-100, 100,0.5,100, -100,0.5,100],"
+        "\"indices\":[0,1,2, 0,2,3, 4,6,5, 4,7,6, 0,4,5, 0,5,1, 1,5,6, 1,6,2, 2,6,7, 2,7,3, 3,7,4, 3,4,0]},"
+        "{\"type\":\"disk\",\"center\":[0,30,0],\"normal\":[0,-1,0],\"radius\":1000,\"material\":\"k\",\"emission\":1}]}";
+    char doc[4096];
+    double a = 60 * 3.14159265358979 / 180;
+    snprintf(doc, sizeof doc, fmt, sin(a), cos(a));
+    result tir = render_doc(doc, 4);
+    print_message("%-48s %.6f (expected exactly 0)\n", "TIR at 60 degrees inside a glass slab", tir.mean);
+    assert_int_equal(tir.nonfinite, 0);
+    assert_true(tir.mean == 0);
+    a = 30 * 3.14159265358979 / 180;
+    snprintf(doc, sizeof doc, fmt, sin(a), cos(a));
+    result out = render_doc(doc, 4);
+    print_message("%-48s %.6f (expected > 0)\n", "refraction at 30 degrees", out.mean);
+    assert_true(out.mean > 0.5);
+}
+
+/* Hard case 5b: an emissive mesh with a zero-area triangle (collinear vertices) and a
+ * sliver (height 1e-7 of its length) renders no non-finite sample and the same light as
+ * the mesh without them (within 3 standard errors of the difference: the sliver emits
+ * a negligible 1e-7 of the quad's power). */
+static void test_degenerate_emitter_triangles(void **state)
+{
+    (void)state;
+    const char *fmt =
+        "{\"tessera\":1,\"camera\":{\"from\":[0,3,4],\"to\":[0,0,0],\"fov\":40},\"film\":{\"width\":12,\"height\":8},"
+        "\"integrator\":{\"type\":\"path\",\"max_depth\":3},\"materials\":{\"w\":{\"type\":\"diffuse\",\"reflectance\":0.6},"
+        "\"k\":{\"type\":\"diffuse\",\"reflectance\":0}},\"shapes\":[{\"type\":\"disk\",\"normal\":[0,1,0],\"radius\":5,"
+        "\"material\":\"w\"},{\"type\":\"mesh\",\"material\":\"k\",\"emission\":5,\"positions\":[-0.5,2,-0.5, 0.5,2,-0.5,"
+        " 0.5,2,0.5, -0.5,2,0.5, 0,2,0, 1,2,1, 2,2,2, 0.2,2.1,0, 0.7,2.1,1e-7]%s}]}";
+    char with[4096], without[4096];
+    snprintf(with, sizeof with, fmt, ",\"indices\":[0,2,1, 0,3,2, 4,6,5, 7,8,1, 4,4,4]");
+    snprintf(without, sizeof without, fmt, ",\"indices\":[0,2,1, 0,3,2]");
+    result a = render_doc(with, 64), b = render_doc(without, 64);
+    double se = sqrt(a.se * a.se + b.se * b.se);
+    print_message("%-48s %.6f vs %.6f without them (%.2f se)\n", "emitter with zero-area and sliver triangles", a.mean,
+                  b.mean, fabs(a.mean - b.mean) / se);
+    assert_int_equal(a.nonfinite, 0);
+    assert_true(a.mean > 0);
+    if (!(fabs(a.mean - b.mean) < 3 * se)) fail_msg("means differ by %.2f standard errors", fabs(a.mean - b.mean) / se);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -244,6 +330,9 @@ int main(void)
         cmocka_unit_test(test_emitting_sphere_roulette),
         cmocka_unit_test(test_sphere_light_over_plane),
         cmocka_unit_test(test_strategies_converge_alike),
+        cmocka_unit_test(test_white_furnace),
+        cmocka_unit_test(test_total_internal_reflection),
+        cmocka_unit_test(test_degenerate_emitter_triangles),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
