@@ -1,7 +1,7 @@
 # tessera — the README's two commands, set-up included.
 #   make run    install what is missing, build, render the built-in Cornell box
 #   make test   install what is missing, build, run the whole suite through ctest
-# Also: make build, make deps, make test-asan, make test-tsan, make bench, make clean.
+# Also: make build, make deps, make test-asan, make test-tsan, make fuzz, make bench, make clean.
 
 BUILD      ?= build
 BUILD_TYPE ?= Release
@@ -10,11 +10,13 @@ CMAKE_ARGS ?=
 
 # Debian packages the build and tests need (DESIGN.md §3).
 DEB_PACKAGES := cmake make gcc pkg-config libembree-dev libopenexr-dev libpng-dev libcjson-dev nettle-dev \
-                libmicrohttpd-dev libcmocka-dev libcurl4-openssl-dev
+                libmicrohttpd-dev libcmocka-dev libcurl4-openssl-dev \
+                clang libclang-rt-14-dev
+# (clang + libclang-rt: the libFuzzer harnesses, whose smoke runs are part of `make test`.)
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: all run test build deps test-asan test-tsan bench clean
+.PHONY: all run test build deps test-asan test-tsan fuzz fuzz-build bench clean
 
 all: build
 
@@ -49,8 +51,24 @@ test-asan:
 test-tsan:
 	$(MAKE) test BUILD=build-tsan BUILD_TYPE=RelWithDebInfo CMAKE_ARGS=-DTS_SANITIZE=thread
 
+# Fuzzing (tests/fuzz/README.md): harnesses built by clang with libFuzzer, ASan and UBSan in
+# their own folder; `make fuzz` runs each for FUZZ_SECONDS, keeping what it finds in
+# $(FUZZ_BUILD)/fuzz-corpus. `make test` runs each for a few seconds (ctest fuzz_*).
+FUZZ_BUILD   ?= build-fuzz
+FUZZ_SECONDS ?= 60
+FUZZERS      ?= scene obj ply bsdf exr json
+
+$(FUZZ_BUILD)/CMakeCache.txt: | deps
+	CC=clang cmake -S . -B $(FUZZ_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTS_FUZZ=ON -DTS_WERROR=OFF
+
+fuzz-build: deps $(FUZZ_BUILD)/CMakeCache.txt
+	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target fuzz_all
+
+fuzz: fuzz-build
+	tests/fuzz/run.sh --keep $(FUZZ_BUILD) $(FUZZ_SECONDS) $(FUZZERS)
+
 bench: build
 	@if [ -x bench/run ]; then bench/run $(BUILD); else echo "bench: no benchmarks yet"; fi
 
 clean:
-	rm -rf build build-asan build-tsan cornell.exr cornell.png
+	rm -rf build build-asan build-tsan build-fuzz cornell.exr cornell.png

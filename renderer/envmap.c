@@ -171,32 +171,33 @@ fail:
     return st;
 }
 
+ts_status ts_envmap_from_image(const ts_image *img, const char *name, ts_envmap **out, ts_error *err)
+{
+    *out = NULL;
+    int ch[3] = {ts_image_channel(img, "R"), ts_image_channel(img, "G"), ts_image_channel(img, "B")};
+    if (ch[0] < 0 || ch[1] < 0 || ch[2] < 0)
+        return ts_error_set(err, TS_ERR_INVALID, "%s: environment map needs channels R, G and B", name);
+    size_t n = (size_t)img->width * (size_t)img->height;
+    ts_rgb *tx = malloc(n * sizeof *tx);
+    if (!tx)
+        return ts_error_set(err, TS_ERR_NOMEM, "%s: out of memory for %d×%d texels", name, img->width, img->height);
+    for (size_t k = 0; k < n; k++) {
+        const float *px = img->data + k * (size_t)img->n_channels;
+        tx[k] = (ts_rgb){px[ch[0]], px[ch[1]], px[ch[2]]};
+    }
+    ts_status st = ts_envmap_create(tx, (uint32_t)img->width, (uint32_t)img->height, out, err);
+    if (st) ts_error_prefix(err, "%s", name);
+    free(tx);
+    return st;
+}
+
 ts_status ts_envmap_load(const char *path, ts_envmap **out, ts_error *err)
 {
     *out = NULL;
     ts_image img = {0};
     ts_status st = ts_exr_read(path, &img, err);
     if (st) return st;
-    int ch[3] = {ts_image_channel(&img, "R"), ts_image_channel(&img, "G"), ts_image_channel(&img, "B")};
-    ts_rgb *tx = NULL;
-    if (ch[0] < 0 || ch[1] < 0 || ch[2] < 0) {
-        st = ts_error_set(err, TS_ERR_INVALID, "%s: environment map needs channels R, G and B", path);
-        goto fail;
-    }
-    size_t n = (size_t)img.width * (size_t)img.height;
-    tx = malloc(n * sizeof *tx);
-    if (!tx) {
-        st = ts_error_set(err, TS_ERR_NOMEM, "%s: out of memory for %d×%d texels", path, img.width, img.height);
-        goto fail;
-    }
-    for (size_t k = 0; k < n; k++) {
-        const float *px = img.data + k * (size_t)img.n_channels;
-        tx[k] = (ts_rgb){px[ch[0]], px[ch[1]], px[ch[2]]};
-    }
-    st = ts_envmap_create(tx, (uint32_t)img.width, (uint32_t)img.height, out, err);
-    if (st) ts_error_prefix(err, "%s", path);
-fail:
-    free(tx);
+    st = ts_envmap_from_image(&img, path, out, err);
     ts_image_fini(&img);
     return st;
 }

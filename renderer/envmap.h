@@ -44,6 +44,10 @@ ts_status ts_envmap_create(const ts_rgb *texels, uint32_t width, uint32_t height
 /* From a lat-long EXR with channels R, G, B (ts_exr_read). On failure *out is NULL and
  * err holds TS_ERR_IO / TS_ERR_INVALID with a sentence naming the file. */
 ts_status ts_envmap_load(const char *path, ts_envmap **out, ts_error *err);
+/* From an image with channels R, G, B (e.g. from ts_exr_read_memory); name prefixes the
+ * error sentence. *out NULL on failure. */
+struct ts_image;
+ts_status ts_envmap_from_image(const struct ts_image *img, const char *name, ts_envmap **out, ts_error *err);
 /* Frees everything the map owns; NULL is a no-op. */
 void ts_envmap_destroy(ts_envmap *m);
 

@@ -52,7 +52,6 @@ ts_status ts_fourier_table_load(const char *path, struct ts_fourier_table **out,
     *out = NULL;
     ts_status st = TS_OK;
     unsigned char *buf = NULL;
-    ts_fourier_table *t = NULL;
     FILE *f = fopen(path, "rb");
     if (!f) return ts_error_set(err, TS_ERR_IO, "%s: cannot open Fourier BSDF file: %s", path, strerror(errno));
     if (fseek(f, 0, SEEK_END) != 0) {
@@ -79,11 +78,29 @@ ts_status ts_fourier_table_load(const char *path, struct ts_fourier_table **out,
         st = ts_error_set(err, TS_ERR_IO, "%s: read error", path);
         goto fail_buf;
     }
+    st = ts_fourier_table_load_memory(buf, (size_t)size, path, out, err);
+fail_buf:
+    free(buf);
+fail_file:
+    fclose(f);
+    return st;
+}
+
+ts_status ts_fourier_table_load_memory(const unsigned char *buf, size_t size, const char *path,
+                                       struct ts_fourier_table **out, ts_error *err)
+{
+    *out = NULL;
+    ts_status st = TS_OK;
+    ts_fourier_table *t = NULL;
+    if (!path) path = "(memory)";
+    if (size < HEADER_BYTES)
+        return ts_error_set(err, TS_ERR_INVALID, "%s: truncated Fourier BSDF file: %zu bytes, the header alone is %d",
+                            path, size, HEADER_BYTES);
     static const unsigned char magic[8] = {'S', 'C', 'A', 'T', 'F', 'U', 'N', 0x01};
     if (memcmp(buf, magic, 8) != 0) {
         st = ts_error_set(err, TS_ERR_INVALID, "%s: not a pbrt-v3 Fourier BSDF file (bad magic, expected \"SCATFUN\\x01\")",
                           path);
-        goto fail_buf;
+        return st;
     }
     int32_t flags = le_i32(buf + 8), n_mu = le_i32(buf + 12), n_coeffs = le_i32(buf + 16), m_max = le_i32(buf + 20),
             n_channels = le_i32(buf + 24), n_bases = le_i32(buf + 28);
@@ -92,33 +109,33 @@ ts_status ts_fourier_table_load(const char *path, struct ts_fourier_table **out,
         st = ts_error_set(err, TS_ERR_UNSUPPORTED,
                           "%s: unsupported flags %d (only 1, a uniform non-textured material, is supported)", path,
                           (int)flags);
-        goto fail_buf;
+        return st;
     }
     if (n_channels != 1 && n_channels != 3) {
         st = ts_error_set(err, TS_ERR_UNSUPPORTED, "%s: unsupported channel count %d (expected 1 or 3)", path,
                           (int)n_channels);
-        goto fail_buf;
+        return st;
     }
     if (n_bases != 1) {
         st = ts_error_set(err, TS_ERR_UNSUPPORTED, "%s: unsupported basis count %d (expected 1)", path, (int)n_bases);
-        goto fail_buf;
+        return st;
     }
     if (n_mu < 2 || n_mu > MAX_MU || n_coeffs < 0 || m_max < 1 || m_max > MAX_M) {
         st = ts_error_set(err, TS_ERR_INVALID, "%s: invalid sizes (nMu %d, nCoeffs %d, mMax %d)", path, (int)n_mu,
                           (int)n_coeffs, (int)m_max);
-        goto fail_buf;
+        return st;
     }
     if (!(eta > 0) || !isfinite(eta)) {
         st = ts_error_set(err, TS_ERR_INVALID, "%s: invalid index of refraction %g", path, eta);
-        goto fail_buf;
+        return st;
     }
     uint64_t nn = (uint64_t)n_mu * (uint64_t)n_mu;
     uint64_t expect = HEADER_BYTES + 4 * ((uint64_t)n_mu + nn + 2 * nn + (uint64_t)n_coeffs);
     if ((uint64_t)size != expect) {
-        st = ts_error_set(err, TS_ERR_INVALID, "%s: %s Fourier BSDF file: %ld bytes, the header announces %llu", path,
+        st = ts_error_set(err, TS_ERR_INVALID, "%s: %s Fourier BSDF file: %zu bytes, the header announces %llu", path,
                           (uint64_t)size < expect ? "truncated" : "inconsistent (trailing data)", size,
                           (unsigned long long)expect);
-        goto fail_buf;
+        return st;
     }
     t = calloc(1, sizeof *t);
     if (!t) goto fail_nomem;
@@ -173,8 +190,6 @@ ts_status ts_fourier_table_load(const char *path, struct ts_fourier_table **out,
     }
     for (uint64_t i = 0; i < nn; i++) t->a0[i] = t->m[i] > 0 ? t->a[t->a_offset[i]] : 0;
     for (int i = 0; i < m_max; i++) t->recip[i] = i > 0 ? 1.0f / (float)i : 0;
-    free(buf);
-    fclose(f);
     *out = t;
     return TS_OK;
 
@@ -182,10 +197,6 @@ fail_nomem:
     st = ts_error_set(err, TS_ERR_NOMEM, "%s: out of memory for the Fourier BSDF table", path);
 fail_table:
     ts_fourier_table_destroy(t);
-fail_buf:
-    free(buf);
-fail_file:
-    fclose(f);
     return st;
 }
 

@@ -14,6 +14,7 @@
 #ifndef TS_FOURIER_BSDF_H
 #define TS_FOURIER_BSDF_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "error.h"
@@ -39,6 +40,11 @@ typedef struct ts_fourier_table {
  * or TS_ERR_INVALID / TS_ERR_UNSUPPORTED (bad content) with a sentence naming the file;
  * *out is left NULL. Thread-safe. */
 ts_status ts_fourier_table_load(const char *path, struct ts_fourier_table **out, ts_error *err);
+
+/* The same from an in-memory file image of size bytes (only read); path names it in
+ * messages (NULL: "(memory)"). Errors as ts_fourier_table_load except TS_ERR_IO. */
+ts_status ts_fourier_table_load_memory(const unsigned char *buf, size_t size, const char *path,
+                                       struct ts_fourier_table **out, ts_error *err);
 
 /* Frees a table from ts_fourier_table_load; NULL is accepted. */
 void ts_fourier_table_destroy(struct ts_fourier_table *t);

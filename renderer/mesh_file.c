@@ -1350,6 +1350,18 @@ static bool ext_is(const char *ext, const char *want)
     return *ext == '\0' && *want == '\0';
 }
 
+/* Parses a whole NUL-terminated file image; *out is set only on success. */
+static ts_status parse_buffer(const load_ctx *c, bool is_obj, const char *buf, size_t size, ts_mesh_data *out)
+{
+    ts_mesh_data m = {0};
+    ts_status st = is_obj ? obj_parse(c, buf, size, &m) : ply_parse(c, buf, size, &m);
+    if (!st)
+        *out = m;
+    else
+        ts_mesh_data_free(&m);
+    return st;
+}
+
 ts_status ts_mesh_file_load(const char *base_dir, const char *rel_path, const ts_mesh_limits *limits,
                             ts_mesh_data *out, ts_error *err)
 {
@@ -1368,15 +1380,35 @@ ts_status ts_mesh_file_load(const char *base_dir, const char *rel_path, const ts
     char *buf;
     size_t size;
     if ((st = read_file(&c, real, &buf, &size))) goto fail_real;
-    ts_mesh_data m = {0};
-    st = is_obj ? obj_parse(&c, buf, size, &m) : ply_parse(&c, buf, size, &m);
-    if (!st)
-        *out = m;
-    else
-        ts_mesh_data_free(&m);
+    st = parse_buffer(&c, is_obj, buf, size, out);
     free(buf);
 fail_real:
     free(real);
+    return st;
+}
+
+ts_status ts_mesh_load_memory(const char *name, const void *bytes, size_t size, const ts_mesh_limits *limits,
+                              ts_mesh_data *out, ts_error *err)
+{
+    load_ctx c = {.name = name ? name : "", .err = err};
+    if (limits) c.lim = *limits;
+    if (!out) return fail(&c, TS_ERR_INVALID, "no output mesh given");
+    *out = (ts_mesh_data){0};
+    const char *slash = strrchr(c.name, '/'), *leaf = slash ? slash + 1 : c.name;
+    const char *dot = strrchr(leaf, '.');
+    bool is_obj = dot && ext_is(dot + 1, "obj"), is_ply = dot && ext_is(dot + 1, "ply");
+    if (!is_obj && !is_ply) return fail(&c, TS_ERR_INVALID, "unknown extension (expected .obj or .ply)");
+    if (size == 0 || !bytes) return fail(&c, TS_ERR_INVALID, "file is empty");
+    if (over(size, c.lim.max_file_bytes) || size >= SIZE_MAX)
+        return fail(&c, TS_ERR_LIMIT, "file is %llu bytes, more than the limit of %llu", (unsigned long long)size,
+                    (unsigned long long)(c.lim.max_file_bytes ? c.lim.max_file_bytes : SIZE_MAX - 1));
+    /* The parsers rely on a terminating NUL (strtod), so parse a copy. */
+    char *buf = malloc(size + 1);
+    if (!buf) return nomem(&c);
+    memcpy(buf, bytes, size);
+    buf[size] = '\0';
+    ts_status st = parse_buffer(&c, is_obj, buf, size, out);
+    free(buf);
     return st;
 }
 

@@ -32,6 +32,7 @@
 #ifndef TS_MESH_FILE_H
 #define TS_MESH_FILE_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "error.h"
@@ -63,6 +64,13 @@ typedef struct ts_mesh_data {
  * "C" locale, which it is unless the program calls setlocale). */
 ts_status ts_mesh_file_load(const char *base_dir, const char *rel_path, const ts_mesh_limits *limits,
                             ts_mesh_data *out, ts_error *err);
+
+/* Parses an in-memory file image (for fuzzing and callers that already hold the bytes):
+ * name is used in messages and its extension (.obj or .ply) picks the format; bytes (size
+ * bytes, need not be NUL-terminated) are only read. Same results, limits (max_file_bytes
+ * applies to size) and errors as ts_mesh_file_load without the path checks. Thread-safe. */
+ts_status ts_mesh_load_memory(const char *name, const void *bytes, size_t size, const ts_mesh_limits *limits,
+                              ts_mesh_data *out, ts_error *err);
 
 /* Frees the arrays of m (NULL or zeroed is fine) and zeroes it. */
 void ts_mesh_data_free(ts_mesh_data *m);

@@ -270,9 +270,9 @@ static tri_d tri_load(const ts_mesh *m, uint32_t prim)
 /* Möller–Trumbore in double. Returns false only if the ray is parallel to the plane (or the
  * triangle degenerate); u, v (barycentrics of p1, p2) and t are not range-checked.
  * num = e2·((o − p0) × e1) = t·det is |e1 × e2| times the signed distance of o from the
- * plane; num_noise bounds its round-off. */
+ * plane; tri_num_noise bounds its round-off. */
 typedef struct tri_solve {
-    double u, v, t, det, num, num_noise;
+    double u, v, t, det, num;
     ts_dvec3 e1, e2, tvec;
 } tri_solve;
 
@@ -290,10 +290,14 @@ static bool tri_mt(const tri_d *tr, ts_dvec3 o, ts_dvec3 d, tri_solve *s)
     s->v = ts_dvec3_dot(d, qvec) * inv;
     s->num = ts_dvec3_dot(s->e2, qvec);
     s->t = s->num * inv;
-    /* e2·(tvec × e1) is a triple product: its round-off is a few units of
-     * |e1|·|e2|·|tvec|; T_GUARD leaves a wide margin. */
-    s->num_noise = T_GUARD * ts_dvec3_length(s->e1) * ts_dvec3_length(s->e2) * ts_dvec3_length(s->tvec);
     return true;
+}
+
+/* e2·(tvec × e1) is a triple product: its round-off is a few units of |e1|·|e2|·|tvec|;
+ * T_GUARD leaves a wide margin. Computed only where it is compared (three square roots). */
+static inline double tri_num_noise(const tri_solve *s)
+{
+    return T_GUARD * ts_dvec3_length(s->e1) * ts_dvec3_length(s->e2) * ts_dvec3_length(s->tvec);
 }
 
 bool ts_shape_triangle_intersect(const ts_shape *s, uint32_t prim, const ts_ray *ray, float tmax, float *t_hit)
@@ -303,7 +307,7 @@ bool ts_shape_triangle_intersect(const ts_shape *s, uint32_t prim, const ts_ray 
     tri_solve m;
     if (!tri_mt(&tr, ts_dvec3_from(ray->o), ts_dvec3_from(ray->d), &m)) return false;
     if (m.u < 0 || m.v < 0 || m.u + m.v > 1) return false;
-    if (fabs(m.num) <= m.num_noise || !root_ok(m.t, 0, tmax)) return false;
+    if (!root_ok(m.t, 0, tmax) || fabs(m.num) <= tri_num_noise(&m)) return false;
     *t_hit = (float)m.t;
     return true;
 }
@@ -312,9 +316,17 @@ bool ts_shape_triangle_ahead(const ts_shape *s, uint32_t prim, const ts_ray *ray
 {
     if (s->type != TS_SHAPE_MESH || prim >= s->mesh.n_triangles) return false;
     tri_d tr = tri_load(&s->mesh, prim);
+    /* tri_mt without the barycentrics, which this test does not need. */
+    ts_dvec3 o = ts_dvec3_from(ray->o), d = ts_dvec3_from(ray->d);
     tri_solve m;
-    if (!tri_mt(&tr, ts_dvec3_from(ray->o), ts_dvec3_from(ray->d), &m)) return false;
-    return fabs(m.num) > m.num_noise && m.t > 0;
+    m.e1 = ts_dvec3_sub(tr.p1, tr.p0);
+    m.e2 = ts_dvec3_sub(tr.p2, tr.p0);
+    m.det = ts_dvec3_dot(m.e1, ts_dvec3_cross(d, m.e2));
+    if (m.det == 0 || !isfinite(m.det)) return false;
+    m.tvec = ts_dvec3_sub(o, tr.p0);
+    m.num = ts_dvec3_dot(m.e2, ts_dvec3_cross(m.tvec, m.e1));
+    m.t = m.num * (1.0 / m.det);
+    return m.t > 0 && fabs(m.num) > tri_num_noise(&m);
 }
 
 /* ---- public: intersection ---- */

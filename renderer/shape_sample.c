@@ -240,89 +240,39 @@ static ts_dvec3 normal_at(const ts_shape *s, uint32_t prim, ts_dvec3 p)
     return ts_dvec3_normalize(ts_xform_normal(&s->to_world, n_obj));
 }
 
-/* ---- intersection (double, no offsets) ---- */
+/* ---- intersection: shape.c's exact, conservative routines ---- */
 
-/* Roots of a t² + b t + c = 0 in increasing order; false if none is real. */
-static bool quadratic(double a, double b, double c, double *t0, double *t1)
+/* Nearest hit of (o, d) in (0, tmax): one triangle of a mesh, or the analytic shape. */
+static bool first_hit(const ts_shape *s, uint32_t prim, const ts_ray *ray, float tmax, float *t)
 {
-    if (a == 0) return false;
-    double disc = b * b - 4 * a * c;
-    if (disc < 0) return false;
-    double root = sqrt(disc);
-    double q = b < 0 ? -0.5 * (b - root) : -0.5 * (b + root);
-    double r0 = q / a, r1 = q != 0 ? c / q : r0;
-    *t0 = fmin(r0, r1);
-    *t1 = fmax(r0, r1);
-    return true;
+    if (s->type == TS_SHAPE_MESH) return ts_shape_triangle_intersect(s, prim, ray, tmax, t);
+    return ts_shape_intersect(s, ray, tmax, t);
 }
 
 bool ts_shape_sample_intersect(const ts_shape *s, uint32_t prim, ts_vec3 o, ts_vec3 d, double tmin, double tmax,
                                double *t_out, ts_vec3 *n_out)
 {
-    double t = 0;
-    ts_dvec3 n;
-    if (s->type == TS_SHAPE_MESH) {
-        if (prim >= s->mesh.n_triangles) return false;
-        ts_dvec3 v[3];
-        tri_vertices(s, prim, v);
-        ts_dvec3 od = dv(o), dd = dv(d);
-        ts_dvec3 e1 = ts_dvec3_sub(v[1], v[0]), e2 = ts_dvec3_sub(v[2], v[0]);
-        ts_dvec3 pv = ts_dvec3_cross(dd, e2);
-        double det = ts_dvec3_dot(e1, pv);
-        if (det == 0) return false;
-        double inv = 1.0 / det;
-        ts_dvec3 tv = ts_dvec3_sub(od, v[0]);
-        double b1 = ts_dvec3_dot(tv, pv) * inv;
-        if (b1 < 0 || b1 > 1) return false;
-        ts_dvec3 qv = ts_dvec3_cross(tv, e1);
-        double b2 = ts_dvec3_dot(dd, qv) * inv;
-        if (b2 < 0 || b1 + b2 > 1) return false;
-        t = ts_dvec3_dot(e2, qv) * inv;
-        if (!(t > tmin && t < tmax)) return false;
-        n = ts_dvec3_normalize(ts_dvec3_cross(e1, e2));
-    } else {
-        ts_dvec3 O = ts_xform_point_inv(&s->to_world, dv(o));
-        ts_dvec3 D = ts_xform_vector_inv(&s->to_world, dv(d));
-        ts_dvec3 p_obj;
-        bool hit = false;
-        switch (s->type) {
-        case TS_SHAPE_SPHERE: {
-            double r = s->sphere.radius, t0, t1;
-            if (!quadratic(ts_dvec3_dot(D, D), 2 * ts_dvec3_dot(O, D), ts_dvec3_dot(O, O) - r * r, &t0, &t1))
-                return false;
-            if (t0 > tmin && t0 < tmax) t = t0, hit = true;
-            else if (t1 > tmin && t1 < tmax) t = t1, hit = true;
-            break;
-        }
-        case TS_SHAPE_DISK: {
-            if (D.z == 0) return false;
-            t = -O.z / D.z;
-            if (!(t > tmin && t < tmax)) return false;
-            double x = O.x + t * D.x, y = O.y + t * D.y, r2 = x * x + y * y;
-            double ro = s->disk.radius, ri = s->disk.inner_radius;
-            hit = r2 <= ro * ro && r2 >= ri * ri;
-            break;
-        }
-        case TS_SHAPE_CYLINDER: {
-            double r = s->cylinder.radius, t0, t1;
-            if (!quadratic(D.x * D.x + D.y * D.y, 2 * (O.x * D.x + O.y * D.y), O.x * O.x + O.y * O.y - r * r, &t0,
-                           &t1))
-                return false;
-            double ts[2] = {t0, t1};
-            for (int k = 0; k < 2 && !hit; k++) {
-                double z = O.z + ts[k] * D.z;
-                if (ts[k] > tmin && ts[k] < tmax && z >= 0 && z <= s->cylinder.height) t = ts[k], hit = true;
-            }
-            break;
-        }
-        default: break;
-        }
-        if (!hit) return false;
-        p_obj = ts_dvec3_add(O, ts_dvec3_scale(D, t));
-        n = ts_dvec3_normalize(ts_xform_normal(&s->to_world, object_normal(s, p_obj)));
+    if (s->type == TS_SHAPE_MESH && prim >= s->mesh.n_triangles) return false;
+    float tmax_f = (float)tmax, t;
+    ts_ray ray = ts_ray_make(o, d, tmax_f);
+    if (!first_hit(s, prim, &ray, tmax_f, &t)) return false;
+    double t_hit = t;
+    if (!(t_hit > tmin)) {
+        /* A root at or before tmin (the surface o lies on): the next one is found from a
+         * ray starting just past both; spheres and tubes have at most one more. */
+        float t_skip = ts_next_float_up(fmaxf(t, (float)tmin));
+        ray.o = ts_ray_at(&ray, t_skip);
+        if (!first_hit(s, prim, &ray, tmax_f - t_skip, &t)) return false;
+        t_hit = (double)t_skip + t;
+        ray.o = o;
+        if (!(t_hit > tmin && t_hit < tmax)) return false;
     }
-    *t_out = t;
-    if (n_out) *n_out = ts_dvec3_to_vec3(n);
+    *t_out = t_hit;
+    if (n_out) {
+        ts_interaction si;
+        ts_shape_interaction(s, 0, s->type == TS_SHAPE_MESH ? prim : 0, &ray, (float)t_hit, &si);
+        *n_out = si.n;
+    }
     return true;
 }
 

@@ -494,8 +494,8 @@ int ts_cli_main(int argc, char **argv)
     }
     if (strcmp(cmd, "merge") == 0) return ts_cli_merge(argc - 1, argv + 1);
     if (strcmp(cmd, "serve") == 0) {
-        fprintf(stderr, "tessera: '%s' is not available in this build yet\n", cmd);
-        return 2;
+        int srv_serve_main(int argc, char **argv); /* server/serve.h */
+        return srv_serve_main(argc - 1, argv + 1);
     }
     return usage_error("unknown command '%s'", cmd);
 }

@@ -253,7 +253,9 @@ srv_job *srv_store_submit(srv_store *st, const char *text, size_t len, int *http
     j->spp_target = spp;
     j->time_limit_s = s->job.time_limit_s;
     j->target_error = s->job.target_error;
-    j->created_unix = (double)time(NULL);
+    struct timespec now;
+    clock_gettime(CLOCK_REALTIME, &now);
+    j->created_unix = (double)now.tv_sec + 1e-6 * (double)(now.tv_nsec / 1000); /* µs: orders restored jobs */
     ts_sched_job_desc d = {0};
     d.scene = s;
     d.integrator = s->integrator.type;

@@ -12,6 +12,7 @@
 #define ZERO_EXPECTED 1e-8   /* a cell this empty should never see a sample */
 #define NOISE_FRACTION 0.03  /* quadrature error target: 0.03 √E counts per cell ... */
 #define MAX_COUNT_ERROR 1e-3 /* ... and at most 0.001 counts */
+#define FLOAT_NOISE 1e-6     /* relative error floor: float pdf evaluations */
 
 void ts_chi2_params_default(ts_chi2_params *p)
 {
@@ -280,14 +281,17 @@ static double integrate_cell(quad *q, double z0, double z1, double p0, double p1
     double total = 0;
     for (int k = 0; k < parts; k++) {
         double a = bounds[k], b = bounds[k + 1];
+        double maxv = 0, coarse = gl_rect(q, a, b, p0, p1, &maxv);
         double tol = abs_tol / parts;
         if (n_samples > 0) {
             /* Target |ΔE| ≤ min(0.03 √E, 0.001) counts: negligible in the cell's term
              * and, summed over all cells, in the no-direction bin's. */
-            double maxv = 0;
-            double e = fmax(gl_rect(q, a, b, p0, p1, &maxv) * n_samples, 1.0);
+            double e = fmax(coarse * n_samples, 1.0);
             tol = fmin(NOISE_FRACTION * sqrt(e), MAX_COUNT_ERROR) / n_samples / parts;
         }
+        /* The pdf is evaluated in float at float directions: differences of the rules
+         * below ~1e-6 of the value are rounding noise, not quadrature error. */
+        tol = fmax(tol, FLOAT_NOISE * fabs(coarse));
         double e = 0;
         total += adaptive(q, a, b, p0, p1, tol, pts, n, &e);
         *err += e;
@@ -297,7 +301,7 @@ static double integrate_cell(quad *q, double z0, double z1, double p0, double p1
 
 double ts_chi2_integrate(ts_chi2_pdf_fn pdf, void *ctx, int cos_theta_res, int phi_res, double abs_tol)
 {
-    quad q = {.pdf = pdf, .ctx = ctx, .budget = 4000000};
+    quad q = {.pdf = pdf, .ctx = ctx, .budget = 200000};
     q.heap_cap = (int)(q.budget / 89) + 2;
     q.heap = malloc(sizeof(rect) * (size_t)q.heap_cap);
     if (!q.heap) return NAN;

@@ -38,16 +38,18 @@ static double rotated_f(void *ctx, ts_vec3 w)
     return r->f(r->ctx, v);
 }
 
-static double integrate_around(double (*f)(void *, ts_vec3), void *ctx, ts_vec3 peak)
+static double integrate_around(double (*f)(void *, ts_vec3), void *ctx, ts_vec3 peak, double tol)
 {
     enum { rows = 21, cols = 42 };
     rotated r = {f, ctx};
     r.fn = ts_vec3_normalize(peak);
     ts_coordinate_system(r.fn, &r.fs, &r.ft);
-    double phi = (0.5 + 3) * 2 * TS_PI_D / cols; /* middle of a cell on the equator (middle row) */
-    r.gn = (ts_vec3){(float)cos(phi), (float)sin(phi), 0};
+    /* Inside a cell near the equator, off the horizon split and off the cell's centre
+     * lines (an unguided quadrature can be fooled by a peak exactly on a split line). */
+    double phi = 3.3 * 2 * TS_PI_D / cols, z = 0.3 / rows;
+    r.gn = (ts_vec3){(float)(sqrt(1 - z * z) * cos(phi)), (float)(sqrt(1 - z * z) * sin(phi)), (float)z};
     ts_coordinate_system(r.gn, &r.gs, &r.gt);
-    return ts_chi2_integrate(rotated_f, &r, rows, cols, 1e-8);
+    return ts_chi2_integrate(rotated_f, &r, rows, cols, tol);
 }
 
 static double d_cos(void *ctx, ts_vec3 w)
@@ -91,7 +93,7 @@ static void test_d_normalised(void **state)
     for (int t = 0; t < 2; t++)
         for (size_t i = 0; i < sizeof alphas / sizeof alphas[0]; i++) {
             dctx c = {ts_microfacet_make((ts_microfacet_type)t, alphas[i][0], alphas[i][1]), {0, 0, 1}};
-            double v = integrate_around(d_cos, &c, (ts_vec3){0, 0, 1});
+            double v = integrate_around(d_cos, &c, (ts_vec3){0, 0, 1}, 1e-8);
             print_message("∫D cos: type %d α=(%g,%g): %.8f\n", t, alphas[i][0], alphas[i][1], v);
             assert_close(v, 1, 1e-5);
         }
@@ -118,7 +120,7 @@ static void test_g1_projected_area(void **state)
                 float th = ts_radians(thetas[k]);
                 dctx c = {ts_microfacet_make((ts_microfacet_type)t, alphas[a][0], alphas[a][1]),
                           {sinf(th) * 0.8f, sinf(th) * 0.6f, cosf(th)}};
-                double v = integrate_around(projected, &c, (ts_vec3){0, 0, 1});
+                double v = integrate_around(projected, &c, (ts_vec3){0, 0, 1}, 1e-7);
                 if (fabs(v / c.wo.z - 1) > 1e-4)
                     fail_msg("type %d α=(%g,%g) θo=%g: ∫ = %.8f, cosθo = %.8f", t, alphas[a][0], alphas[a][1],
                              thetas[k], v, c.wo.z);

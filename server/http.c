@@ -1,0 +1,257 @@
+/* http.c — libmicrohttpd glue; see http.h. */
+#include "http.h"
+
+#include <arpa/inet.h>
+#include <cjson/cJSON.h>
+#include <microhttpd.h>
+#include <netinet/in.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "api.h"
+#include "offload.h"
+
+struct srv_http {
+    struct MHD_Daemon *d;
+    srv_server *srv;
+};
+
+static void add_common_headers(srv_request *r, struct MHD_Response *resp)
+{
+    const srv_config *cfg = &r->srv->cfg;
+    if (cfg->cors_origin) {
+        MHD_add_response_header(resp, "Access-Control-Allow-Origin", cfg->cors_origin);
+        MHD_add_response_header(resp, "Vary", "Origin");
+    }
+    MHD_add_response_header(resp, "Cache-Control", "no-store");
+}
+
+int srv_http_queue(srv_request *r, unsigned status, struct MHD_Response *resp)
+{
+    if (!resp) return MHD_NO;
+    add_common_headers(r, resp);
+    r->status = status;
+    /* Counted when queued, so a client's next request already sees it in /metrics. */
+    srv_metrics_count(r->srv->metrics, r->route, status);
+    enum MHD_Result ret = MHD_queue_response(r->conn, status, resp);
+    MHD_destroy_response(resp);
+    return ret;
+}
+
+int srv_http_reply(srv_request *r, unsigned status, const char *type, const void *body, size_t len)
+{
+    struct MHD_Response *resp = MHD_create_response_from_buffer(len, (void *)body, MHD_RESPMEM_MUST_COPY);
+    if (!resp) return MHD_NO;
+    if (type) MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, type);
+    return srv_http_queue(r, status, resp);
+}
+
+int srv_http_reply_json(srv_request *r, unsigned status, const char *json)
+{
+    return srv_http_reply(r, status, "application/json", json, strlen(json));
+}
+
+int srv_http_error(srv_request *r, unsigned status, const char *fmt, ...)
+{
+    char msg[1024];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddStringToObject(o, "error", msg);
+    cJSON_AddNumberToObject(o, "status", status);
+    char *s = cJSON_PrintUnformatted(o);
+    cJSON_Delete(o);
+    int ret = srv_http_reply_json(r, status, s ? s : "{\"error\":\"out of memory\"}");
+    free(s);
+    return ret;
+}
+
+int srv_http_method_not_allowed(srv_request *r, const char *allow)
+{
+    char msg[256];
+    snprintf(msg, sizeof msg, "{\"error\":\"method %s is not allowed here; allowed: %s\",\"status\":405}", r->method, allow);
+    struct MHD_Response *resp = MHD_create_response_from_buffer(strlen(msg), msg, MHD_RESPMEM_MUST_COPY);
+    if (!resp) return MHD_NO;
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, "application/json");
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_ALLOW, allow);
+    return srv_http_queue(r, 405, resp);
+}
+
+
+typedef struct deferred { srv_request *r; void (*fn)(void *); } deferred;
+
+static void run_deferred(void *arg)
+{
+    deferred *d = arg;
+    d->fn(d->r);
+    free(d);
+}
+
+int srv_http_defer(srv_request *r, void (*fn)(void *r))
+{
+    deferred *d = malloc(sizeof *d);
+    if (!d) return srv_http_error(r, 500, "out of memory");
+    d->r = r;
+    d->fn = fn;
+    r->deferred = true;
+    r->completed = false;
+    MHD_suspend_connection(r->conn);
+    if (!srv_offload_submit(r->srv->offload, run_deferred, d)) {
+        free(d);
+        r->reply_status = 503;
+        r->reply_type = "application/json";
+        const char *m = "{\"error\":\"the server is shutting down\",\"status\":503}";
+        r->reply_body = (unsigned char *)strdup(m);
+        r->reply_len = r->reply_body ? strlen(m) : 0;
+        srv_http_complete(r);
+    }
+    return MHD_YES;
+}
+
+void srv_http_complete(srv_request *r)
+{
+    r->completed = true;
+    MHD_resume_connection(r->conn);
+}
+
+static int reply_deferred(srv_request *r)
+{
+    struct MHD_Response *resp =
+        MHD_create_response_from_buffer(r->reply_len, r->reply_body ? r->reply_body : (void *)"", r->reply_body ? MHD_RESPMEM_MUST_FREE : MHD_RESPMEM_PERSISTENT);
+    if (!resp) return MHD_NO;
+    r->reply_body = NULL; /* the response frees it */
+    if (r->reply_type) MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, r->reply_type);
+    if (r->reply_disposition[0]) MHD_add_response_header(resp, "Content-Disposition", r->reply_disposition);
+    return srv_http_queue(r, r->reply_status, resp);
+}
+
+static enum MHD_Result handler(void *cls, struct MHD_Connection *conn, const char *url, const char *method,
+                               const char *version, const char *upload, size_t *upload_size, void **con_cls)
+{
+    (void)version;
+    srv_server *srv = cls;
+    srv_request *r = *con_cls;
+    if (!r) {
+        r = calloc(1, sizeof *r);
+        if (!r) return MHD_NO;
+        r->srv = srv;
+        r->conn = conn;
+        r->route = srv_api_route(url);
+        *con_cls = r;
+        const char *cl = MHD_lookup_connection_value(conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH);
+        if (cl && strtoull(cl, NULL, 10) > srv->cfg.max_body) {
+            r->method = method, r->url = url;
+            r->body_too_large = true;
+            return (enum MHD_Result)srv_http_error(r, 413, "the request body (%s bytes) is larger than the limit of %zu bytes",
+                                                   cl, srv->cfg.max_body);
+        }
+        return MHD_YES;
+    }
+    r->method = method;
+    r->url = url;
+    if (r->deferred) {
+        if (!r->completed) return MHD_YES;
+        return (enum MHD_Result)reply_deferred(r);
+    }
+    if (*upload_size) {
+        size_t n = *upload_size;
+        *upload_size = 0;
+        if (r->body_too_large || r->body_len + n > srv->cfg.max_body) {
+            r->body_too_large = true;
+            return MHD_YES; /* keep reading, discard */
+        }
+        if (r->body_len + n + 1 > r->body_cap) {
+            size_t cap = r->body_cap ? r->body_cap : 16384;
+            while (cap < r->body_len + n + 1) cap *= 2;
+            char *b = realloc(r->body, cap);
+            if (!b) return MHD_NO;
+            r->body = b;
+            r->body_cap = cap;
+        }
+        memcpy(r->body + r->body_len, upload, n);
+        r->body_len += n;
+        r->body[r->body_len] = '\0';
+        return MHD_YES;
+    }
+    if (r->body_too_large)
+        return (enum MHD_Result)srv_http_error(r, 413, "the request body is larger than the limit of %zu bytes",
+                                               srv->cfg.max_body);
+    return (enum MHD_Result)srv_api_handle(r);
+}
+
+static void completed(void *cls, struct MHD_Connection *conn, void **con_cls, enum MHD_RequestTerminationCode toe)
+{
+    (void)cls, (void)conn, (void)toe;
+    srv_request *r = *con_cls;
+    if (!r) return;
+    srv_api_request_done(r);
+    free(r->body);
+    free(r->reply_body);
+    free(r);
+    *con_cls = NULL;
+}
+
+srv_http *srv_http_start(srv_server *srv, int *port_out, char *err, size_t err_len)
+{
+    srv_http *h = calloc(1, sizeof *h);
+    if (!h) {
+        snprintf(err, err_len, "out of memory");
+        return NULL;
+    }
+    h->srv = srv;
+    struct sockaddr_storage ss;
+    memset(&ss, 0, sizeof ss);
+    const char *bind = srv->cfg.bind;
+    if (strchr(bind, ':')) {
+        struct sockaddr_in6 *a = (struct sockaddr_in6 *)&ss;
+        a->sin6_family = AF_INET6;
+        a->sin6_port = htons((uint16_t)srv->cfg.port);
+        if (inet_pton(AF_INET6, bind, &a->sin6_addr) != 1) goto bad_addr;
+    } else {
+        struct sockaddr_in *a = (struct sockaddr_in *)&ss;
+        a->sin_family = AF_INET;
+        a->sin_port = htons((uint16_t)srv->cfg.port);
+        if (inet_pton(AF_INET, bind, &a->sin_addr) != 1) goto bad_addr;
+    }
+    unsigned flags = MHD_USE_AUTO | MHD_USE_INTERNAL_POLLING_THREAD | MHD_ALLOW_SUSPEND_RESUME;
+    if (strchr(bind, ':')) flags |= MHD_USE_IPv6;
+    h->d = MHD_start_daemon(flags, (uint16_t)srv->cfg.port, NULL, NULL, handler, srv,
+                            MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&ss,
+                            MHD_OPTION_NOTIFY_COMPLETED, completed, srv,
+                            MHD_OPTION_THREAD_POOL_SIZE, (unsigned)(srv->cfg.http_threads > 0 ? srv->cfg.http_threads : 1),
+                            MHD_OPTION_CONNECTION_LIMIT, (unsigned)4000,
+                            MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)120,
+                            MHD_OPTION_LISTEN_BACKLOG_SIZE, (unsigned)1024,
+                            MHD_OPTION_END);
+    if (!h->d) {
+        snprintf(err, err_len, "cannot listen on %s port %d (in use, or not an address of this host)", bind, srv->cfg.port);
+        free(h);
+        return NULL;
+    }
+    const union MHD_DaemonInfo *info = MHD_get_daemon_info(h->d, MHD_DAEMON_INFO_BIND_PORT);
+    *port_out = info ? info->port : srv->cfg.port;
+    return h;
+bad_addr:
+    snprintf(err, err_len, "--bind %s: not a numeric IPv4 or IPv6 address", bind);
+    free(h);
+    return NULL;
+}
+
+void srv_http_quiesce(srv_http *h)
+{
+    if (!h || !h->d) return;
+    MHD_socket fd = MHD_quiesce_daemon(h->d);
+    if (fd != MHD_INVALID_SOCKET) close(fd);
+}
+
+void srv_http_stop(srv_http *h)
+{
+    if (!h) return;
+    if (h->d) MHD_stop_daemon(h->d);
+    free(h);
+}

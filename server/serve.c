@@ -1,0 +1,322 @@
+/* serve.c — `tessera serve`: options, start-up, the maintenance thread, shutdown.
+ *
+ * Start-up: parse options, restore jobs from --data, start the scheduler, the encoder
+ * pool and the HTTP daemon, print the URL. Shutdown on SIGINT/SIGTERM (taken with
+ * sigwait in the main thread, so no handler runs on a random thread): stop accepting,
+ * stop the render workers after their current tiles, checkpoint every job, end the event
+ * streams, drain the encoders, stop the daemon, free everything. */
+#include "serve.h"
+
+#include <errno.h>
+#include <getopt.h>
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "http.h"
+#include "job_store.h"
+#include "metrics.h"
+#include "offload.h"
+#include "persist.h"
+#include "scheduler.h"
+
+#define KEEPALIVE_S 15.0
+
+static void usage(FILE *f)
+{
+    fprintf(f,
+            "usage: tessera serve [--bind 127.0.0.1] [--port 8080] [--threads N] [--data DIR] [--token TOKEN]\n"
+            "                     [--max-running N] [--http-threads N] [--max-body BYTES] [--max-pixels N]\n"
+            "                     [--max-resolution N] [--max-spp N] [--max-triangles N] [--max-shapes N]\n"
+            "                     [--checkpoint-interval SECONDS] [--cors-origin ORIGIN] [--queue-builtin]\n");
+}
+
+static int usage_error(const char *fmt, const char *arg)
+{
+    fprintf(stderr, "tessera serve: ");
+    fprintf(stderr, fmt, arg);
+    fprintf(stderr, "\n");
+    usage(stderr);
+    return 2;
+}
+
+static bool parse_u64(const char *s, unsigned long long lo, unsigned long long hi, unsigned long long *out)
+{
+    char *end;
+    if (!s[0] || s[0] == '-') return false;
+    errno = 0;
+    unsigned long long v = strtoull(s, &end, 10);
+    if (*end || errno || v < lo || v > hi) return false;
+    *out = v;
+    return true;
+}
+
+void srv_server_kick(srv_server *srv)
+{
+    pthread_mutex_lock(&srv->mu);
+    srv->kick = true;
+    pthread_cond_signal(&srv->cv);
+    pthread_mutex_unlock(&srv->mu);
+}
+
+static void keepalive_all(srv_store *st)
+{
+    int n = 0;
+    srv_job **jobs = srv_store_list(st, &n);
+    for (int i = 0; jobs && i < n; i++) {
+        srv_events_keepalive(jobs[i]->events);
+        srv_job_release(jobs[i]);
+    }
+    free(jobs);
+}
+
+static void shutdown_streams(srv_store *st)
+{
+    int n = 0;
+    srv_job **jobs = srv_store_list(st, &n);
+    for (int i = 0; jobs && i < n; i++) {
+        srv_events_shutdown(jobs[i]->events);
+        srv_job_release(jobs[i]);
+    }
+    free(jobs);
+}
+
+/* Checkpoints (--data) every interval and soon after a job finishes; keep-alives to SSE
+ * clients (so vanished ones are noticed). Waits on srv->cv with a deadline. */
+static void *maintenance(void *arg)
+{
+    srv_server *srv = arg;
+    double next_ckpt = ts_now_seconds() + srv->cfg.checkpoint_interval_s, next_ka = ts_now_seconds() + KEEPALIVE_S;
+    pthread_mutex_lock(&srv->mu);
+    while (!srv->stopping) {
+        double now = ts_now_seconds();
+        double until = srv->cfg.data_dir && next_ckpt < next_ka ? next_ckpt : next_ka;
+        if (!srv->kick && now < until) {
+            struct timespec ts;
+            clock_gettime(CLOCK_REALTIME, &ts);
+            double wait = until - now, whole = floor(wait);
+            ts.tv_sec += (time_t)whole;
+            ts.tv_nsec += (long)((wait - whole) * 1e9);
+            if (ts.tv_nsec >= 1000000000L) ts.tv_sec++, ts.tv_nsec -= 1000000000L;
+            pthread_cond_timedwait(&srv->cv, &srv->mu, &ts);
+            continue;
+        }
+        bool kicked = srv->kick;
+        srv->kick = false;
+        pthread_mutex_unlock(&srv->mu);
+        now = ts_now_seconds();
+        if (srv->cfg.data_dir && (kicked || now >= next_ckpt)) {
+            srv_persist_save_changed(srv->cfg.data_dir, srv->store);
+            if (now >= next_ckpt) next_ckpt = now + srv->cfg.checkpoint_interval_s;
+        }
+        if (now >= next_ka) {
+            keepalive_all(srv->store);
+            next_ka = now + KEEPALIVE_S;
+        }
+        pthread_mutex_lock(&srv->mu);
+    }
+    pthread_mutex_unlock(&srv->mu);
+    return NULL;
+}
+
+int srv_serve_main(int argc, char **argv)
+{
+    enum {
+        OPT_BIND = 256, OPT_PORT, OPT_THREADS, OPT_DATA, OPT_TOKEN, OPT_MAX_RUNNING, OPT_HTTP_THREADS, OPT_MAX_BODY,
+        OPT_MAX_PIXELS, OPT_MAX_RES, OPT_MAX_SPP, OPT_MAX_TRIS, OPT_MAX_SHAPES, OPT_CKPT, OPT_CORS, OPT_BUILTIN, OPT_HELP
+    };
+    static const struct option opts[] = {
+        {"bind", required_argument, NULL, OPT_BIND},
+        {"port", required_argument, NULL, OPT_PORT},
+        {"threads", required_argument, NULL, OPT_THREADS},
+        {"data", required_argument, NULL, OPT_DATA},
+        {"token", required_argument, NULL, OPT_TOKEN},
+        {"max-running", required_argument, NULL, OPT_MAX_RUNNING},
+        {"http-threads", required_argument, NULL, OPT_HTTP_THREADS},
+        {"max-body", required_argument, NULL, OPT_MAX_BODY},
+        {"max-pixels", required_argument, NULL, OPT_MAX_PIXELS},
+        {"max-resolution", required_argument, NULL, OPT_MAX_RES},
+        {"max-spp", required_argument, NULL, OPT_MAX_SPP},
+        {"max-triangles", required_argument, NULL, OPT_MAX_TRIS},
+        {"max-shapes", required_argument, NULL, OPT_MAX_SHAPES},
+        {"checkpoint-interval", required_argument, NULL, OPT_CKPT},
+        {"cors-origin", required_argument, NULL, OPT_CORS},
+        {"queue-builtin", no_argument, NULL, OPT_BUILTIN},
+        {"help", no_argument, NULL, OPT_HELP},
+        {NULL, 0, NULL, 0}};
+    srv_server srv_storage, *srv = &srv_storage;
+    memset(srv, 0, sizeof *srv);
+    srv_config *cfg = &srv->cfg;
+    cfg->bind = "127.0.0.1";
+    cfg->port = 8080;
+    long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
+    cfg->threads = ncpu > 0 ? (int)ncpu : 1;
+    cfg->max_running = 4;
+    cfg->http_threads = 4;
+    cfg->max_body = 16u << 20;
+    cfg->checkpoint_interval_s = 30;
+    ts_scene_limits_default(&cfg->limits);
+    cfg->limits.max_width = cfg->limits.max_height = 8192;
+    cfg->limits.max_pixels = 4096ull * 4096;
+    cfg->limits.max_spp = 1u << 16;
+    cfg->limits.max_triangles = 5ull << 20;
+    cfg->limits.max_shapes = 1u << 16;
+    cfg->limits.max_file_bytes = 0; /* posted scenes reference no files */
+    cfg->limits.max_memory = 2ull << 30;
+    unsigned long long v;
+    optind = 1;
+    opterr = 0;
+    int c;
+    while ((c = getopt_long(argc, argv, ":", opts, NULL)) != -1) {
+        switch (c) {
+        case OPT_BIND: cfg->bind = optarg; break;
+        case OPT_PORT:
+            if (!parse_u64(optarg, 0, 65535, &v)) return usage_error("--port: expected 0 to 65535, got '%s'", optarg);
+            cfg->port = (int)v;
+            break;
+        case OPT_THREADS:
+            if (!parse_u64(optarg, 1, 1024, &v)) return usage_error("--threads: expected 1 to 1024, got '%s'", optarg);
+            cfg->threads = (int)v;
+            break;
+        case OPT_MAX_RUNNING:
+            if (!parse_u64(optarg, 1, 1024, &v)) return usage_error("--max-running: expected 1 to 1024, got '%s'", optarg);
+            cfg->max_running = (int)v;
+            break;
+        case OPT_HTTP_THREADS:
+            if (!parse_u64(optarg, 1, 64, &v)) return usage_error("--http-threads: expected 1 to 64, got '%s'", optarg);
+            cfg->http_threads = (int)v;
+            break;
+        case OPT_DATA: cfg->data_dir = optarg; break;
+        case OPT_TOKEN:
+            if (!optarg[0]) return usage_error("--token: expected a non-empty token%s", "");
+            cfg->token = optarg;
+            break;
+        case OPT_CORS: cfg->cors_origin = optarg; break;
+        case OPT_MAX_BODY:
+            if (!parse_u64(optarg, 64, 1ull << 32, &v)) return usage_error("--max-body: expected 64 to 4294967296 bytes, got '%s'", optarg);
+            cfg->max_body = (size_t)v;
+            break;
+        case OPT_MAX_PIXELS:
+            if (!parse_u64(optarg, 1, 1ull << 28, &v)) return usage_error("--max-pixels: expected 1 to 268435456, got '%s'", optarg);
+            cfg->limits.max_pixels = v;
+            break;
+        case OPT_MAX_RES:
+            if (!parse_u64(optarg, 1, 16384, &v)) return usage_error("--max-resolution: expected 1 to 16384, got '%s'", optarg);
+            cfg->limits.max_width = cfg->limits.max_height = (uint32_t)v;
+            break;
+        case OPT_MAX_SPP:
+            if (!parse_u64(optarg, 1, 1u << 24, &v)) return usage_error("--max-spp: expected 1 to 16777216, got '%s'", optarg);
+            cfg->limits.max_spp = (uint32_t)v;
+            break;
+        case OPT_MAX_TRIS:
+            if (!parse_u64(optarg, 1, 1ull << 32, &v)) return usage_error("--max-triangles: expected a positive count, got '%s'", optarg);
+            cfg->limits.max_triangles = v;
+            break;
+        case OPT_MAX_SHAPES:
+            if (!parse_u64(optarg, 1, 1u << 24, &v)) return usage_error("--max-shapes: expected a positive count, got '%s'", optarg);
+            cfg->limits.max_shapes = (uint32_t)v;
+            break;
+        case OPT_CKPT: {
+            char *end;
+            double s = strtod(optarg, &end);
+            if (*end || !(s > 0) || !isfinite(s)) return usage_error("--checkpoint-interval: expected positive seconds, got '%s'", optarg);
+            cfg->checkpoint_interval_s = s;
+            break;
+        }
+        case OPT_BUILTIN: cfg->queue_builtin = true; break;
+        case OPT_HELP: usage(stdout); return 0;
+        case ':': return usage_error("option '%s' needs a value", argv[optind - 1]);
+        default: return usage_error("unknown option '%s'", argv[optind - 1]);
+        }
+    }
+    if (optind < argc) return usage_error("unexpected argument '%s'", argv[optind]);
+
+    /* Signals are taken by sigwait below; every thread started from here inherits the mask. */
+    sigset_t sigs;
+    sigemptyset(&sigs);
+    sigaddset(&sigs, SIGINT);
+    sigaddset(&sigs, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &sigs, NULL);
+    signal(SIGPIPE, SIG_IGN);
+
+    int rc = 1;
+    ts_error err = {0};
+    pthread_mutex_init(&srv->mu, NULL);
+    pthread_cond_init(&srv->cv, NULL);
+    pthread_t maint;
+    bool maint_started = false;
+    srv->metrics = srv_metrics_create();
+    srv->store = srv_store_create(srv);
+    srv->offload = srv_offload_create(2);
+    srv->sched = ts_scheduler_create(cfg->threads, cfg->max_running, &err);
+    if (!srv->metrics || !srv->store || !srv->offload || !srv->sched) {
+        fprintf(stderr, "tessera serve: %s\n", err.message[0] ? err.message : "out of memory");
+        goto fail;
+    }
+    if (cfg->data_dir) {
+        if (srv_persist_init(cfg->data_dir, &err)) {
+            fprintf(stderr, "tessera serve: --data: %s\n", err.message);
+            goto fail;
+        }
+        int n = srv_persist_restore_all(cfg->data_dir, srv->store, &cfg->limits);
+        if (n) fprintf(stderr, "tessera serve: %d job(s) restored from %s\n", n, cfg->data_dir);
+    }
+    if (cfg->queue_builtin) {
+        size_t len;
+        const char *text = ts_scene_builtin_text(&len);
+        int status;
+        srv_job *j = srv_store_submit(srv->store, text, len, &status, &err);
+        if (!j) fprintf(stderr, "tessera serve: the built-in scene was not queued: %s\n", err.message);
+        else fprintf(stderr, "tessera serve: queued the built-in Cornell box as job %s\n", j->id);
+        srv_job_release(j);
+    }
+    if (pthread_create(&maint, NULL, maintenance, srv) != 0) {
+        fprintf(stderr, "tessera serve: cannot start the maintenance thread\n");
+        goto fail;
+    }
+    maint_started = true;
+    char msg[256];
+    int port = 0;
+    srv->http = srv_http_start(srv, &port, msg, sizeof msg);
+    if (!srv->http) {
+        fprintf(stderr, "tessera serve: %s\n", msg);
+        goto fail;
+    }
+    const char *host = strchr(cfg->bind, ':') ? NULL : cfg->bind;
+    if (host) printf("tessera: listening on http://%s:%d/\n", host, port);
+    else printf("tessera: listening on http://[%s]:%d/\n", cfg->bind, port);
+    fflush(stdout);
+
+    int sig = 0;
+    sigwait(&sigs, &sig);
+    fprintf(stderr, "tessera serve: %s, shutting down\n", sig == SIGINT ? "interrupted" : "terminated");
+    rc = 0;
+fail:
+    if (srv->http) srv_http_quiesce(srv->http);
+    if (maint_started) {
+        pthread_mutex_lock(&srv->mu);
+        srv->stopping = true;
+        pthread_cond_signal(&srv->cv);
+        pthread_mutex_unlock(&srv->mu);
+        pthread_join(maint, NULL);
+    }
+    if (srv->sched) ts_scheduler_stop(srv->sched);
+    if (cfg->data_dir && srv->store && rc == 0) {
+        int n = srv_persist_save_changed(cfg->data_dir, srv->store);
+        fprintf(stderr, "tessera serve: checkpointed %d job(s) to %s\n", n, cfg->data_dir);
+    }
+    if (srv->store) shutdown_streams(srv->store);
+    if (srv->offload) srv_offload_drain(srv->offload);
+    srv_http_stop(srv->http);
+    srv_offload_destroy(srv->offload);
+    srv_store_destroy(srv->store);
+    ts_scheduler_destroy(srv->sched);
+    srv_metrics_destroy(srv->metrics);
+    pthread_cond_destroy(&srv->cv);
+    pthread_mutex_destroy(&srv->mu);
+    return rc;
+}

@@ -1,0 +1,53 @@
+#!/bin/sh
+# run.sh — runs libFuzzer harnesses (tests/fuzz/README.md).
+#   tests/fuzz/run.sh [--keep] BUILD_DIR SECONDS HARNESS...
+# Each harness BUILD_DIR/fuzz_<h> runs for SECONDS over its seed corpus
+# tests/fuzz/corpus/<h>. New inputs go to a scratch folder (removed afterwards) or, with
+# --keep, to BUILD_DIR/fuzz-corpus/<h>, kept between runs; the seed corpus is never
+# written. Crash inputs are saved in BUILD_DIR/fuzz-artifacts/<h>/. Prints executions
+# and executions/s per harness and in total; exits 1 if any harness crashed, leaked, hit
+# a timeout or is missing (a missing binary is a failure, never a skip).
+set -u
+keep=0
+if [ "${1:-}" = "--keep" ]; then keep=1; shift; fi
+if [ $# -lt 3 ]; then echo "usage: $0 [--keep] BUILD_DIR SECONDS HARNESS..." >&2; exit 2; fi
+build=$1 seconds=$2; shift 2
+src=$(cd "$(dirname "$0")/../.." && pwd)
+status=0 total=0
+export UBSAN_OPTIONS="${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1}"
+for h in "$@"; do
+  bin=$build/fuzz_$h
+  if [ ! -x "$bin" ]; then
+    echo "fuzz $h: $bin is missing (make fuzz-build)" >&2
+    status=1
+    continue
+  fi
+  art=$build/fuzz-artifacts/$h
+  mkdir -p "$art"
+  if [ $keep = 1 ]; then
+    work=$build/fuzz-corpus/$h
+    mkdir -p "$work"
+  else
+    work=$(mktemp -d "${TMPDIR:-/tmp}/ts_fuzz_corpus_XXXXXX")
+  fi
+  log=$(mktemp "${TMPDIR:-/tmp}/ts_fuzz_log_XXXXXX")
+  # -timeout: one input taking this long is a hang; -rss_limit_mb: libFuzzer's default.
+  "$bin" -max_total_time="$seconds" -timeout=25 -rss_limit_mb=2048 -print_final_stats=1 \
+         -artifact_prefix="$art/" "$work" "$src/tests/fuzz/corpus/$h" >"$log" 2>&1
+  rc=$?
+  runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
+  rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log" | tail -1)
+  cov=$(grep -o 'cov: [0-9]*' "$log" | tail -1)
+  if [ $rc -ne 0 ] || [ -z "$runs" ]; then
+    echo "fuzz $h: FAILED (exit $rc); log follows, crash input in $art/" >&2
+    tail -n 80 "$log" >&2
+    status=1
+  else
+    echo "fuzz $h: ${runs} executions, ${rate} exec/s, ${cov:-cov: ?} in ${seconds}s"
+    total=$((total + runs))
+  fi
+  rm -f "$log"
+  [ $keep = 1 ] || rm -rf "$work"
+done
+echo "fuzz: ${total} executions in total"
+exit $status

@@ -1,0 +1,516 @@
+/* test_server_api.c — `tessera serve` over real HTTP on loopback (libcurl): submit, event
+ * streams, EXR/PNG contents, two jobs at once, priorities, cancel, time limit, target
+ * error, every bad-request class, auth, 200 concurrent clients, and CLI/server identity.
+ * Scenes are small `ao` films so the suite stays quick on two cores. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <cmocka.h>
+
+#include <curl/curl.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "exr.h"
+#include "image.h"
+#include "render.h"
+#include "server_harness.h"
+
+static test_server srv; /* the default server: 2 render threads */
+
+/* An AO scene: a sphere on a floor, w × h, spp; `job` is extra JSON for the "job" object. */
+static char *scene(int w, int h, int spp, const char *job)
+{
+    char *s = malloc(2048);
+    snprintf(s, 2048,
+             "{\"tessera\":1,\"name\":\"server-test\",\"camera\":{\"from\":[0,1.5,5],\"to\":[0,0.6,0],\"fov\":35},"
+             "\"film\":{\"width\":%d,\"height\":%d,\"filter\":{\"type\":\"box\"}},"
+             "\"sampler\":{\"spp\":%d,\"seed\":7},\"integrator\":{\"type\":\"ao\"},"
+             "\"materials\":{\"w\":{\"type\":\"diffuse\"}},"
+             "\"shapes\":[{\"type\":\"sphere\",\"center\":[0,0.6,0],\"radius\":0.6,\"material\":\"w\"},"
+             "{\"type\":\"mesh\",\"positions\":[-5,0,-5, 5,0,-5, 5,0,5, -5,0,5],\"indices\":[0,2,1, 0,3,2],\"material\":\"w\"}]"
+             "%s%s%s}",
+             w, h, spp, job ? ",\"job\":{" : "", job ? job : "", job ? "}" : "");
+    return s;
+}
+
+static int setup(void **state)
+{
+    (void)state;
+    curl_global_init(CURL_GLOBAL_DEFAULT);
+    const char *args[] = {"--threads", "2", "--max-spp", "4000000", NULL};
+    ts_server_start(&srv, args);
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    assert_int_equal(ts_server_stop(&srv, SIGTERM), 0);
+    curl_global_cleanup();
+    return 0;
+}
+
+static void get_path(char *out, size_t n, const char *id, const char *suffix)
+{
+    snprintf(out, n, "/api/v1/jobs/%s%s", id, suffix);
+}
+
+static void decode_exr(const http_resp *r, ts_image *img)
+{
+    ts_error err = {0};
+    assert_int_equal(r->status, 200);
+    if (ts_exr_read_memory((const unsigned char *)r->body, r->len, img, &err)) fail_msg("%s", err.message);
+}
+
+static int count_substr(const char *s, const char *needle)
+{
+    int n = 0;
+    for (const char *p = strstr(s, needle); p; p = strstr(p + 1, needle)) n++;
+    return n;
+}
+
+/* Submit; the late-joining stream gets every tile, then progress and done; the images. */
+static void test_submit_stream_and_images(void **state)
+{
+    (void)state;
+    char *doc = scene(80, 48, 8, "\"name\":\"first\"");
+    http_resp r;
+    ts_http(&srv, "POST", "/api/v1/jobs", doc, strlen(doc), NULL, &r);
+    assert_int_equal(r.status, 201);
+    assert_non_null(strstr(r.headers, "Location: /api/v1/jobs/"));
+    cJSON *o = cJSON_Parse(r.body);
+    char id[32], path[160];
+    snprintf(id, sizeof id, "%s", ts_json_str(o, "id"));
+    assert_string_equal(ts_json_str(o, "name"), "first");
+    cJSON_Delete(o);
+    ts_http_free(&r);
+
+    get_path(path, sizeof path, id, "/events");
+    char *ev = ts_http_stream(&srv, path, 30);
+    /* 80 × 48 is 3 × 2 tiles; whatever the moment we joined, each tile's last event says
+     * spp 8, the stream ends with done, and events of one tile never go back in spp. */
+    assert_non_null(strstr(ev, "event: done"));
+    assert_true(count_substr(ev, "event: tile") >= 6);
+    assert_int_equal(count_substr(ev, "\"spp\":8,\"png\""), 6);
+    assert_non_null(strstr(ev, "event: progress"));
+    const char *done = strstr(ev, "event: done");
+    assert_null(strstr(done, "event: tile"));
+    free(ev);
+
+    get_path(path, sizeof path, id, "");
+    o = ts_http_json(&srv, path, 200);
+    assert_string_equal(ts_json_str(o, "state"), "done");
+    assert_int_equal((int)ts_json_num(o, "spp_done"), 8);
+    assert_int_equal((long)ts_json_num(o, "samples"), 80 * 48 * 8);
+    assert_true(ts_json_num(o, "error_estimate") > 0);
+    assert_string_equal(ts_json_str(o, "halt_reason"), "spp");
+    assert_true(cJSON_IsArray(cJSON_GetObjectItem(o, "effects")));
+    assert_int_equal((int)ts_json_num(o, "nonfinite_samples"), 0);
+    cJSON_Delete(o);
+
+    /* EXR: float RGB + variance + count, 8 samples in every pixel. */
+    get_path(path, sizeof path, id, "/image.exr");
+    ts_http(&srv, "GET", path, NULL, 0, NULL, &r);
+    assert_non_null(strstr(r.headers, "image/x-exr"));
+    ts_image img;
+    decode_exr(&r, &img);
+    ts_http_free(&r);
+    assert_int_equal(img.width, 80);
+    assert_int_equal(img.height, 48);
+    int cc = ts_image_channel(&img, "count"), cr = ts_image_channel(&img, "R"), cv = ts_image_channel(&img, "R.var");
+    assert_true(cc >= 0 && cr >= 0 && cv >= 0);
+    double sum = 0;
+    for (int i = 0; i < 80 * 48; i++) {
+        assert_float_equal(img.data[i * img.n_channels + cc], 8.0f, 0);
+        float v = img.data[i * img.n_channels + cr];
+        assert_true(v >= 0 && v <= 1); /* AO is a fraction */
+        sum += v;
+    }
+    assert_true(sum / (80 * 48) > 0.2); /* mostly unoccluded */
+    ts_image_fini(&img);
+
+    /* PNG: signature and IHDR size. */
+    get_path(path, sizeof path, id, "/image.png");
+    ts_http(&srv, "GET", path, NULL, 0, NULL, &r);
+    assert_int_equal(r.status, 200);
+    assert_true(r.len > 33 && !memcmp(r.body, "\x89PNG\r\n\x1a\n", 8));
+    const unsigned char *u = (const unsigned char *)r.body;
+    assert_int_equal((u[16] << 24 | u[17] << 16 | u[18] << 8 | u[19]), 80);
+    assert_int_equal((u[20] << 24 | u[21] << 16 | u[22] << 8 | u[23]), 48);
+    ts_http_free(&r);
+
+    /* One tile: the bottom-right one is 16 × 16. */
+    get_path(path, sizeof path, id, "/tiles/2/1.exr");
+    ts_http(&srv, "GET", path, NULL, 0, NULL, &r);
+    decode_exr(&r, &img);
+    ts_http_free(&r);
+    assert_int_equal(img.width, 16);
+    assert_int_equal(img.height, 16);
+    assert_float_equal(img.data[ts_image_channel(&img, "count")], 8.0f, 0);
+    ts_image_fini(&img);
+    get_path(path, sizeof path, id, "/tiles/1/0.png");
+    ts_http(&srv, "GET", path, NULL, 0, NULL, &r);
+    assert_int_equal(r.status, 200);
+    ts_http_free(&r);
+    get_path(path, sizeof path, id, "/tiles/3/0.png");
+    ts_http(&srv, "GET", path, NULL, 0, NULL, &r);
+    assert_int_equal(r.status, 404);
+    ts_http_free(&r);
+
+    /* Listed, newest first. */
+    o = ts_http_json(&srv, "/api/v1/jobs", 200);
+    cJSON *jobs = cJSON_GetObjectItem(o, "jobs");
+    assert_true(cJSON_GetArraySize(jobs) >= 1);
+    assert_string_equal(ts_json_str(cJSON_GetArrayItem(jobs, 0), "id"), id);
+    cJSON_Delete(o);
+    free(doc);
+}
+
+static void cancel(const char *id)
+{
+    char path[160];
+    get_path(path, sizeof path, id, "");
+    http_resp r;
+    ts_http(&srv, "DELETE", path, NULL, 0, NULL, &r);
+    assert_int_equal(r.status, 200);
+    ts_http_free(&r);
+}
+
+/* Two jobs render at once (the default allows 4); cancel keeps the pixels. */
+static void test_two_jobs_at_once_and_cancel(void **state)
+{
+    (void)state;
+    char *doc = scene(64, 64, 1000000, NULL);
+    char a[32], b[32];
+    ts_submit(&srv, doc, a, sizeof a);
+    ts_submit(&srv, doc, b, sizeof b);
+    ts_wait_field(&srv, a, "spp_done", 2, 20);
+    ts_wait_field(&srv, b, "spp_done", 2, 20);
+    char path[160];
+    get_path(path, sizeof path, a, "");
+    cJSON *o = ts_http_json(&srv, path, 200);
+    assert_string_equal(ts_json_str(o, "state"), "running");
+    cJSON_Delete(o);
+    cancel(a);
+    cancel(b);
+    o = ts_wait_done(&srv, a, 20);
+    assert_string_equal(ts_json_str(o, "state"), "cancelled");
+    assert_string_equal(ts_json_str(o, "halt_reason"), "cancelled");
+    int spp = (int)ts_json_num(o, "spp_done");
+    assert_true(spp >= 2 && spp < 1000000);
+    cJSON_Delete(o);
+    o = ts_wait_done(&srv, b, 20);
+    assert_string_equal(ts_json_str(o, "state"), "cancelled");
+    cJSON_Delete(o);
+    /* The pixels stay: every pixel has at least spp_done samples. */
+    http_resp r;
+    get_path(path, sizeof path, a, "/image.exr");
+    ts_http(&srv, "GET", path, NULL, 0, NULL, &r);
+    ts_image img;
+    decode_exr(&r, &img);
+    ts_http_free(&r);
+    int cc = ts_image_channel(&img, "count");
+    for (int i = 0; i < 64 * 64; i++) assert_true(img.data[i * img.n_channels + cc] >= (float)spp);
+    ts_image_fini(&img);
+    free(doc);
+}
+
+/* Halting on the time limit and on the target error. */
+static void test_time_limit_and_target_error(void **state)
+{
+    (void)state;
+    char *doc = scene(64, 64, 1000000, "\"time_limit_s\":0.6");
+    char id[32];
+    ts_submit(&srv, doc, id, sizeof id);
+    cJSON *o = ts_wait_done(&srv, id, 20);
+    assert_string_equal(ts_json_str(o, "halt_reason"), "time_limit");
+    double el = ts_json_num(o, "elapsed_s");
+    /* The last pass is shrunk to fit the measured speed: a small overshoot at most. */
+    assert_true(el >= 0.6 && el < 1.6);
+    cJSON_Delete(o);
+    free(doc);
+
+    doc = scene(64, 64, 1000000, "\"target_error\":0.05");
+    ts_submit(&srv, doc, id, sizeof id);
+    o = ts_wait_done(&srv, id, 30);
+    assert_string_equal(ts_json_str(o, "halt_reason"), "target_error");
+    assert_true(ts_json_num(o, "error_estimate") <= 0.05);
+    assert_true(ts_json_num(o, "spp_done") >= 4 && ts_json_num(o, "spp_done") < 1000000);
+    cJSON_Delete(o);
+    free(doc);
+}
+
+/* Priority, then arrival: with one running slot, a blocker runs; then a low-priority job
+ * and a high-priority one queue; the high one starts first although it came later. */
+static void test_priority_order(void **state)
+{
+    (void)state;
+    test_server one;
+    const char *args[] = {"--threads", "2", "--max-running", "1", "--max-spp", "4000000", NULL};
+    ts_server_start(&one, args);
+    char *blocker = scene(64, 64, 1000000, "\"priority\":9");
+    char *low = scene(64, 64, 64, "\"priority\":0");
+    char *high = scene(64, 64, 64, "\"priority\":5");
+    char b[32], l[32], h[32];
+    ts_submit(&one, blocker, b, sizeof b);
+    ts_wait_field(&one, b, "spp_done", 1, 20);
+    ts_submit(&one, low, l, sizeof l);
+    ts_submit(&one, high, h, sizeof h);
+    char path[160];
+    get_path(path, sizeof path, h, "");
+    cJSON *o = ts_http_json(&one, path, 200);
+    assert_string_equal(ts_json_str(o, "state"), "queued");
+    cJSON_Delete(o);
+    get_path(path, sizeof path, b, "");
+    http_resp r;
+    ts_http(&one, "DELETE", path, NULL, 0, NULL, &r);
+    ts_http_free(&r);
+    cJSON *ol = ts_wait_done(&one, l, 30), *oh = ts_wait_done(&one, h, 30);
+    /* Low was submitted first but waited longer: it started after high finished. */
+    assert_true(ts_json_num(ol, "queued_s") > ts_json_num(oh, "queued_s") + ts_json_num(oh, "elapsed_s") * 0.5);
+    assert_string_equal(ts_json_str(oh, "state"), "done");
+    cJSON_Delete(ol);
+    cJSON_Delete(oh);
+    free(blocker);
+    free(low);
+    free(high);
+    assert_int_equal(ts_server_stop(&one, SIGTERM), 0);
+}
+
+static void expect(const test_server *s, const char *method, const char *path, const char *body, long status,
+                   const char *in_body)
+{
+    http_resp r;
+    ts_http(s, method, path, body, body ? strlen(body) : 0, NULL, &r);
+    if (r.status != status) fail_msg("%s %s: %ld, expected %ld: %s", method, path, r.status, status, r.body);
+    if (in_body && !strstr(r.body, in_body)) fail_msg("%s %s: '%s' not in '%s'", method, path, in_body, r.body);
+    ts_http_free(&r);
+}
+
+/* Every bad-request class, then the server is still healthy. */
+static void test_bad_requests(void **state)
+{
+    (void)state;
+    test_server s;
+    const char *args[] = {"--threads", "1", "--max-body", "4096", "--max-pixels", "20000", "--max-spp", "1000", NULL};
+    ts_server_start(&s, args);
+    expect(&s, "POST", "/api/v1/jobs", "{\"tessera\":1,\n \"camera\": [1,", 400, "line 2");
+    char *doc = scene(32, 32, 4, NULL);
+    char *bad = strstr(doc, "\"radius\":0.6");
+    memcpy(bad, "\"radius\":-.6", 12);
+    expect(&s, "POST", "/api/v1/jobs", doc, 400, "shapes[0].radius");
+    free(doc);
+    char big[8192];
+    memset(big, ' ', sizeof big - 1);
+    big[0] = '{';
+    big[sizeof big - 2] = '}';
+    big[sizeof big - 1] = '\0';
+    expect(&s, "POST", "/api/v1/jobs", big, 413, "limit");
+    doc = scene(200, 200, 4, NULL);
+    expect(&s, "POST", "/api/v1/jobs", doc, 422, "film");
+    free(doc);
+    doc = scene(32, 32, 5000, NULL);
+    expect(&s, "POST", "/api/v1/jobs", doc, 422, "spp");
+    free(doc);
+    doc = scene(32, 32, 4, "\"spp\":5000");
+    expect(&s, "POST", "/api/v1/jobs", doc, 422, "job.spp");
+    free(doc);
+    expect(&s, "POST", "/api/v1/jobs", "", 400, "empty");
+    expect(&s, "GET", "/api/v1/nothing", NULL, 404, "no such");
+    expect(&s, "GET", "/api/v1/jobs/0123456789abcdef", NULL, 404, "no job");
+    expect(&s, "GET", "/api/v1/jobs/0123456789abcdef/image.exr", NULL, 404, "no job");
+    http_resp r;
+    ts_http(&s, "PUT", "/api/v1/jobs", "{}", 2, NULL, &r);
+    assert_int_equal(r.status, 405);
+    assert_non_null(strstr(r.headers, "Allow: GET, HEAD, POST"));
+    ts_http_free(&r);
+    ts_http(&s, "POST", "/healthz", "{}", 2, NULL, &r);
+    assert_int_equal(r.status, 405);
+    assert_non_null(strstr(r.headers, "Allow:"));
+    assert_null(strstr(r.headers, "Access-Control-Allow-Origin")); /* no CORS unless configured */
+    ts_http_free(&r);
+    expect(&s, "GET", "/healthz", NULL, 200, "ok");
+    /* Metrics count requests by route and status. */
+    expect(&s, "GET", "/metrics", NULL, 200, "tessera_http_requests_total{route=\"/api/v1/jobs\",status=\"422\"} 3");
+    assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
+}
+
+static void test_auth(void **state)
+{
+    (void)state;
+    test_server s;
+    const char *args[] = {"--threads", "1", "--token", "s3cret", "--cors-origin", "https://example.org", NULL};
+    ts_server_start(&s, args);
+    http_resp r;
+    ts_http(&s, "GET", "/api/v1/jobs", NULL, 0, NULL, &r);
+    assert_int_equal(r.status, 401);
+    assert_non_null(strstr(r.headers, "WWW-Authenticate: Bearer"));
+    ts_http_free(&r);
+    ts_http(&s, "GET", "/api/v1/jobs", NULL, 0, "Authorization: Bearer wrong", &r);
+    assert_int_equal(r.status, 401);
+    ts_http_free(&r);
+    ts_http(&s, "GET", "/api/v1/jobs", NULL, 0, "Authorization: Bearer s3cret", &r);
+    assert_int_equal(r.status, 200);
+    assert_non_null(strstr(r.headers, "Access-Control-Allow-Origin: https://example.org"));
+    ts_http_free(&r);
+    ts_http(&s, "GET", "/api/v1/jobs?access_token=s3cret", NULL, 0, NULL, &r);
+    assert_int_equal(r.status, 200);
+    ts_http_free(&r);
+    ts_http(&s, "GET", "/metrics", NULL, 0, NULL, &r);
+    assert_int_equal(r.status, 401);
+    ts_http_free(&r);
+    ts_http(&s, "GET", "/healthz", NULL, 0, NULL, &r); /* liveness needs no token */
+    assert_int_equal(r.status, 200);
+    ts_http_free(&r);
+    assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
+}
+
+/* 200 clients hold event streams of a rendering job; the server keeps answering. */
+static void test_200_concurrent_clients(void **state)
+{
+    (void)state;
+    char *doc = scene(64, 64, 1000000, NULL);
+    char id[32], path[256];
+    ts_submit(&srv, doc, id, sizeof id);
+    free(doc);
+    CURLM *m = curl_multi_init();
+    enum { N = 200 };
+    CURL *e[N];
+    snprintf(path, sizeof path, "%s/api/v1/jobs/%s/events", srv.base, id);
+    FILE *null = fopen("/dev/null", "w");
+    for (int i = 0; i < N; i++) {
+        e[i] = curl_easy_init();
+        curl_easy_setopt(e[i], CURLOPT_URL, path);
+        curl_easy_setopt(e[i], CURLOPT_WRITEDATA, null);
+        curl_multi_add_handle(m, e[i]);
+    }
+    /* Drive the multi handle until every stream is connected and got data. */
+    int running = 0;
+    double t0 = ts_now_seconds();
+    long connected = 0;
+    while (ts_now_seconds() - t0 < 10) {
+        curl_multi_perform(m, &running);
+        int numfds;
+        curl_multi_poll(m, NULL, 0, 50, &numfds);
+        connected = 0;
+        for (int i = 0; i < N; i++) {
+            long code = 0;
+            curl_easy_getinfo(e[i], CURLINFO_RESPONSE_CODE, &code);
+            connected += code == 200;
+        }
+        if (connected == N) break;
+    }
+    assert_int_equal(connected, N);
+    assert_int_equal(running, N);
+    /* Meanwhile: health, status and an image answer promptly. */
+    double t1 = ts_now_seconds();
+    int n_req = 0;
+    for (int k = 0; k < 50; k++, n_req++) {
+        expect(&srv, "GET", "/healthz", NULL, 200, "ok");
+        curl_multi_perform(m, &running);
+    }
+    snprintf(path, sizeof path, "/api/v1/jobs/%s", id);
+    expect(&srv, "GET", path, NULL, 200, "running");
+    snprintf(path, sizeof path, "/api/v1/jobs/%s/image.png", id);
+    expect(&srv, "GET", path, NULL, 200, NULL);
+    double dt = ts_now_seconds() - t1;
+    print_message("50 health checks + status + PNG with %d open streams: %.3f s\n", N, dt);
+    assert_true(dt < 5);
+    cancel(id);
+    /* Every stream ends after done. */
+    t0 = ts_now_seconds();
+    while (running > 0 && ts_now_seconds() - t0 < 20) {
+        curl_multi_perform(m, &running);
+        int numfds;
+        curl_multi_poll(m, NULL, 0, 50, &numfds);
+    }
+    assert_int_equal(running, 0);
+    for (int i = 0; i < N; i++) {
+        curl_multi_remove_handle(m, e[i]);
+        curl_easy_cleanup(e[i]);
+    }
+    curl_multi_cleanup(m);
+    fclose(null);
+}
+
+/* A finished server job's EXR equals `tessera render` of the same scene and spp: every
+ * channel bit for bit, every attribute but the render time. */
+static void test_cli_server_identity(void **state)
+{
+    (void)state;
+    char *doc = scene(72, 40, 12, NULL);
+    char id[32], path[160];
+    ts_submit(&srv, doc, id, sizeof id);
+    cJSON *o = ts_wait_done(&srv, id, 30);
+    cJSON_Delete(o);
+    http_resp r;
+    get_path(path, sizeof path, id, "/image.exr");
+    ts_http(&srv, "GET", path, NULL, 0, NULL, &r);
+    ts_image a, b;
+    decode_exr(&r, &a);
+    ts_http_free(&r);
+
+    char dir[] = "/tmp/tessera-ident-XXXXXX";
+    assert_non_null(mkdtemp(dir));
+    char scene_path[256], out[256];
+    snprintf(scene_path, sizeof scene_path, "%s/scene.json", dir);
+    snprintf(out, sizeof out, "%s/cli.exr", dir);
+    FILE *f = fopen(scene_path, "w");
+    fputs(doc, f);
+    fclose(f);
+    pid_t pid = fork();
+    if (pid == 0) {
+        int nul = open("/dev/null", O_WRONLY);
+        dup2(nul, 2);
+        execl(getenv("TS_BINARY"), getenv("TS_BINARY"), "render", scene_path, "-o", out, "--quiet", "--threads", "3",
+              (char *)NULL);
+        _exit(127);
+    }
+    int status;
+    waitpid(pid, &status, 0);
+    assert_int_equal(WEXITSTATUS(status), 0);
+    ts_error err = {0};
+    if (ts_exr_read(out, &b, &err)) fail_msg("%s", err.message);
+    assert_int_equal(a.width, b.width);
+    assert_int_equal(a.height, b.height);
+    assert_int_equal(a.n_channels, b.n_channels);
+    for (int c = 0; c < a.n_channels; c++) assert_string_equal(a.channel_names[c], b.channel_names[c]);
+    assert_memory_equal(a.data, b.data, sizeof(float) * (size_t)a.width * a.height * a.n_channels);
+    for (int i = 0; i < b.n_attrs; i++) {
+        const ts_image_attr *x = &b.attrs[i], *y = ts_image_attr_find(&a, x->name);
+        if (!strcmp(x->name, "tessera_render_time_s")) continue;
+        if (!y) fail_msg("the server's EXR lacks attribute %s", x->name);
+        assert_int_equal(x->type, y->type);
+        if (x->type == TS_ATTR_STRING) assert_string_equal(x->s, y->s);
+        else if (x->type == TS_ATTR_INT) assert_int_equal(x->i, y->i);
+        else assert_memory_equal(&x->d, &y->d, sizeof x->d);
+    }
+    ts_image_fini(&a);
+    ts_image_fini(&b);
+    unlink(out);
+    unlink(scene_path);
+    rmdir(dir);
+    free(doc);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_submit_stream_and_images),
+        cmocka_unit_test(test_two_jobs_at_once_and_cancel),
+        cmocka_unit_test(test_time_limit_and_target_error),
+        cmocka_unit_test(test_priority_order),
+        cmocka_unit_test(test_bad_requests),
+        cmocka_unit_test(test_auth),
+        cmocka_unit_test(test_200_concurrent_clients),
+        cmocka_unit_test(test_cli_server_identity),
+    };
+    return cmocka_run_group_tests(tests, setup, teardown);
+}
