@@ -7,6 +7,17 @@
 #include "material.h"
 #include "sampling.h"
 
+const char *ts_integrator_name(ts_integrator_type type)
+{
+    switch (type) {
+    case TS_INTEGRATOR_PATH: return "path";
+    case TS_INTEGRATOR_DIRECT: return "direct";
+    case TS_INTEGRATOR_AO: return "ao";
+    case TS_INTEGRATOR_NORMALS: return "normals";
+    }
+    return "unknown";
+}
+
 bool ts_integrator_available(ts_integrator_type type)
 {
     (void)type;

@@ -21,6 +21,9 @@ typedef struct ts_counters {
     uint64_t nonfinite; /* samples dropped for NaN, ∞ or negative radiance */
 } ts_counters;
 
+/* The scene-format name of an integrator type ("path", "direct", "ao", "normals"). */
+const char *ts_integrator_name(ts_integrator_type type);
+
 /* True when the integrator type is implemented in this build. */
 bool ts_integrator_available(ts_integrator_type type);
 

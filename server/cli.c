@@ -136,17 +136,6 @@ static ts_status write_outputs(const ts_scene *scene, const ts_film *film, char 
     return st;
 }
 
-static const char *integrator_name(ts_integrator_type t)
-{
-    switch (t) {
-    case TS_INTEGRATOR_PATH: return "path";
-    case TS_INTEGRATOR_DIRECT: return "direct";
-    case TS_INTEGRATOR_AO: return "ao";
-    case TS_INTEGRATOR_NORMALS: return "normals";
-    }
-    return "?";
-}
-
 /* ---------------------------------------------------------------- farm shards
 
  * With --checkpoint, SIGTERM and SIGINT stop the render between tiles and the last
@@ -311,7 +300,7 @@ static int cmd_render(int argc, char **argv)
     ts_integrator_type integ = scene->integrator.type;
     if (!ts_integrator_available(integ)) {
         fprintf(stderr, "tessera: note: the '%s' integrator is not implemented yet; rendering the 'ao' debugging view\n",
-                integrator_name(integ));
+                ts_integrator_name(integ));
         integ = TS_INTEGRATOR_AO;
     }
 
@@ -333,7 +322,7 @@ static int cmd_render(int argc, char **argv)
     uint32_t done = 0;                        /* of them, [range.begin, range.begin + done) are in the film */
     ts_shard_info info;
     if (checkpoint) {
-        ts_shard_info_init(&info, scene, film, integrator_name(integ), NULL, 0, target_spp, 0);
+        ts_shard_info_init(&info, scene, film, ts_integrator_name(integ), NULL, 0, target_spp, 0);
         ts_film *resumed = NULL;
         uint32_t at = range.begin;
         st = ts_shard_checkpoint_load(checkpoint, &info, range, &resumed, &at, &err);
@@ -417,7 +406,7 @@ static int cmd_render(int argc, char **argv)
         }
         if (checkpoint && done < span && ts_now_seconds() - last_checkpoint >= checkpoint_interval) {
             ts_sample_range held = {range.begin, range.begin + done};
-            ts_shard_info_init(&info, scene, film, integrator_name(integ), &held, 1, target_spp, stats.seconds);
+            ts_shard_info_init(&info, scene, film, ts_integrator_name(integ), &held, 1, target_spp, stats.seconds);
             st = ts_shard_write(checkpoint, film, &info, &err);
             if (st) break;
             last_checkpoint = ts_now_seconds();
@@ -426,7 +415,7 @@ static int cmd_render(int argc, char **argv)
     if (prog.enabled) fprintf(stderr, "\n");
     if (!st && g_signal) { /* stopped by SIGTERM/SIGINT: save, then exit as the signal would */
         ts_sample_range held = {range.begin, range.begin + done};
-        ts_shard_info_init(&info, scene, film, integrator_name(integ), &held, done ? 1 : 0, target_spp, stats.seconds);
+        ts_shard_info_init(&info, scene, film, ts_integrator_name(integ), &held, done ? 1 : 0, target_spp, stats.seconds);
         st = ts_shard_write(checkpoint, film, &info, &err);
         int sig = g_signal;
         if (st) fprintf(stderr, "tessera: %s; could not save the checkpoint: %s\n", strsignal(sig), err.message);
@@ -448,11 +437,11 @@ static int cmd_render(int argc, char **argv)
     } else {
         if (shard_text) {
             ts_sample_range held = {range.begin, range.begin + done};
-            ts_shard_info_init(&info, scene, film, integrator_name(integ), &held, done ? 1 : 0, target_spp,
+            ts_shard_info_init(&info, scene, film, ts_integrator_name(integ), &held, done ? 1 : 0, target_spp,
                                stats.seconds);
             st = write_shard_outputs(film, &info, outputs, n_outputs, &err);
         } else {
-            st = write_outputs(scene, film, outputs, n_outputs, &stats, done, error, integrator_name(integ), &err);
+            st = write_outputs(scene, film, outputs, n_outputs, &stats, done, error, ts_integrator_name(integ), &err);
         }
         if (st) {
             fprintf(stderr, "tessera: %s\n", err.message);
@@ -466,7 +455,7 @@ static int cmd_render(int argc, char **argv)
         fprintf(stderr,
                 "tessera: %s: %d×%d, %u spp (%s), %s integrator, %d threads, %.2f s, %.2f Msamples/s, "
                 "error estimate %.3g%%, %llu non-finite samples dropped\n",
-                scene->name, film->width, film->height, done, stop_reason, integrator_name(integ), n_threads,
+                scene->name, film->width, film->height, done, stop_reason, ts_integrator_name(integ), n_threads,
                 stats.seconds, msps, 100 * error, (unsigned long long)stats.counters.nonfinite);
         for (int i = 0; i < n_outputs; i++) fprintf(stderr, "tessera: wrote %s\n", outputs[i]);
     }

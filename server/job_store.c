@@ -17,17 +17,6 @@ struct srv_store {
     srv_job *jobs; /* guarded by mu: newest first */
 };
 
-static const char *integrator_name(ts_integrator_type t)
-{
-    switch (t) {
-    case TS_INTEGRATOR_PATH: return "path";
-    case TS_INTEGRATOR_DIRECT: return "direct";
-    case TS_INTEGRATOR_AO: return "ao";
-    case TS_INTEGRATOR_NORMALS: return "normals";
-    }
-    return "unknown";
-}
-
 srv_store *srv_store_create(srv_server *srv)
 {
     srv_store *st = calloc(1, sizeof *st);
@@ -198,7 +187,7 @@ static void describe_scene(srv_job *j, const ts_scene *s)
 {
     if (!j->name && s->job.name) j->name = strdup(s->job.name);
     else if (!j->name && s->name) j->name = strdup(s->name);
-    snprintf(j->integrator, sizeof j->integrator, "%s", integrator_name(s->integrator.type));
+    snprintf(j->integrator, sizeof j->integrator, "%s", ts_integrator_name(s->integrator.type));
     ts_effects_format(s->effects, j->effects, sizeof j->effects);
     j->full_w = s->width, j->full_h = s->height;
     j->x0 = s->crop_x0, j->y0 = s->crop_y0, j->w = s->crop_x1 - s->crop_x0, j->h = s->crop_y1 - s->crop_y0;
@@ -239,7 +228,7 @@ srv_job *srv_store_submit(srv_store *st, const char *text, size_t len, int *http
     }
     if (!ts_integrator_available(s->integrator.type)) {
         ts_error_set(err, TS_ERR_UNSUPPORTED, "integrator.type: the '%s' integrator is not available in this build",
-                     integrator_name(s->integrator.type));
+                     ts_integrator_name(s->integrator.type));
         goto fail_scene;
     }
     *http_status = 500;
