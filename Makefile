@@ -1,5 +1,5 @@
 # tessera — the README's two commands, set-up included.
-#   make run    install what is missing, build, render the built-in Cornell box
+#   make run    install what is missing, build, render the built-in Cornell box, serve it
 #   make test   install what is missing, build, run the whole suite through ctest
 # Also: make build, make deps, make test-asan, make test-tsan, make fuzz, make bench, make clean.
 
@@ -38,9 +38,15 @@ $(BUILD)/CMakeCache.txt: | deps
 build: deps $(BUILD)/CMakeCache.txt
 	cmake --build $(BUILD) -j $(JOBS)
 
+# The main job: render the built-in Cornell box to files, then serve it: `tessera serve`
+# on $(BIND):$(PORT) with the Cornell box queued as its first job (Ctrl-C stops it).
+BIND ?= 127.0.0.1
+PORT ?= 8080
 run: build
 	$(BUILD)/tessera render -o cornell.exr -o cornell.png
 	@echo "run: wrote $(CURDIR)/cornell.exr and $(CURDIR)/cornell.png"
+	@echo "run: serving; open http://$(BIND):$(PORT)/ in a browser (Ctrl-C to stop)"
+	$(BUILD)/tessera serve --bind $(BIND) --port $(PORT) --queue-builtin
 
 test: build
 	ctest --test-dir $(BUILD) --output-on-failure -j $(JOBS)

@@ -81,6 +81,7 @@ int ts_server_stop(test_server *s, int sig)
     kill(s->pid, sig);
     int status = 0;
     waitpid(s->pid, &status, 0);
+    unlink(s->log); /* kept only when a test fails before stopping its server */
     return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
