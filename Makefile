@@ -11,8 +11,9 @@ CMAKE_ARGS ?=
 # Debian packages the build and tests need (DESIGN.md §3).
 DEB_PACKAGES := cmake make gcc pkg-config libembree-dev libopenexr-dev libpng-dev libcjson-dev nettle-dev \
                 libmicrohttpd-dev libcmocka-dev libcurl4-openssl-dev \
-                clang libclang-rt-14-dev
-# (clang + libclang-rt: the libFuzzer harnesses, whose smoke runs are part of `make test`.)
+                clang libclang-rt-14-dev chromium
+# (clang + libclang-rt: the libFuzzer harnesses, whose smoke runs are part of `make test`;
+#  chromium: the browser tests of the web UI, tests/browser.)
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
@@ -48,14 +49,25 @@ run: build
 	@echo "run: serving; open http://$(BIND):$(PORT)/ in a browser (Ctrl-C to stop)"
 	$(BUILD)/tessera serve --bind $(BIND) --port $(PORT) --queue-builtin
 
+# TEST_ENV: environment (and wrapper) for the ctest run; the sanitizer targets set it.
+TEST_ENV ?=
 test: build
-	ctest --test-dir $(BUILD) --output-on-failure -j $(JOBS)
+	$(TEST_ENV) ctest --test-dir $(BUILD) --output-on-failure -j $(JOBS)
+
+# Sanitizer runs stop at the first report (halt_on_error), with a leak check under ASan.
+# TSan's runtime (GCC 12) cannot map its shadow memory when the kernel randomises mmap
+# with more than 28 bits (vm.mmap_rnd_bits = 32 on recent kernels), so the run goes under
+# `setarch -R` (no ASLR) wherever the container allows that personality.
+ASAN_ENV  = ASAN_OPTIONS=halt_on_error=1:detect_leaks=1:abort_on_error=0:strict_string_checks=1 \
+            UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
+TSAN_ENV  = TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:suppressions=$(CURDIR)/tests/tsan.supp \
+            $(shell setarch $$(uname -m) -R true 2>/dev/null && echo setarch $$(uname -m) -R)
 
 test-asan:
-	$(MAKE) test BUILD=build-asan BUILD_TYPE=RelWithDebInfo CMAKE_ARGS=-DTS_SANITIZE=address
+	$(MAKE) test BUILD=build-asan BUILD_TYPE=RelWithDebInfo CMAKE_ARGS=-DTS_SANITIZE=address TEST_ENV="env $(ASAN_ENV)"
 
 test-tsan:
-	$(MAKE) test BUILD=build-tsan BUILD_TYPE=RelWithDebInfo CMAKE_ARGS=-DTS_SANITIZE=thread
+	$(MAKE) test BUILD=build-tsan BUILD_TYPE=RelWithDebInfo CMAKE_ARGS=-DTS_SANITIZE=thread TEST_ENV="env $(TSAN_ENV)"
 
 # Fuzzing (tests/fuzz/README.md): harnesses built by clang with libFuzzer, ASan and UBSan in
 # their own folder; `make fuzz` runs each for FUZZ_SECONDS, keeping what it finds in

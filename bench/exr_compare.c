@@ -29,8 +29,8 @@ int main(int argc, char **argv)
     }
     int status = 0;
     if (a.width != b.width || a.height != b.height || a.n_channels != b.n_channels) {
-        printf("different layouts: %dx%d×%d vs %dx%d×%d\n", a.width, a.height, a.n_channels, b.width, b.height,
-               b.n_channels);
+        printf("different layouts: %dx%d×%d vs %dx%d×%d\n", a.width, a.height, a.n_channels, b.width,
+               b.height, b.n_channels);
         status = 1;
         goto done;
     }
@@ -54,10 +54,11 @@ int main(int argc, char **argv)
     } else {
         size_t px = first / (size_t)a.n_channels;
         int c = (int)(first % (size_t)a.n_channels);
-        printf("DIFFERENT: %zu of %zu values; first at pixel (%zu, %zu) channel %s: %.9g vs %.9g; max relative "
-               "difference %.3g\n",
-               n_diff, n, px % (size_t)a.width, px / (size_t)a.width, a.channel_names[c], a.data[first],
-               b.data[first], max_rel);
+        printf(
+            "DIFFERENT: %zu of %zu values; first at pixel (%zu, %zu) channel %s: %.9g vs %.9g; max relative "
+            "difference %.3g\n",
+            n_diff, n, px % (size_t)a.width, px / (size_t)a.width, a.channel_names[c], a.data[first],
+            b.data[first], max_rel);
         status = 1;
     }
 done:

@@ -14,7 +14,8 @@
  *   2. Ray log: one more render at 1 thread with the accel's ray log on (accel.h) records
  *      every ray the integrator asks Embree about, in query order (nearest-hit and
  *      occlusion queries), up to --max-rays (default 2^21) rays.
- *   3. R repetitions (default 3), each measuring side by side, at 1 and at N threads:
+ *   3. R repetitions (default 3), each measuring side by side, at 1 and at N threads
+ *      (render, then the two replays, seconds apart, so load changes hit all three):
  *        render  — ts_render of the whole film, the CLI's code path;
  *        accel   — our ts_accel_intersect / ts_accel_occluded on the logged rays (Embree
  *                  plus our triangle filter, user geometry and double-precision
@@ -27,8 +28,8 @@
  *      Rays are split into contiguous chunks, one per thread, so each thread sees the
  *      render's ray order. Each repetition's ratios are taken within the repetition;
  *      the row reports medians.
- *   Peak memory is getrusage's ru_maxrss after the timed renders and before the ray log
- *   is allocated, so it is the render's (this process holds one scene and one film).
+ *   Peak memory is getrusage's ru_maxrss after one render at N threads and before the ray
+ *   log is allocated, so it is the render's (this process holds one scene and one film).
  *
  * Columns: scene, integrator, threads, spp, width, height, samples, rays, rays_per_sample,
  * render_s, samples_per_s, rays_per_s, accel_rays_per_s, embree_rays_per_s, efficiency
@@ -52,7 +53,7 @@
 #include "render.h"
 #include "scene.h"
 
-#define MAX_REPS 15
+#define MAX_REPS        15
 #define MAX_INTEGRATORS 8
 
 typedef struct options {
@@ -127,8 +128,8 @@ static int plain_build(const ts_scene *s, plain_scene *p)
             const ts_mesh *m = &sh->mesh;
             if (m->n_triangles == 0 || m->n_vertices == 0) continue;
             g = rtcNewGeometry(p->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-            float *v = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-                                               m->n_vertices);
+            float *v = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                               3 * sizeof(float), m->n_vertices);
             if (!v) return -1;
             memcpy(v, m->p, (size_t)m->n_vertices * 3 * sizeof(float));
             rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, m->index, 0,
@@ -209,17 +210,25 @@ static double replay(replay_kind kind, const ts_accel *accel, RTCScene plain, co
     pthread_t th[64];
     if (threads > 64) threads = 64;
     for (int t = 0; t < threads; t++)
-        jobs[t] = (replay_job){kind, accel, plain, log->rays, log->kinds, n * (size_t)t / (size_t)threads,
-                               n * (size_t)(t + 1) / (size_t)threads, 0};
+        jobs[t] = (replay_job){kind,
+                               accel,
+                               plain,
+                               log->rays,
+                               log->kinds,
+                               n * (size_t)t / (size_t)threads,
+                               n * (size_t)(t + 1) / (size_t)threads,
+                               0};
     double t0 = ts_now_seconds();
     int started = 0;
     for (int t = 1; t < threads; t++, started++)
         if (pthread_create(&th[t], NULL, replay_worker, &jobs[t]) != 0) return -1;
     replay_worker(&jobs[0]);
-    for (int t = 1; t <= started; t++) pthread_join(th[t], NULL);
+    for (int t = 1; t <= started; t++)
+        pthread_join(th[t], NULL);
     double dt = ts_now_seconds() - t0;
     *hits = 0;
-    for (int t = 0; t < threads; t++) *hits += jobs[t].hits;
+    for (int t = 0; t < threads; t++)
+        *hits += jobs[t].hits;
     return dt;
 }
 
@@ -236,7 +245,11 @@ static int render(const ts_scene *s, ts_integrator_type integ, uint32_t spp, int
     ts_film *film = ts_film_create(s->width, s->height, s->crop_x0, s->crop_y0, s->crop_x1 - s->crop_x0,
                                    s->crop_y1 - s->crop_y0, err);
     if (!film) return -1;
-    ts_render_request req = {.scene = s, .integrator = integ, .film = film, .sample_begin = 0, .sample_end = spp,
+    ts_render_request req = {.scene = s,
+                             .integrator = integ,
+                             .film = film,
+                             .sample_begin = 0,
+                             .sample_end = spp,
                              .threads = threads};
     ts_render_stats stats = {0};
     ts_status st = ts_render(&req, &stats, err);
@@ -265,10 +278,14 @@ static double median(double *v, int n)
 static const char *integrator_name(ts_integrator_type t)
 {
     switch (t) {
-    case TS_INTEGRATOR_PATH: return "path";
-    case TS_INTEGRATOR_DIRECT: return "direct";
-    case TS_INTEGRATOR_AO: return "ao";
-    case TS_INTEGRATOR_NORMALS: return "normals";
+    case TS_INTEGRATOR_PATH:
+        return "path";
+    case TS_INTEGRATOR_DIRECT:
+        return "direct";
+    case TS_INTEGRATOR_AO:
+        return "ao";
+    case TS_INTEGRATOR_NORMALS:
+        return "normals";
     }
     return "unknown";
 }
@@ -288,16 +305,9 @@ static int bench_integrator(const char *path, ts_scene *s, ts_integrator_type in
     double r_eff[2][MAX_REPS], r_aeff[2][MAX_REPS], r_secs[2][MAX_REPS];
     render_result rr = {0};
 
-    /* Timed renders first, so the peak memory is the render's, not the ray log's. The
-     * replays need the log, so each repetition renders here and replays below; renders of
-     * repetition k and its replays are still minutes apart at most. */
-    for (int k = 0; k < o->reps; k++)
-        for (int c = 0; c < n_cfg; c++) {
-            if (render(s, integ, spp, threads[c], &rr, &err) != 0) goto fail;
-            r_secs[c][k] = rr.seconds;
-            r_samples[c][k] = (double)rr.samples / rr.seconds;
-            r_rays[c][k] = (double)rr.rays / rr.seconds;
-        }
+    /* One render at all threads before the ray log exists: the peak memory is the
+     * render's (more repetitions do not raise it), not the log's. */
+    if (render(s, integ, spp, o->threads, &rr, &err) != 0) goto fail;
     struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);
     double peak_mib = (double)ru.ru_maxrss / 1024.0;
@@ -324,7 +334,8 @@ static int bench_integrator(const char *path, ts_scene *s, ts_integrator_type in
     size_t n = n_logged < log.capacity ? n_logged : log.capacity;
     plain_scene plain = {0};
     if (rc != 0 || plain_build(s, &plain) != 0 || n == 0) {
-        if (rc == 0) snprintf(err.message, sizeof err.message, "cannot build the plain Embree scene or no rays");
+        if (rc == 0)
+            snprintf(err.message, sizeof err.message, "cannot build the plain Embree scene or no rays");
         plain_destroy(&plain);
         free(log.rays);
         free(log.kinds);
@@ -336,8 +347,20 @@ static int bench_integrator(const char *path, ts_scene *s, ts_integrator_type in
         fprintf(stderr, "bench_throughput: note: %s: %zu rays logged, %llu counted by the integrator\n", path,
                 n_logged, (unsigned long long)rr.rays);
 
+    /* Side by side: each repetition renders, then replays the log through our accel and
+     * through plain Embree, at one thread count, within a few seconds of each other. */
     for (int k = 0; k < o->reps; k++)
         for (int c = 0; c < n_cfg; c++) {
+            render_result rk;
+            if (render(s, integ, spp, threads[c], &rk, &err) != 0) {
+                plain_destroy(&plain);
+                free(log.rays);
+                free(log.kinds);
+                goto fail;
+            }
+            r_secs[c][k] = rk.seconds;
+            r_samples[c][k] = (double)rk.samples / rk.seconds;
+            r_rays[c][k] = (double)rk.rays / rk.seconds;
             uint64_t h_accel, h_embree;
             double ta = replay(REPLAY_ACCEL, s->accel, NULL, &log, n, threads[c], &h_accel);
             double te = replay(REPLAY_EMBREE, NULL, plain.scene, &log, n, threads[c], &h_embree);
@@ -356,10 +379,9 @@ static int bench_integrator(const char *path, ts_scene *s, ts_integrator_type in
         double rps = median(r_rays[c], o->reps);
         printf("%s,%s,%d,%u,%d,%d,%llu,%llu,%.3f,%.3f,%.0f,%.0f,%.0f,%.0f,%.3f,%.3f,%.1f,%zu,%d\n", name,
                integrator_name(integ), threads[c], spp, s->crop_x1 - s->crop_x0, s->crop_y1 - s->crop_y0,
-               (unsigned long long)pixels * spp,
-               (unsigned long long)llround(rps * secs), rps / sps, secs, sps, rps, median(r_accel[c], o->reps),
-               median(r_embree[c], o->reps), median(r_eff[c], o->reps), median(r_aeff[c], o->reps), peak_mib, n,
-               o->reps);
+               (unsigned long long)pixels * spp, (unsigned long long)llround(rps * secs), rps / sps, secs,
+               sps, rps, median(r_accel[c], o->reps), median(r_embree[c], o->reps), median(r_eff[c], o->reps),
+               median(r_aeff[c], o->reps), peak_mib, n, o->reps);
     }
     fflush(stdout);
     return 0;
@@ -373,9 +395,13 @@ fail:
 
 static int parse_integrator(const char *name, size_t len, const ts_scene *s, ts_integrator_type *out)
 {
-    static const struct { const char *name; ts_integrator_type type; } names[] = {
-        {"path", TS_INTEGRATOR_PATH}, {"direct", TS_INTEGRATOR_DIRECT}, {"ao", TS_INTEGRATOR_AO},
-        {"normals", TS_INTEGRATOR_NORMALS}};
+    static const struct {
+        const char *name;
+        ts_integrator_type type;
+    } names[] = {{"path", TS_INTEGRATOR_PATH},
+                 {"direct", TS_INTEGRATOR_DIRECT},
+                 {"ao", TS_INTEGRATOR_AO},
+                 {"normals", TS_INTEGRATOR_NORMALS}};
     if (len == 5 && strncmp(name, "scene", 5) == 0) {
         *out = ts_integrator_available(s->integrator.type) ? s->integrator.type : TS_INTEGRATOR_AO;
         return 0;
@@ -449,19 +475,27 @@ int main(int argc, char **argv)
         first++;
         char *end;
         errno = 0;
-        if (strcmp(a, "--integrators") == 0) o.integrators = v;
-        else if (strcmp(a, "--threads") == 0) o.threads = (int)strtol(v, &end, 10);
-        else if (strcmp(a, "--reps") == 0) o.reps = (int)strtol(v, &end, 10);
-        else if (strcmp(a, "--seconds") == 0) o.seconds = strtod(v, &end);
-        else if (strcmp(a, "--max-rays") == 0) o.max_rays = (size_t)strtoull(v, &end, 10);
-        else return usage("unknown option");
+        if (strcmp(a, "--integrators") == 0)
+            o.integrators = v;
+        else if (strcmp(a, "--threads") == 0)
+            o.threads = (int)strtol(v, &end, 10);
+        else if (strcmp(a, "--reps") == 0)
+            o.reps = (int)strtol(v, &end, 10);
+        else if (strcmp(a, "--seconds") == 0)
+            o.seconds = strtod(v, &end);
+        else if (strcmp(a, "--max-rays") == 0)
+            o.max_rays = (size_t)strtoull(v, &end, 10);
+        else
+            return usage("unknown option");
     }
-    if (o.threads < 1 || o.threads > 64 || o.reps < 1 || o.reps > MAX_REPS || !(o.seconds > 0) || o.max_rays < 1)
+    if (o.threads < 1 || o.threads > 64 || o.reps < 1 || o.reps > MAX_REPS || !(o.seconds > 0) ||
+        o.max_rays < 1)
         return usage("--threads 1..64, --reps 1..15, --seconds > 0, --max-rays ≥ 1");
     if (o.header)
-        printf("scene,integrator,threads,spp,width,height,samples,rays,rays_per_sample,render_s,samples_per_s,"
-               "rays_per_s,accel_rays_per_s,embree_rays_per_s,efficiency,accel_efficiency,peak_rss_mib,"
-               "logged_rays,reps\n");
+        printf(
+            "scene,integrator,threads,spp,width,height,samples,rays,rays_per_sample,render_s,samples_per_s,"
+            "rays_per_s,accel_rays_per_s,embree_rays_per_s,efficiency,accel_efficiency,peak_rss_mib,"
+            "logged_rays,reps\n");
     /* One child process per (scene, integrator): each loads its scene afresh, so its peak
      * memory is its own, and no Embree thread pool is ever forked. */
     int status = 0;
@@ -475,7 +509,8 @@ int main(int argc, char **argv)
             }
             if (pid == 0) _exit(run_child(argv[i], j, &o));
             int ws;
-            while (waitpid(pid, &ws, 0) < 0 && errno == EINTR) continue;
+            while (waitpid(pid, &ws, 0) < 0 && errno == EINTR)
+                continue;
             int code = WIFEXITED(ws) ? WEXITSTATUS(ws) : 1;
             if (code == CHILD_END) break;
             if (code == CHILD_LOAD_FAILED) {

@@ -48,9 +48,13 @@ ts_bxdf ts_bxdf_microfacet_reflection(ts_rgb r, ts_microfacet dist, ts_fresnel f
                      .r = r, .dist = ts_microfacet_make(dist.type, dist.alpha_x, dist.alpha_y), .fresnel = fresnel};
 }
 
+/* Indices this close make refraction a straight pass-through (wi = −wo): a delta. */
+static bool index_matched(float eta_a, float eta_b) { return fabsf(eta_a - eta_b) <= 1e-5f * fabsf(eta_a); }
+
 ts_bxdf ts_bxdf_microfacet_transmission(ts_rgb t, ts_microfacet dist, float eta_a, float eta_b)
 {
-    return (ts_bxdf){.type = TS_BXDF_MICROFACET_TRANSMISSION, .flags = TS_BXDF_TRANSMISSION | TS_BXDF_GLOSSY,
+    uint32_t kind = index_matched(eta_a, eta_b) ? TS_BXDF_SPECULAR : TS_BXDF_GLOSSY;
+    return (ts_bxdf){.type = TS_BXDF_MICROFACET_TRANSMISSION, .flags = TS_BXDF_TRANSMISSION | kind,
                      .t = t, .dist = ts_microfacet_make(dist.type, dist.alpha_x, dist.alpha_y), .eta_a = eta_a,
                      .eta_b = eta_b};
 }
@@ -121,7 +125,9 @@ static ts_rgb microfacet_reflection_f(const ts_bxdf *b, ts_vec3 wo, ts_vec3 wi)
     ts_vec3 wh = ts_vec3_add(wi, wo);
     if (wh.x == 0 && wh.y == 0 && wh.z == 0) return black();
     wh = ts_vec3_normalize(wh);
-    ts_rgb f = ts_fresnel_eval(&b->fresnel, ts_vec3_dot(wi, ts_vec3_faceforward(wh, (ts_vec3){0, 0, 1})));
+    /* wi·wh = wo·wh exactly; the average keeps f reciprocal under float rounding. */
+    ts_vec3 whf = ts_vec3_faceforward(wh, (ts_vec3){0, 0, 1});
+    ts_rgb f = ts_fresnel_eval(&b->fresnel, 0.5f * (ts_vec3_dot(wi, whf) + ts_vec3_dot(wo, whf)));
     float s = ts_microfacet_d(&b->dist, wh) * ts_microfacet_g(&b->dist, wo, wi) / (4 * cos_i * cos_o);
     return rgb_finite(ts_rgb_scale(ts_rgb_mul(b->r, f), s));
 }
@@ -175,7 +181,7 @@ static ts_rgb fresnel_blend_f(const ts_bxdf *b, ts_vec3 wo, ts_vec3 wi)
     ts_vec3 wh = ts_vec3_add(wi, wo);
     if (wh.x == 0 && wh.y == 0 && wh.z == 0) return rgb_finite(diffuse);
     wh = ts_vec3_normalize(wh);
-    float dot_ih = fabsf(ts_vec3_dot(wi, wh));
+    float dot_ih = 0.5f * (fabsf(ts_vec3_dot(wi, wh)) + fabsf(ts_vec3_dot(wo, wh))); /* symmetric in wo, wi */
     float denom = 4 * dot_ih * ts_maxf(ci, co);
     if (!(denom > 0)) return rgb_finite(diffuse);
     ts_rgb spec = ts_rgb_scale(schlick(b->rs, dot_ih), ts_microfacet_d(&b->dist, wh) / denom);
@@ -189,7 +195,9 @@ ts_rgb ts_bxdf_f(const ts_bxdf *b, ts_vec3 wo, ts_vec3 wi)
     case TS_BXDF_LAMBERTIAN: return ts_rgb_scale(b->r, TS_INV_PI);
     case TS_BXDF_OREN_NAYAR: return oren_nayar_f(b, wo, wi);
     case TS_BXDF_MICROFACET_REFLECTION: return microfacet_reflection_f(b, wo, wi);
-    case TS_BXDF_MICROFACET_TRANSMISSION: return microfacet_transmission_f(b, wo, wi);
+    case TS_BXDF_MICROFACET_TRANSMISSION:
+        if (b->flags & TS_BXDF_SPECULAR) return black();
+        return microfacet_transmission_f(b, wo, wi);
     case TS_BXDF_FRESNEL_BLEND: return fresnel_blend_f(b, wo, wi);
     case TS_BXDF_FOURIER: return rgb_finite(ts_fourier_f(b->fourier, wo, wi));
     case TS_BXDF_SPECULAR_REFLECTION:
@@ -234,7 +242,9 @@ float ts_bxdf_pdf(const ts_bxdf *b, ts_vec3 wo, ts_vec3 wi)
     case TS_BXDF_LAMBERTIAN:
     case TS_BXDF_OREN_NAYAR: return cosine_pdf(wo, wi);
     case TS_BXDF_MICROFACET_REFLECTION: return microfacet_reflection_pdf(&b->dist, wo, wi);
-    case TS_BXDF_MICROFACET_TRANSMISSION: return microfacet_transmission_pdf(b, wo, wi);
+    case TS_BXDF_MICROFACET_TRANSMISSION:
+        if (b->flags & TS_BXDF_SPECULAR) return 0;
+        return microfacet_transmission_pdf(b, wo, wi);
     case TS_BXDF_FRESNEL_BLEND:
         if (!b->blend_glossy) return cosine_pdf(wo, wi);
         return 0.5f * (cosine_pdf(wo, wi) + microfacet_reflection_pdf(&b->dist, wo, wi));
@@ -294,6 +304,14 @@ bool ts_bxdf_sample_f(const ts_bxdf *b, ts_vec3 wo, ts_vec2 u, ts_bxdf_sample *o
         return finish_sample(b, wo, wi, b->flags, 1, out);
     }
     case TS_BXDF_MICROFACET_TRANSMISSION: {
+        if (b->flags & TS_BXDF_SPECULAR) { /* matched indices: straight through, no Fresnel */
+            out->wi = ts_vec3_neg(wo);
+            out->pdf = 1;
+            out->f = rgb_finite(ts_rgb_scale(b->t, 1 / fabsf(wo.z)));
+            out->flags = b->flags;
+            out->eta = 1;
+            return true;
+        }
         ts_vec3 wh = ts_microfacet_sample_wh(&b->dist, wo, u), wi;
         if (!(ts_vec3_dot(wo, wh) > 0)) return false;
         float eta_io = wo.z > 0 ? b->eta_a / b->eta_b : b->eta_b / b->eta_a; /* η_i / η_t */

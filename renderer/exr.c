@@ -19,6 +19,14 @@
 #include <openexr.h>
 
 /* Per-call stream state shared by the library's callbacks (user_data). */
+/* Reading refuses images whose float pixels would need more than EXR_MAX_EXPANSION bytes
+ * per byte of file (and more than EXR_SMALL_IMAGE_BYTES in all): deflate (ZIP, ZIPS,
+ * PXR24) expands at most ~1032:1, RLE 64:1, B44 ~11:1, and HALF or UINT samples double
+ * at most when stored as float, so only a file that lies about its size (or a perfectly
+ * constant giant image in PIZ or DWA) goes past 4096:1. */
+#define EXR_MAX_EXPANSION 4096
+#define EXR_SMALL_IMAGE_BYTES (64.0 * 1024 * 1024)
+
 typedef struct exr_io {
     /* reading: memory (fd < 0) or a file descriptor */
     const unsigned char *src;
@@ -464,6 +472,19 @@ static ts_status read_any(exr_io *io, const char *what, ts_image *out, ts_error 
     if (!row_fits_stride(width, chlist->num_channels)) {
         st = ts_error_set(err, TS_ERR_LIMIT, "%s: a row of %lld pixels x %d channels is too long", what,
                           (long long)width, chlist->num_channels);
+        goto fail_ctxt;
+    }
+    /* The data window is a header field: a file of a few hundred bytes can claim 2³⁰
+     * pixels. Refuse an image whose float pixels would take more than EXR_MAX_EXPANSION
+     * times the file's size before allocating them (see the constant). */
+    int64_t file_bytes = io->fd < 0 ? (int64_t)io->src_len : io->file_size;
+    double pixel_bytes = (double)width * (double)height * chlist->num_channels * sizeof(float);
+    if (pixel_bytes > EXR_SMALL_IMAGE_BYTES && pixel_bytes > (double)EXR_MAX_EXPANSION * (double)file_bytes) {
+        st = ts_error_set(err, TS_ERR_LIMIT,
+                          "%s: a %lld x %lld image of %d channels (%.0f MB of pixels) cannot come from %lld bytes "
+                          "(refused as a decompression bomb)",
+                          what, (long long)width, (long long)height, chlist->num_channels, pixel_bytes / 1e6,
+                          (long long)file_bytes);
         goto fail_ctxt;
     }
     st = ts_image_init(out, (int)width, (int)height, chlist->num_channels, names, err);

@@ -36,8 +36,11 @@ ts_status ts_exr_write_memory(const ts_image *img, unsigned char **buf, size_t *
  * header attributes are copied into attrs (float as TS_ATTR_DOUBLE; attributes whose name
  * or string value does not fit, and any beyond TS_IMAGE_MAX_ATTRS, are skipped).
  * Missing or unreadable file → TS_ERR_IO; truncated or corrupt → TS_ERR_INVALID; deep,
- * multi-part, subsampled or >16 channels → TS_ERR_UNSUPPORTED/TS_ERR_LIMIT. The sentence
- * names the file. On failure *out is empty and nothing is leaked. */
+ * multi-part, subsampled or >16 channels → TS_ERR_UNSUPPORTED/TS_ERR_LIMIT; an image whose
+ * float pixels would need over 64 MiB and over 4096 bytes per byte of file (a header that
+ * lies about the data window: a decompression bomb) → TS_ERR_LIMIT before any pixel
+ * memory is allocated. The sentence names the file. On failure *out is empty and nothing
+ * is leaked. */
 ts_status ts_exr_read(const char *path, ts_image *out, ts_error *err);
 
 /* ts_exr_read of an in-memory file (for fuzzing/HTTP); buf is only read. */

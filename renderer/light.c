@@ -265,3 +265,17 @@ float ts_light_distribution_pmf(const ts_light_distribution *d, uint32_t i)
 {
     return d->n == 0 ? 0.0f : ts_alias_table_pmf(&d->table, i);
 }
+
+uint32_t ts_lights_set_triangle_sampling(ts_light *lights, uint32_t n, const ts_shape *shapes,
+                                         ts_triangle_sampling mode)
+{
+    uint32_t changed = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        ts_light *l = &lights[i];
+        if (l->type != TS_LIGHT_AREA || shapes[l->shape].type != TS_SHAPE_MESH) continue;
+        l->triangle_sampling = mode;
+        l->geom.triangle_mode = mode;
+        changed++;
+    }
+    return changed;
+}

@@ -69,6 +69,13 @@ typedef struct ts_light {
 ts_status ts_lights_prepare(ts_light *lights, uint32_t n, const ts_shape *shapes, ts_bounds3 scene_bounds,
                             ts_error *err);
 
+/* Forces how the area lights on mesh triangles are sampled, after ts_lights_prepare (sets
+ * triangle_sampling and the prepared geom's mode; AUTO restores the loader's default).
+ * Returns how many lights it changed. The accuracy benchmark's switch (bench/accuracy/);
+ * scene files have no key for it. Not thread-safe: call before rendering. */
+uint32_t ts_lights_set_triangle_sampling(ts_light *lights, uint32_t n, const ts_shape *shapes,
+                                         ts_triangle_sampling mode);
+
 typedef struct ts_light_sample {
     ts_rgb L;            /* radiance arriving at ref along −wi (before visibility) */
     ts_vec3 wi;          /* unit, from ref towards the light */

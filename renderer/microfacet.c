@@ -168,8 +168,12 @@ static ts_vec3 sample_beckmann(const ts_microfacet *m, ts_vec3 wo, ts_vec2 u)
     wz /= len;
     double s = sqrt(wx * wx + wy * wy);
     double cphi = s > 0 ? wx / s : 1, sphi = s > 0 ? wy / s : 0;
+    /* A float u of 0 stands for [0, 2^-24): map the ends of the square to the middle of
+     * their float intervals, so u = 0 does not become an infinitely steep facet whose
+     * density no evaluation can represent. */
+    double u1 = fmin(fmax((double)u.x, 0x1p-25), 1 - 0x1p-25), u2 = fmin(fmax((double)u.y, 0x1p-25), 1 - 0x1p-25);
     double sx, sy;
-    beckmann_slopes(wz, u.x, u.y, &sx, &sy);
+    beckmann_slopes(wz, u1, u2, &sx, &sy);
     double rx = cphi * sx - sphi * sy, ry = sphi * sx + cphi * sy;
     rx *= m->alpha_x;
     ry *= m->alpha_y;

@@ -7,6 +7,7 @@
 #include <string.h>
 #include <strings.h>
 
+#include "assets.h"
 #include "exr.h"
 #include "film_image.h"
 #include "job_store.h"
@@ -37,7 +38,7 @@ static void parse_url(const char *url, parsed *p)
 {
     memset(p, 0, sizeof *p);
     p->route = SRV_ROUTE_OTHER;
-    if (!strcmp(url, "/") || !strcmp(url, "/index.html")) p->route = SRV_ROUTE_UI;
+    if (!strcmp(url, "/") || !strcmp(url, "/index.html") || srv_asset_find(url)) p->route = SRV_ROUTE_UI;
     else if (!strcmp(url, "/healthz")) p->route = SRV_ROUTE_HEALTHZ;
     else if (!strcmp(url, "/metrics")) p->route = SRV_ROUTE_METRICS;
     else if (!strcmp(url, API_PREFIX) || !strcmp(url, API_PREFIX "/")) p->route = SRV_ROUTE_JOBS;
@@ -389,6 +390,9 @@ int srv_api_handle(srv_request *r)
     switch (p.route) {
     case SRV_ROUTE_UI:
         if (!get) return srv_http_method_not_allowed(r, "GET, HEAD");
+        if (srv_asset_find(r->url)) /* the embedded web UI (server/assets.h); else the minimal page */
+            return srv_http_reply(r, 200, srv_asset_find(r->url)->content_type, srv_asset_find(r->url)->data,
+                                  srv_asset_find(r->url)->size);
         return srv_http_reply(r, 200, "text/html; charset=utf-8", ui_html, sizeof ui_html - 1);
     case SRV_ROUTE_HEALTHZ:
         if (!get) return srv_http_method_not_allowed(r, "GET, HEAD");

@@ -23,7 +23,7 @@ void ts_chi2_params_default(ts_chi2_params *p)
     p->test_count = TS_CHI2_FAMILY_SIZE;
     p->min_expected = 5;
     p->seed = 1;
-    p->max_node_evals = 400000;
+    p->max_node_evals = 2000000;
 }
 
 /* ---------------------------------------------------------------- quadrature ---- */
@@ -230,11 +230,53 @@ static double adaptive(quad *q, double z0, double z1, double p0, double p1, doub
     if (cap > q->heap_cap) cap = q->heap_cap;
     rect *h = q->heap;
     int nh = 0;
-    double maxv = 0;
-    rect root = {z0, z1, p0, p1, gl_rect(q, z0, z1, p0, p1, &maxv), 0, 0, {0, 0}, false, false};
-    evaluate_rect(q, &root, pts, n);
-    heap_push(h, &nh, root);
-    double total_err = root.err;
+    /* Kept samples bunched in a small part of the rectangle mark a sharp lobe: cut the
+     * rectangle along their bounding box, widened by twice its size, so the refinement
+     * starts at the lobe's scale instead of searching for it from the cell's. */
+    double zc[4] = {z0, z0, z1, z1}, pc[4] = {p0, p0, p1, p1};
+    int nzc = 1, npc = 1;
+    {
+        double blo_z = INFINITY, bhi_z = -INFINITY, blo_p = INFINITY, bhi_p = -INFINITY;
+        int inside = 0;
+        for (int i = 0; i < n; i++) {
+            const kept_point *k = pts[i];
+            if (!(k->pdf > 0) || k->z < z0 || k->z > z1 || k->phi < p0 || k->phi > p1) continue;
+            inside++;
+            blo_z = fmin(blo_z, k->z);
+            bhi_z = fmax(bhi_z, k->z);
+            blo_p = fmin(blo_p, k->phi);
+            bhi_p = fmax(bhi_p, k->phi);
+        }
+        if (inside >= 2) {
+            double wz = fmax(bhi_z - blo_z, 1e-9 * (z1 - z0)), wp = fmax(bhi_p - blo_p, 1e-9 * (p1 - p0));
+            double a = blo_z - 2 * wz, b = bhi_z + 2 * wz;
+            if (b - a < 0.25 * (z1 - z0)) {
+                zc[1] = fmax(z0, a);
+                zc[2] = fmin(z1, b);
+                nzc = 3;
+            }
+            a = blo_p - 2 * wp;
+            b = bhi_p + 2 * wp;
+            if (b - a < 0.25 * (p1 - p0)) {
+                pc[1] = fmax(p0, a);
+                pc[2] = fmin(p1, b);
+                npc = 3;
+            }
+        }
+    }
+    if (nzc == 1) zc[1] = z1;
+    if (npc == 1) pc[1] = p1;
+    double total_err = 0;
+    for (int i = 0; i < nzc; i++)
+        for (int j = 0; j < npc; j++) {
+            double a0 = zc[i], a1 = nzc == 1 ? z1 : zc[i + 1], b0 = pc[j], b1 = npc == 1 ? p1 : pc[j + 1];
+            if (!(a1 > a0) || !(b1 > b0)) continue;
+            double maxv = 0;
+            rect root = {a0, a1, b0, b1, gl_rect(q, a0, a1, b0, b1, &maxv), 0, 0, {0, 0}, false, false};
+            evaluate_rect(q, &root, pts, n);
+            heap_push(h, &nh, root);
+            total_err += root.err;
+        }
     while (nh > 0 && nh + 1 < cap) {
         if (!h[0].unresolved && total_err <= tol) break;
         rect r = heap_pop(h, &nh);

@@ -62,7 +62,7 @@ typedef struct ts_chi2_params {
     int test_count;        /* number of χ² tests in the family (Šidák); default TS_CHI2_FAMILY_SIZE */
     double min_expected;   /* pooling threshold; default 5 */
     uint64_t seed;         /* PCG32 seed of the sample stream; default 1 */
-    int max_node_evals;    /* quadrature budget per cell (pdf calls); default 400 000 */
+    int max_node_evals;    /* quadrature budget per cell (pdf calls); default 2 000 000 */
 } ts_chi2_params;
 
 typedef struct ts_chi2_result {

@@ -2,7 +2,7 @@
 # run.sh — runs libFuzzer harnesses (tests/fuzz/README.md).
 #   tests/fuzz/run.sh [--keep] BUILD_DIR SECONDS HARNESS...
 # Each harness BUILD_DIR/fuzz_<h> runs for SECONDS over its seed corpus
-# tests/fuzz/corpus/<h>. New inputs go to a scratch folder (removed afterwards) or, with
+# tests/fuzz/corpus/<h> (with the dictionary tests/fuzz/<h>.dict where there is one). New inputs go to a scratch folder (removed afterwards) or, with
 # --keep, to BUILD_DIR/fuzz-corpus/<h>, kept between runs; the seed corpus is never
 # written. Crash inputs are saved in BUILD_DIR/fuzz-artifacts/<h>/. Prints executions
 # and executions/s per harness and in total; exits 1 if any harness crashed, leaked, hit
@@ -32,7 +32,9 @@ for h in "$@"; do
   fi
   log=$(mktemp "${TMPDIR:-/tmp}/ts_fuzz_log_XXXXXX")
   # -timeout: one input taking this long is a hang; -rss_limit_mb: libFuzzer's default.
-  "$bin" -max_total_time="$seconds" -timeout=25 -rss_limit_mb=2048 -print_final_stats=1 \
+  dict=
+  [ -f "$src/tests/fuzz/$h.dict" ] && dict="-dict=$src/tests/fuzz/$h.dict"
+  "$bin" -max_total_time="$seconds" -timeout=25 -rss_limit_mb=2048 -print_final_stats=1 $dict \
          -artifact_prefix="$art/" "$work" "$src/tests/fuzz/corpus/$h" >"$log" 2>&1
   rc=$?
   runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)

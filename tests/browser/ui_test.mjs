@@ -1,0 +1,261 @@
+// Browser tests of the web UI (issue 7): playwright-core drives Debian's chromium headless
+// against a real `tessera serve --port 0` on loopback started here. Run by run.sh (ctest
+// `browser_ui`), which installs playwright-core into the build folder and skips plainly
+// when chromium is missing. Screenshots go to $TS_ARTIFACTS.
+//
+// Scenarios: submit the Cornell box and see the canvas change as tiles arrive; the plot
+// gains points; reload mid-render and see the image at once; overlay two jobs; cancel a
+// job; a broken scene's message beside its field; layout at 1280×800 and phone width;
+// labelled, keyboard-operable controls.
+import { spawn } from 'node:child_process';
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+import { createRequire } from 'node:module';
+
+const { TS_BINARY, TS_SOURCE_DIR, TS_ARTIFACTS, TS_WEB_NODE_MODULES } = process.env;
+const CHROMIUM = process.env.TS_CHROMIUM || '/usr/bin/chromium';
+const require = createRequire(path.join(TS_WEB_NODE_MODULES, 'x.js'));
+const { chromium } = require('playwright-core');
+
+fs.mkdirSync(TS_ARTIFACTS, { recursive: true });
+const t0 = Date.now();
+let failures = 0, passes = 0;
+const log = (...a) => console.log(`[${((Date.now() - t0) / 1000).toFixed(1)}s]`, ...a);
+
+async function check(name, fn) {
+  const t = Date.now();
+  try {
+    await fn();
+    passes++;
+    log(`PASS ${name} (${((Date.now() - t) / 1000).toFixed(1)} s)`);
+  } catch (e) {
+    failures++;
+    log(`FAIL ${name}: ${e && e.stack ? e.stack : e}`);
+  }
+}
+function assert(cond, msg) { if (!cond) throw new Error(msg); }
+
+// ---------------------------------------------------------------- the server
+function startServer() {
+  return new Promise((resolve, reject) => {
+    const srv = spawn(TS_BINARY, ['serve', '--bind', '127.0.0.1', '--port', '0', '--threads', '2'],
+      { stdio: ['ignore', 'pipe', 'pipe'] });
+    let out = '';
+    const timer = setTimeout(() => reject(new Error('tessera serve printed no URL in 10 s: ' + out)), 10000);
+    srv.stdout.on('data', (d) => {
+      out += d;
+      const m = /listening on (http:\/\/[^\s]+)/.exec(out);
+      if (m) { clearTimeout(timer); resolve({ srv, url: m[1] }); }
+    });
+    srv.stderr.on('data', (d) => process.stderr.write('[tessera] ' + d));
+    srv.on('exit', (code) => reject(new Error('tessera serve exited with ' + code)));
+  });
+}
+
+// A Cornell box small enough for a busy two-core machine: 96×96 = 3×3 tiles.
+const cornell = JSON.parse(fs.readFileSync(path.join(TS_SOURCE_DIR, 'scenes/cornell-box.json'), 'utf8'));
+const small = (over = {}) => JSON.stringify({ ...cornell, film: { ...cornell.film, width: 96, height: 96 }, ...over }, null, 2);
+
+// ---------------------------------------------------------------- helpers in the page
+const canvasDigest = (page) => page.evaluate(() => {
+  const c = document.getElementById('canvas');
+  const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+  let h = 0, lit = 0;
+  for (let i = 0; i < d.length; i += 4) {
+    h = (h * 31 + d[i] + 7 * d[i + 1] + 13 * d[i + 2]) >>> 0;
+    if (d[i + 3] > 0 && d[i] + d[i + 1] + d[i + 2] > 0) lit++;
+  }
+  return { h, lit, n: d.length / 4 };
+});
+const jobRow = (page, id) => page.locator(`#jobs tr[data-id="${id}"]`);
+
+async function submit(page, { scene, integrator = '', spp = '', time = '', target = '', maxdepth = '', name = '' }) {
+  await page.fill('#f-scene', scene);
+  await page.selectOption('#f-integrator', integrator);
+  await page.fill('#f-spp', String(spp));
+  await page.fill('#f-time', String(time));
+  await page.fill('#f-target', String(target));
+  await page.fill('#f-maxdepth', String(maxdepth));
+  await page.fill('#f-name', name);
+  const resp = page.waitForResponse((r) => r.url().endsWith('/api/v1/jobs') && r.request().method() === 'POST');
+  await page.click('#f-submit');
+  return (await resp).json();
+}
+
+// ---------------------------------------------------------------- the run
+const { srv, url } = await startServer();
+log('server at', url);
+const userDir = fs.mkdtempSync(path.join(os.tmpdir(), 'tessera-chromium-'));
+process.on('exit', () => { srv.kill('SIGTERM'); fs.rmSync(userDir, { recursive: true, force: true }); });
+// A fresh profile per run (--user-data-dir, which Playwright passes for a persistent context).
+const context = await chromium.launchPersistentContext(userDir, {
+  executablePath: CHROMIUM,
+  headless: true,
+  viewport: { width: 1280, height: 800 },
+  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run', '--disable-background-networking',
+    '--disable-component-update', '--disable-sync'],
+});
+const page = await context.newPage();
+const pageErrors = [];
+page.on('pageerror', (e) => pageErrors.push(String(e)));
+// The 400/422 answers the broken-scene check provokes are logged by chromium as failed loads: not script errors.
+page.on('console', (m) => { if (m.type() === 'error' && !/Failed to load resource/.test(m.text())) pageErrors.push('console: ' + m.text()); });
+const shot = (name, p = page) => p.screenshot({ path: path.join(TS_ARTIFACTS, name + '.png'), fullPage: true });
+
+let first = null, second = null;
+try {
+  await page.goto(url, { waitUntil: 'load' });
+
+  await check('the page loads from the binary with the example scenes', async () => {
+    await page.waitForSelector('#f-example option[value="cornell-box.json"]', { state: 'attached', timeout: 5000 });
+    await page.selectOption('#f-example', 'cornell-box.json');
+    await page.waitForFunction(() => document.getElementById('f-scene').value.includes('"tessera"'));
+    const doc = JSON.parse(await page.inputValue('#f-scene'));
+    assert(doc.film.width === 512, 'the example is the shipped Cornell box');
+  });
+
+  await check('submit the Cornell box; the canvas changes as tiles arrive', async () => {
+    first = await submit(page, { scene: small(), spp: 1024, time: 8, name: 'cornell-path' });
+    assert(first.id, 'POST answered ' + JSON.stringify(first));
+    await jobRow(page, first.id).waitFor({ timeout: 5000 });
+    await page.waitForFunction(() => Number(document.getElementById('canvas').dataset.tiles) > 0, null, { timeout: 15000 });
+    const a = await canvasDigest(page);
+    assert(a.n === 96 * 96, 'the canvas is the film size, got ' + a.n + ' pixels');
+    await page.waitForFunction((n) => Number(document.getElementById('canvas').dataset.tiles) >= n + 9, 
+      Number(await page.getAttribute('#canvas', 'data-tiles')), { timeout: 15000 });
+    const b = await canvasDigest(page);
+    assert(b.h !== a.h, 'the canvas did not change');
+    assert(b.lit > 0.5 * b.n, 'most of the canvas is painted, lit ' + b.lit);
+    await shot('01-live-preview');
+  });
+
+  await check('the error and spp plots gain points', async () => {
+    const before = Number(await page.getAttribute('#plot-spp', 'data-points'));
+    await page.waitForFunction((n) => Number(document.getElementById('plot-spp').dataset.points) > n && 
+      Number(document.getElementById('plot-error').dataset.points) >= 2, before, { timeout: 15000 });
+    assert(await page.locator('#plot-error canvas').count() > 0, 'uPlot drew the error plot');
+    await shot('02-plot');
+  });
+
+  await check('reload mid-render: the current image is there at once', async () => {
+    const st = await (await page.request.get(url + 'api/v1/jobs/' + first.id)).json();
+    assert(st.state === 'running', 'the job should still be running, is ' + st.state);
+    const t = Date.now();
+    await page.reload({ waitUntil: 'load' });
+    await page.waitForFunction(() => { const c = document.getElementById('canvas'); return Number(c.dataset.tiles) >= 9; },
+      null, { timeout: 3000 });
+    const d = await canvasDigest(page);
+    const ms = Date.now() - t;
+    assert(d.lit > 0.9 * d.n, 'after reload the canvas is whole, lit ' + d.lit + ' of ' + d.n);
+    log(`  image back ${ms} ms after the reload`);
+    await shot('03-after-reload');
+  });
+
+  await check('overlay two jobs of the same scene (path and direct)', async () => {
+    second = await submit(page, { scene: small(), integrator: 'direct', spp: 1024, time: 5, name: 'cornell-direct' });
+    assert(second.id && second.integrator === 'direct', 'POST answered ' + JSON.stringify(second));
+    await page.waitForFunction((id) => [...document.querySelectorAll('#compare option')].some((o) => o.value === id),
+      first.id, { timeout: 5000 });
+    await page.selectOption('#compare', first.id);
+    await page.waitForFunction(() => document.getElementById('plot-error').dataset.series === '2' &&
+      document.querySelectorAll('#plot-error .u-legend .u-series').length >= 2, null,
+      { timeout: 5000 });
+    // Both series hold points: the compared job's history was gathered while it ran.
+    await page.waitForFunction(() => Number(document.getElementById('plot-error').dataset.points) >= 4, null, { timeout: 15000 });
+    await shot('04-overlay');
+  });
+
+  await check('cancel a job from the list', async () => {
+    const long = await submit(page, { scene: small(), spp: 65536, name: 'to-cancel' });
+    assert(long.id, 'POST answered ' + JSON.stringify(long));
+    const row = jobRow(page, long.id);
+    await row.waitFor({ timeout: 5000 });
+    await row.getByRole('button', { name: 'cancel job ' + long.id }).click();
+    await row.locator('.state-cancelled').waitFor({ timeout: 15000 });
+    assert(await row.getByRole('button', { name: 'cancel job ' + long.id }).isDisabled(), 'Cancel is disabled once cancelled');
+    await shot('05-cancelled');
+  });
+
+  await check('EXR and PNG downloads', async () => {
+    const row = jobRow(page, first.id);
+    const png = await page.request.get(new URL(await row.getByRole('link', { name: 'download PNG of job ' + first.id }).getAttribute('href'), url).href);
+    assert(png.status() === 200 && png.headers()['content-type'] === 'image/png', 'PNG link');
+    const exr = await page.request.get(new URL(await row.getByRole('link', { name: 'download EXR of job ' + first.id }).getAttribute('href'), url).href);
+    const b = await exr.body();
+    assert(exr.status() === 200 && b.readUInt32LE(0) === 20000630, 'EXR link gives an OpenEXR file');
+  });
+
+  await check('a broken scene: the message is beside the field its JSON path names', async () => {
+    const r1 = await submit(page, { scene: small(), maxdepth: -1 });
+    assert(/^integrator\.max_depth/.test(r1.error), 'server error ' + JSON.stringify(r1));
+    await page.waitForFunction(() => document.getElementById('err-maxdepth').textContent.includes('integrator.max_depth'));
+    assert(await page.getAttribute('#f-maxdepth', 'aria-invalid') === 'true', 'max depth is marked invalid');
+    assert(await page.evaluate(() => document.activeElement.id) === 'f-maxdepth', 'focus moves to the field');
+    await shot('06-error-maxdepth');
+    const bad = JSON.parse(small());
+    bad.shapes.push({ type: 'sphere', center: [0, 1, 0], radius: -1, material: Object.keys(bad.materials)[0] });
+    const r2 = await submit(page, { scene: JSON.stringify(bad, null, 2) });
+    assert(/^shapes\[\d+\]\.radius/.test(r2.error), 'server error ' + JSON.stringify(r2));
+    await page.waitForFunction(() => document.getElementById('err-scene').textContent.includes('.radius'));
+    assert(await page.textContent('#err-maxdepth') === '', 'the old message is gone');
+    const r3 = await submit(page, { scene: small(), spp: 100000 });
+    assert(/^job\.spp/.test(r3.error), 'server error ' + JSON.stringify(r3));
+    await page.waitForFunction(() => document.getElementById('err-spp').textContent.includes('job.spp'));
+    await page.fill('#f-scene', '{"tessera": 1,');
+    await page.click('#f-submit');
+    await page.waitForFunction(() => document.getElementById('err-scene').textContent.includes('not valid JSON'));
+    await shot('07-error-scene');
+  });
+
+  await check('controls are labelled and keyboard-operable', async () => {
+    const unlabelled = await page.evaluate(() => [...document.querySelectorAll('input, select, textarea, button')]
+      .filter((e) => !(e.labels && e.labels.length) && !e.getAttribute('aria-label') && !e.textContent.trim())
+      .map((e) => e.id || e.outerHTML.slice(0, 60)));
+    assert(unlabelled.length === 0, 'unlabelled controls: ' + unlabelled.join(', '));
+    await page.focus('#exposure');
+    await page.keyboard.press('ArrowRight');
+    await page.keyboard.press('ArrowRight');
+    assert((await page.textContent('#exposure-out')).startsWith('0.2'), 'exposure moved by the keyboard');
+    const before = await canvasDigest(page);
+    await page.keyboard.press('End');
+    const after = await canvasDigest(page);
+    assert(after.h !== before.h, 'exposure repaints the canvas');
+    // Tab reaches the submit form's controls in order.
+    await page.focus('#f-name');
+    await page.keyboard.press('Tab');
+    assert(await page.evaluate(() => document.activeElement.id) === 'f-integrator', 'Tab goes to the integrator');
+    await page.keyboard.press('Home');
+    await page.focus('#exposure');
+    await page.keyboard.press('Home');
+    await page.fill('#exposure', '0');
+    await page.dispatchEvent('#exposure', 'input');
+  });
+
+  await check('layout at 1280×800 and at phone width', async () => {
+    await page.waitForFunction((id) => document.querySelector(`#jobs tr[data-id="${id}"] .state`).textContent !== 'running',
+      second.id, { timeout: 20000 });
+    await page.screenshot({ path: path.join(TS_ARTIFACTS, '08-desktop-1280x800.png') });
+    const overflow = await page.evaluate(() => document.documentElement.scrollWidth - window.innerWidth);
+    assert(overflow <= 0, 'no horizontal scrolling at 1280 px, overflow ' + overflow);
+    const phone = await context.newPage();
+    await phone.setViewportSize({ width: 390, height: 844 });
+    await phone.goto(url, { waitUntil: 'load' });
+    await phone.getByRole('button', { name: 'show job ' + 'cornell-path (' + first.id + ') in the preview' }).click();
+    await phone.waitForFunction(() => Number(document.getElementById('canvas').dataset.tiles) >= 9, null, { timeout: 5000 });
+    const o = await phone.evaluate(() => document.documentElement.scrollWidth - window.innerWidth);
+    assert(o <= 0, 'no horizontal scrolling at phone width, overflow ' + o);
+    const box = await phone.locator('#canvas').boundingBox();
+    assert(box && box.width <= 390 && box.width > 200, 'the canvas fits the phone, width ' + (box && box.width));
+    await shot('09-phone-390', phone);
+    await phone.close();
+  });
+
+  await check('no script errors in the page', async () => {
+    assert(pageErrors.length === 0, pageErrors.join('\n'));
+  });
+} finally {
+  await context.close();
+}
+log(`${passes} passed, ${failures} failed; screenshots in ${TS_ARTIFACTS}`);
+process.exit(failures ? 1 : 0);

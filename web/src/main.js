@@ -1,0 +1,513 @@
+// tessera web UI (issue 7): jobs, submit, live preview, accuracy-against-time plots.
+// Talks only to the public API v1 (DESIGN.md §5, proto/openapi.yaml).
+import uPlot from 'uplot';
+import 'uplot/dist/uPlot.min.css';
+import './style.css';
+
+const $ = (id) => document.getElementById(id);
+const query = new URLSearchParams(location.search);
+const token = query.get('access_token');
+const authHeaders = token ? { Authorization: 'Bearer ' + token } : {};
+// URLs the browser fetches by itself (img, EventSource, download links) carry the token as a query.
+const withToken = (url) => (token ? url + (url.includes('?') ? '&' : '?') + 'access_token=' + encodeURIComponent(token) : url);
+
+async function api(path, opts = {}) {
+  const r = await fetch(path, { ...opts, headers: { ...authHeaders, ...(opts.headers || {}) } });
+  let body = null;
+  try { body = await r.json(); } catch { /* not JSON */ }
+  return { status: r.status, ok: r.ok, body };
+}
+
+// ------------------------------------------------------------------ state
+const jobs = new Map();      // id -> latest status document
+// id -> [{t, err, spp}]: points seen while this page (or an earlier load of it in this tab,
+// through sessionStorage) was open; the API reports only the present.
+const history = new Map();
+try {
+  for (const [id, h] of JSON.parse(sessionStorage.getItem('tessera.history') || '[]')) history.set(id, h);
+} catch { /* storage unavailable or damaged: start afresh */ }
+let saveTimer = null;
+function saveHistory() {
+  clearTimeout(saveTimer);
+  saveTimer = setTimeout(() => {
+    try { sessionStorage.setItem('tessera.history', JSON.stringify([...history].filter(([id]) => jobs.has(id)))); } catch { /* full */ }
+  }, 300);
+}
+let selectedId = null;       // the job in the preview
+let compareId = '';          // the job overlaid on the plots
+let streams = new Map();     // id -> EventSource (selected and compared jobs)
+
+function addPoint(id, t, err, spp) {
+  if (!(t > 0)) return;
+  let h = history.get(id);
+  if (!h) history.set(id, (h = []));
+  const last = h[h.length - 1];
+  if (last && last.spp === spp && last.err === err) return;
+  if (last && t < last.t) return;
+  h.push({ t, err: err == null || !(err > 0) ? null : err, spp: spp > 0 ? spp : null });
+  saveHistory();
+}
+
+// ------------------------------------------------------------------ formatting
+const fmtNum = (v, d = 3) => (v == null || !isFinite(v) ? '–' : Number(v).toPrecision(d));
+function fmtRate(v) {
+  if (v == null || !isFinite(v)) return '–';
+  if (v >= 1e9) return (v / 1e9).toFixed(2) + ' G';
+  if (v >= 1e6) return (v / 1e6).toFixed(2) + ' M';
+  if (v >= 1e3) return (v / 1e3).toFixed(1) + ' k';
+  return v.toFixed(0);
+}
+function fmtTime(s) {
+  if (s == null || !isFinite(s)) return '–';
+  if (s < 60) return s.toFixed(1) + ' s';
+  const m = Math.floor(s / 60);
+  return m + ' min ' + Math.round(s - 60 * m) + ' s';
+}
+const finished = (st) => st === 'done' || st === 'cancelled' || st === 'failed';
+const jobLabel = (j) => (j.name ? j.name + ' ' : '') + '(' + j.id + ')';
+
+// ------------------------------------------------------------------ jobs list
+function el(tag, attrs = {}, ...kids) {
+  const e = document.createElement(tag);
+  for (const [k, v] of Object.entries(attrs)) {
+    if (k === 'class') e.className = v;
+    else if (k.startsWith('on')) e.addEventListener(k.slice(2), v);
+    else if (v !== undefined && v !== null && v !== false) e.setAttribute(k, v === true ? '' : v);
+  }
+  for (const k of kids) e.append(k);
+  return e;
+}
+
+function renderJobs() {
+  const tbody = $('jobs').querySelector('tbody');
+  const list = [...jobs.values()].sort((a, b) => b.created_at - a.created_at);
+  $('jobs-empty').hidden = list.length > 0;
+  const rows = list.map((j) => {
+    const frac = j.spp_target > 0 ? Math.min(1, j.spp_done / j.spp_target) : 0;
+    const row = el('tr', { 'data-id': j.id, class: j.id === selectedId ? 'selected' : '' },
+      el('td', {}, el('button', { class: 'link', type: 'button', 'aria-label': 'show job ' + jobLabel(j) + ' in the preview',
+        'aria-pressed': j.id === selectedId ? 'true' : 'false', onclick: () => select(j.id) }, jobLabel(j)),
+        el('div', { class: 'muted small' }, j.integrator || '')),
+      el('td', {}, el('span', { class: 'state state-' + j.state, title: j.error || j.halt_reason || '' }, j.state),
+        j.error ? el('div', { class: 'err small' }, j.error) : ''),
+      el('td', {}, el('progress', { max: '1', value: String(frac), 'aria-label': 'progress of ' + j.id }),
+        el('span', { class: 'small' }, ' ' + Math.round(100 * frac) + '%')),
+      el('td', { class: 'num' }, j.spp_done + ' / ' + j.spp_target),
+      el('td', { class: 'num' }, fmtRate(j.samples_per_s)),
+      el('td', { class: 'num' }, fmtNum(j.error_estimate)),
+      el('td', { class: 'num' }, fmtTime(j.elapsed_s)),
+      el('td', { class: 'effects small' }, (j.effects || []).join(', ')),
+      el('td', { class: 'actions' },
+        el('button', { type: 'button', class: 'cancel', disabled: finished(j.state), 'aria-label': 'cancel job ' + j.id,
+          onclick: () => cancel(j.id) }, 'Cancel'),
+        el('a', { href: withToken(j.urls.exr), download: j.id + '.exr', 'aria-label': 'download EXR of job ' + j.id }, 'EXR'),
+        el('a', { href: withToken(j.urls.png), download: j.id + '.png', 'aria-label': 'download PNG of job ' + j.id }, 'PNG')));
+    return row;
+  });
+  // Keep keyboard focus across the refresh: remember which control had it.
+  const active = document.activeElement;
+  const activeRow = active && active.closest && active.closest('#jobs tr');
+  const focusKey = activeRow ? [activeRow.dataset.id, [...activeRow.querySelectorAll('button,a')].indexOf(active)] : null;
+  tbody.replaceChildren(...rows);
+  if (focusKey) {
+    const r = tbody.querySelector(`tr[data-id="${focusKey[0]}"]`);
+    const c = r && r.querySelectorAll('button,a')[focusKey[1]];
+    if (c) c.focus();
+  }
+  // The overlay choice: other jobs.
+  const sel = $('compare');
+  const want = ['', ...list.filter((j) => j.id !== selectedId).map((j) => j.id)];
+  const have = [...sel.options].map((o) => o.value);
+  if (want.join() !== have.join()) {
+    sel.replaceChildren(el('option', { value: '' }, '(none)'),
+      ...list.filter((j) => j.id !== selectedId).map((j) => el('option', { value: j.id }, jobLabel(j) + ' · ' + (j.integrator || ''))));
+    sel.value = want.includes(compareId) ? compareId : '';
+    if (sel.value !== compareId) setCompare(sel.value);
+  }
+}
+
+let pollTimer = null;
+async function poll() {
+  clearTimeout(pollTimer);
+  try {
+    const r = await api('/api/v1/jobs');
+    if (r.ok && r.body) {
+      $('conn').textContent = 'connected';
+      $('conn').className = 'conn ok';
+      const seen = new Set();
+      for (const j of r.body.jobs) {
+        seen.add(j.id);
+        jobs.set(j.id, j);
+        addPoint(j.id, j.elapsed_s, j.error_estimate, j.spp_done);
+      }
+      for (const id of [...jobs.keys()]) if (!seen.has(id)) jobs.delete(id);
+      renderJobs();
+      if (!selectedId && r.body.jobs.length) {
+        const j = r.body.jobs.find((j) => j.state === 'running') || r.body.jobs[0];
+        select(j.id);
+      }
+      updatePlots();
+    } else {
+      $('conn').textContent = 'server answered ' + r.status + (r.body && r.body.error ? ': ' + r.body.error : '');
+      $('conn').className = 'conn bad';
+    }
+  } catch (e) {
+    $('conn').textContent = 'server unreachable, retrying…';
+    $('conn').className = 'conn bad';
+  }
+  pollTimer = setTimeout(poll, 1000);
+}
+
+async function cancel(id) {
+  const r = await api('/api/v1/jobs/' + encodeURIComponent(id), { method: 'DELETE' });
+  if (r.ok && r.body) jobs.set(id, r.body);
+  renderJobs();
+  poll();
+}
+
+// ------------------------------------------------------------------ preview
+// The canvas shows the tiles' 8-bit sRGB PNGs scaled by 2^exposure in linear light. `base`
+// keeps the unscaled pixels, so changing the exposure repaints without refetching.
+const canvas = $('canvas'), overlay = $('overlay');
+const ctx = canvas.getContext('2d', { willReadFrequently: true });
+const octx = overlay.getContext('2d');
+let base = null;                 // ImageData of the unexposed image (crop window)
+let film = null;                 // the selected job's film
+let tileSpp = new Map();         // "tx,ty" -> spp painted
+let passSpp = 0, jobState = '';
+let lut = null, lutEv = null;
+
+const srgbToLinear = (c) => (c <= 0.04045 ? c / 12.92 : Math.pow((c + 0.055) / 1.055, 2.4));
+const linearToSrgb = (c) => (c <= 0.0031308 ? 12.92 * c : 1.055 * Math.pow(c, 1 / 2.4) - 0.055);
+function exposureLut() {
+  const ev = Number($('exposure').value);
+  if (lut && lutEv === ev) return lut;
+  lut = new Uint8ClampedArray(256);
+  const k = Math.pow(2, ev);
+  for (let i = 0; i < 256; i++) lut[i] = Math.round(255 * linearToSrgb(Math.min(1, k * srgbToLinear(i / 255))));
+  lutEv = ev;
+  return lut;
+}
+function paintRegion(x, y, w, h) {
+  if (!base) return;
+  const L = exposureLut();
+  const out = ctx.createImageData(w, h);
+  const W = base.width;
+  for (let r = 0; r < h; r++) {
+    let si = ((y + r) * W + x) * 4, di = r * w * 4;
+    for (let c = 0; c < w; c++, si += 4, di += 4) {
+      out.data[di] = L[base.data[si]];
+      out.data[di + 1] = L[base.data[si + 1]];
+      out.data[di + 2] = L[base.data[si + 2]];
+      out.data[di + 3] = base.data[si + 3];
+    }
+  }
+  ctx.putImageData(out, x, y);
+}
+
+const scratch = document.createElement('canvas');
+const sctx = scratch.getContext('2d', { willReadFrequently: true });
+function paintTile(t, img) {
+  if (!film) return;
+  const x = t.x - film.x0, y = t.y - film.y0;
+  scratch.width = t.w; scratch.height = t.h;
+  sctx.clearRect(0, 0, t.w, t.h);
+  sctx.drawImage(img, 0, 0);
+  const px = sctx.getImageData(0, 0, t.w, t.h);
+  for (let r = 0; r < t.h; r++)
+    base.data.set(px.data.subarray(r * t.w * 4, (r + 1) * t.w * 4), ((y + r) * base.width + x) * 4);
+  paintRegion(x, y, t.w, t.h);
+}
+
+function drawOutlines() {
+  octx.clearRect(0, 0, overlay.width, overlay.height);
+  if (!film || !$('outline').checked || finished(jobState)) return;
+  // Tiles of the pass under way that have not reported it yet are the ones being worked on.
+  octx.lineWidth = 1;
+  octx.strokeStyle = 'rgba(255, 190, 40, 0.95)';
+  octx.setLineDash([3, 2]);
+  let n = 0;
+  for (let ty = 0; ty < film.tiles_y; ty++)
+    for (let tx = 0; tx < film.tiles_x; tx++) {
+      const s = tileSpp.get(tx + ',' + ty) || 0;
+      if (jobState === 'running' && s < passSpp) {
+        const x = tx * film.tile_size, y = ty * film.tile_size;
+        const w = Math.min(film.tile_size, film.crop_width - x), h = Math.min(film.tile_size, film.crop_height - y);
+        octx.strokeRect(x + 0.5, y + 0.5, w - 1, h - 1);
+        n++;
+      }
+    }
+  overlay.dataset.outlined = String(n);
+}
+
+function setPreviewStatus(p) {
+  jobState = p.state;
+  if (p.pass_spp) passSpp = p.pass_spp;
+  $('preview-status').textContent = `${p.state} · ${p.spp} / ${p.spp_target} spp · ${fmtTime(p.elapsed_s)} · ` +
+    `error ${fmtNum(p.error_estimate)} · ${fmtRate(p.samples_per_s)} samples/s` +
+    (p.halt_reason && p.halt_reason !== 'none' ? ' · halted: ' + p.halt_reason : '');
+  canvas.dataset.state = p.state;
+  drawOutlines();
+}
+
+function onProgress(id, p, isDone) {
+  addPoint(id, p.elapsed_s, p.error_estimate, p.spp);
+  const j = jobs.get(id);
+  if (j) {
+    Object.assign(j, { state: p.state, spp_done: p.spp, spp_target: p.spp_target, pass_spp: p.pass_spp, elapsed_s: p.elapsed_s,
+      samples: p.samples, samples_per_s: p.samples_per_s, error_estimate: p.error_estimate, halt_reason: p.halt_reason });
+  }
+  if (id === selectedId) setPreviewStatus(p);
+  scheduleRender();
+  if (isDone) closeStream(id);
+}
+
+let renderQueued = false;
+function scheduleRender() {
+  if (renderQueued) return;
+  renderQueued = true;
+  requestAnimationFrame(() => { renderQueued = false; renderJobs(); updatePlots(); });
+}
+
+function closeStream(id) {
+  const es = streams.get(id);
+  if (es) { es.close(); streams.delete(id); }
+}
+
+// One EventSource per watched job. EventSource reconnects by itself after a dropped
+// connection; the server then sends every rendered tile's current state first, so the
+// canvas is whole again at once.
+function openStream(id) {
+  if (streams.has(id)) return;
+  const j = jobs.get(id);
+  if (!j) return;
+  const es = new EventSource(withToken(j.urls.events));
+  streams.set(id, es);
+  es.addEventListener('tile', (ev) => {
+    if (id !== selectedId) return;
+    const t = JSON.parse(ev.data);
+    const key = t.tx + ',' + t.ty;
+    if ((tileSpp.get(key) || 0) > t.spp) return; // an older state than what is painted
+    if (t.spp > passSpp) passSpp = t.spp;
+    const img = new Image();
+    img.onload = () => {
+      if (id !== selectedId || (tileSpp.get(key) || 0) > t.spp) return;
+      tileSpp.set(key, t.spp);
+      paintTile(t, img);
+      canvas.dataset.tiles = String(Number(canvas.dataset.tiles || 0) + 1);
+      drawOutlines();
+    };
+    img.src = withToken(t.png + '?spp=' + t.spp);
+  });
+  es.addEventListener('progress', (ev) => onProgress(id, JSON.parse(ev.data), false));
+  es.addEventListener('done', (ev) => onProgress(id, JSON.parse(ev.data), true));
+  es.addEventListener('open', () => { if (id === selectedId) $('preview-job').dataset.live = 'yes'; });
+}
+
+function select(id) {
+  const j = jobs.get(id);
+  if (!j) return;
+  if (selectedId && selectedId !== id && selectedId !== compareId) closeStream(selectedId);
+  closeStream(id); // reopen, so the late-connect state arrives for this canvas
+  selectedId = id;
+  film = j.film;
+  tileSpp = new Map();
+  passSpp = j.pass_spp || 0;
+  jobState = j.state;
+  for (const c of [canvas, overlay]) { c.width = film.crop_width; c.height = film.crop_height; }
+  canvas.dataset.tiles = '0';
+  canvas.style.aspectRatio = film.crop_width + ' / ' + film.crop_height;
+  ctx.clearRect(0, 0, canvas.width, canvas.height);
+  base = ctx.createImageData(film.crop_width, film.crop_height);
+  $('preview-job').textContent = '— ' + jobLabel(j);
+  $('preview-status').textContent = j.state;
+  openStream(id);
+  renderJobs();
+  updatePlots(true);
+}
+
+$('exposure').addEventListener('input', () => {
+  $('exposure-out').textContent = Number($('exposure').value).toFixed(1) + ' EV';
+  if (base) paintRegion(0, 0, base.width, base.height);
+});
+$('outline').addEventListener('change', drawOutlines);
+
+// ------------------------------------------------------------------ plots
+function setCompare(id) {
+  if (compareId && compareId !== selectedId) closeStream(compareId);
+  compareId = id;
+  if (id) {
+    const j = jobs.get(id);
+    if (j && !finished(j.state)) openStream(id);
+  }
+  updatePlots(true);
+}
+$('compare').addEventListener('change', (e) => setCompare(e.target.value));
+
+let plots = null, plotKey = '';
+function plotWidth() {
+  return Math.max(240, Math.min(640, $('plot-error').parentElement.clientWidth - 8));
+}
+function makePlot(target, title, ylabel, names) {
+  const colors = ['#2f7ed8', '#e4572e'];
+  return new uPlot({
+    title, width: plotWidth(), height: 220,
+    scales: { x: { time: false, distr: 3 }, y: { distr: 3 } },
+    axes: [{ label: 'elapsed (s)' }, { label: ylabel, size: 60 }],
+    series: [{ label: 'elapsed (s)' }, ...names.map((n, i) => ({ label: n, stroke: colors[i], width: 2, spanGaps: true,
+      points: { show: true, size: 5 } }))],
+    legend: { show: true, live: false },
+  }, [[], ...names.map(() => [])], target);
+}
+function seriesData(field) {
+  const ids = [selectedId, compareId].filter(Boolean);
+  const tables = ids.map((id) => {
+    const h = (history.get(id) || []).filter((p) => p[field] != null);
+    return [h.map((p) => p.t), h.map((p) => p[field])];
+  });
+  if (!tables.length) return [[]];
+  return uPlot.join(tables);
+}
+function updatePlots(rebuild) {
+  const ids = [selectedId, compareId].filter(Boolean);
+  const key = ids.join('|');
+  if (rebuild || !plots || key !== plotKey) {
+    if (plots) { plots.err.destroy(); plots.spp.destroy(); }
+    const names = ids.map((id) => { const j = jobs.get(id); return j ? jobLabel(j) + ' ' + (j.integrator || '') : id; });
+    $('plot-error').replaceChildren();
+    $('plot-spp').replaceChildren();
+    plots = { err: makePlot($('plot-error'), 'Relative error estimate', 'error', names),
+      spp: makePlot($('plot-spp'), 'Samples per pixel', 'spp', names) };
+    plotKey = key;
+  }
+  if (!ids.length) return;
+  const e = seriesData('err'), s = seriesData('spp');
+  plots.err.setData(e);
+  plots.spp.setData(s);
+  $('plot-error').dataset.series = $('plot-spp').dataset.series = String(ids.length);
+  $('plot-error').dataset.points = String(e[0].length);
+  $('plot-spp').dataset.points = String(s[0].length);
+}
+window.addEventListener('resize', () => {
+  if (!plots) return;
+  const w = plotWidth();
+  plots.err.setSize({ width: w, height: 220 });
+  plots.spp.setSize({ width: w, height: 220 });
+});
+
+// ------------------------------------------------------------------ submit
+// A server error starts with the JSON path it is about; it is shown next to that field.
+const FIELD_OF_PATH = [
+  [/^job\.spp\b|^sampler\.spp\b/, 'spp'],
+  [/^job\.time_limit_s\b/, 'time'],
+  [/^job\.target_error\b/, 'target'],
+  [/^job\.name\b/, 'name'],
+  [/^integrator\.max_depth\b/, 'maxdepth'],
+  [/^integrator(\.type)?\b/, 'integrator'],
+];
+const FIELDS = ['scene', 'name', 'integrator', 'maxdepth', 'spp', 'time', 'target', 'form'];
+const inputOf = { scene: 'f-scene', name: 'f-name', integrator: 'f-integrator', maxdepth: 'f-maxdepth', spp: 'f-spp',
+  time: 'f-time', target: 'f-target', form: 'f-submit' };
+function clearErrors() {
+  for (const f of FIELDS) {
+    $('err-' + f).textContent = '';
+    $(inputOf[f]).removeAttribute('aria-invalid');
+  }
+}
+function showError(field, msg) {
+  $('err-' + field).textContent = msg;
+  if (field !== 'form') $(inputOf[field]).setAttribute('aria-invalid', 'true');
+}
+function fieldForError(msg) {
+  const m = /^([A-Za-z_][\w.\[\]-]*):\s/.exec(msg);
+  if (!m) return /spp/.test(msg) ? 'spp' : /JSON|line \d+/.test(msg) ? 'scene' : 'form';
+  for (const [re, f] of FIELD_OF_PATH) if (re.test(m[1])) return f;
+  return 'scene';
+}
+
+function numberOrNull(id) {
+  const v = $(id).value.trim();
+  return v === '' ? null : Number(v);
+}
+
+$('submit-form').addEventListener('submit', async (e) => {
+  e.preventDefault();
+  clearErrors();
+  let doc;
+  try {
+    doc = JSON.parse($('f-scene').value);
+    if (!doc || typeof doc !== 'object' || Array.isArray(doc)) throw new Error('a scene is a JSON object');
+  } catch (err) {
+    showError('scene', 'not valid JSON: ' + err.message);
+    $('f-scene').focus();
+    return;
+  }
+  const integ = $('f-integrator').value, depth = numberOrNull('f-maxdepth');
+  if (integ && (!doc.integrator || doc.integrator.type !== integ)) doc.integrator = { type: integ };
+  if (depth !== null) doc.integrator = { ...(doc.integrator || { type: 'path' }), max_depth: depth };
+  const job = { ...(doc.job || {}) };
+  const name = $('f-name').value.trim();
+  if (name) job.name = name;
+  const spp = numberOrNull('f-spp'), tl = numberOrNull('f-time'), te = numberOrNull('f-target');
+  if (spp !== null) job.spp = spp;
+  if (tl !== null) job.time_limit_s = tl;
+  if (te !== null) job.target_error = te;
+  if (Object.keys(job).length) doc.job = job;
+  $('f-submit').disabled = true;
+  try {
+    const r = await api('/api/v1/jobs', { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(doc) });
+    if (r.status === 201 && r.body) {
+      jobs.set(r.body.id, r.body);
+      $('err-form').textContent = '';
+      $('err-form').className = 'ok';
+      $('err-form').textContent = 'queued as ' + r.body.id;
+      select(r.body.id);
+      poll();
+    } else {
+      const msg = (r.body && r.body.error) || 'the server answered ' + r.status;
+      const f = fieldForError(msg);
+      $('err-form').className = 'err';
+      showError(f, msg);
+      if (f !== 'form') $(inputOf[f]).focus();
+      else $('err-form').textContent = msg;
+    }
+  } catch (err) {
+    showError('form', 'could not reach the server: ' + err.message);
+  } finally {
+    $('f-submit').disabled = false;
+  }
+});
+
+function loadSceneText(text, name) {
+  $('f-scene').value = text;
+  clearErrors();
+  try {
+    const d = JSON.parse(text);
+    $('f-spp').placeholder = d.sampler && d.sampler.spp ? 'scene: ' + d.sampler.spp : '';
+    $('f-maxdepth').placeholder = d.integrator && d.integrator.max_depth != null ? 'scene: ' + d.integrator.max_depth : '';
+    $('f-integrator').options[0].textContent = '(scene\'s: ' + ((d.integrator && d.integrator.type) || 'path') + ')';
+    if (!$('f-name').value && name) $('f-name').placeholder = name;
+  } catch { /* shown on submit */ }
+}
+
+$('f-example').addEventListener('change', async (e) => {
+  if (!e.target.value) return;
+  const r = await fetch('scenes/' + e.target.value);
+  loadSceneText(await r.text(), e.target.value.replace(/\.json$/, ''));
+});
+$('f-file').addEventListener('change', async (e) => {
+  const f = e.target.files && e.target.files[0];
+  if (f) loadSceneText(await f.text(), f.name.replace(/\.json$/, ''));
+});
+
+async function loadExamples() {
+  try {
+    const r = await fetch('scenes/index.json');
+    const list = await r.json();
+    const sel = $('f-example');
+    for (const s of list) sel.append(el('option', { value: s.file }, s.title || s.file));
+  } catch { /* no examples shipped */ }
+}
+
+loadExamples();
+poll();

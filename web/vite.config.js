@@ -1,0 +1,39 @@
+// Vite build of the web UI into dist/ (embedded in the tessera binary by CMake). The shipped
+// example scenes (../scenes/*.json, or TS_SCENES_DIR) are emitted as dist/scenes/*.json with
+// an index, leaving out scenes that reference files (HTTP jobs have no folder).
+import fs from 'node:fs';
+import path from 'node:path';
+
+const scenesDir = process.env.TS_SCENES_DIR || path.resolve(import.meta.dirname, '../scenes');
+
+function usesFiles(v) {
+  if (Array.isArray(v)) return v.some(usesFiles);
+  if (v && typeof v === 'object')
+    return Object.entries(v).some(([k, x]) => ((k === 'file' || k === 'map') && typeof x === 'string') || usesFiles(x));
+  return false;
+}
+
+function exampleScenes() {
+  return {
+    name: 'tessera-example-scenes',
+    generateBundle() {
+      const index = [];
+      for (const f of fs.readdirSync(scenesDir).filter((f) => f.endsWith('.json')).sort()) {
+        const text = fs.readFileSync(path.join(scenesDir, f), 'utf8');
+        let doc;
+        try { doc = JSON.parse(text); } catch { continue; }
+        if (usesFiles(doc)) continue;
+        const w = doc.film && doc.film.width, h = doc.film && doc.film.height;
+        index.push({ file: f, title: `${f.replace(/\.json$/, '')} (${(doc.integrator && doc.integrator.type) || 'path'}, ${w}×${h})` });
+        this.emitFile({ type: 'asset', fileName: 'scenes/' + f, source: text });
+      }
+      this.emitFile({ type: 'asset', fileName: 'scenes/index.json', source: JSON.stringify(index) });
+    },
+  };
+}
+
+export default {
+  base: './',
+  build: { outDir: process.env.TS_WEB_OUT || 'dist', emptyOutDir: true, assetsInlineLimit: 0, chunkSizeWarningLimit: 1000 },
+  plugins: [exampleScenes()],
+};
