@@ -39,7 +39,11 @@ void ts_render_tile(const ts_render_request *req, int x0, int y0, int w, int h, 
                 ts_sample_stream st;
                 ts_sampler_begin(&s->sampler, (uint32_t)x, (uint32_t)y, i, &st);
                 ts_vec2 u_film = ts_sample_2d(&st);
-                ts_vec2 u_lens = ts_sample_2d(&st);
+                /* The lens dimension is reserved either way, so later dimensions keep their
+                 * values; a pinhole camera just does not compute it. */
+                ts_vec2 u_lens = {0, 0};
+                if (cam.lens_radius > 0) u_lens = ts_sample_2d(&st);
+                else st.dim++;
                 float weight;
                 ts_vec2 off = ts_filter_sample(&s->filter, u_film, &weight);
                 ts_vec2 p_raster = {(float)x + 0.5f + off.x, (float)y + 0.5f + off.y};

@@ -32,9 +32,10 @@
  *   scene, config, integrator, slope_spp, slope_time, final_spp, final_seconds, final_relmse,
  *   t_1pct, how_1pct, t_01pct, how_01pct, ratio_1pct, ratio_01pct
  * slope_*: least-squares slope of log relMSE against log spp / log seconds over the
- * counts ≥ 4 spp. t_X: seconds to relMSE X, `interpolated` (log-log between the two
- * measured counts that bracket it) or `extrapolated` (from the last count along the fitted
- * time slope); ratio_X = t_X ÷ the same scene's `path` (or its own base) t_X.
+ * counts ≥ 4 spp. t_X: seconds to relMSE X = the spp that reaches X, `interpolated`
+ * (log-log between the two measured counts that bracket it) or `extrapolated` (from the
+ * last count along the fitted spp slope), × the measured seconds per spp of the series;
+ * ratio_X = t_X ÷ the same scene's `base` t_X.
  *
  * Configurations (--configs, comma-separated; default all):
  *   base           the scene's integrator as in its file (path: MIS, Sobol, power, RR)
@@ -350,31 +351,33 @@ static double fit_slope(const double *x, const double *y, const uint32_t *spp, i
     return den > 0 ? (m * sxy - sx * sy) / den : NAN;
 }
 
-/* Seconds to reach relMSE `target`; *how: interpolated, extrapolated or "-". */
-static double time_to(const run *r, double slope_t, double target, const char **how)
+/* Seconds to reach relMSE `target`: the sample count that reaches it, `interpolated`
+ * (log-log between the two measured counts that bracket it) or `extrapolated` (from the
+ * last count along the fitted spp slope), times the configuration's measured seconds per
+ * sample over the whole series (cost per sample is constant; the per-pass times of a busy
+ * machine are not, so this is steadier than fitting against time). *how "-": no estimate. */
+static double time_to(const run *r, double slope_spp, double target, const char **how)
 {
+    int l = r->n - 1;
+    if (l < 0) {
+        *how = "-";
+        return NAN;
+    }
+    double per_spp = r->seconds[l] / r->spp[l];
     for (int i = 0; i < r->n; i++) {
         if (r->relmse[i] > target) continue;
-        if (i == 0) {
-            *how = "first";
-            return r->seconds[0];
-        }
-        double e0 = log(r->relmse[i - 1]), e1 = log(r->relmse[i]);
-        if (!(r->relmse[i] > 0)) {
-            *how = "interpolated";
-            return r->seconds[i];
-        }
-        double f = (log(target) - e0) / (e1 - e0);
         *how = "interpolated";
-        return exp(log(r->seconds[i - 1]) + f * (log(r->seconds[i]) - log(r->seconds[i - 1])));
+        if (i == 0 || !(r->relmse[i] > 0)) return r->spp[i] * per_spp;
+        double e0 = log(r->relmse[i - 1]), e1 = log(r->relmse[i]);
+        double f = (log(target) - e0) / (e1 - e0);
+        return exp(log(r->spp[i - 1]) + f * (log(r->spp[i]) - log(r->spp[i - 1]))) * per_spp;
     }
-    int l = r->n - 1;
-    if (l < 0 || !(slope_t < -0.05) || !(r->relmse[l] > 0)) {
+    if (!(slope_spp < -0.05) || !(r->relmse[l] > 0)) {
         *how = "-";
         return NAN;
     }
     *how = "extrapolated";
-    return r->seconds[l] * pow(target / r->relmse[l], 1 / slope_t);
+    return r->spp[l] * pow(target / r->relmse[l], 1 / slope_spp) * per_spp;
 }
 
 /* ---------------------------------------------------------------- one scene */
@@ -517,8 +520,8 @@ static int bench_scene(const char *path, const options *o, FILE *summary)
             for (int k = 0; k < r->n; k++) x[k] = r->spp[k];
             ss[i] = fit_slope(x, r->relmse, r->spp, r->n);
             st[i] = fit_slope(r->seconds, r->relmse, r->spp, r->n);
-            t1[i] = time_to(r, st[i], 0.01, &h1[i]);
-            t01[i] = time_to(r, st[i], 0.001, &h01[i]);
+            t1[i] = time_to(r, ss[i], 0.01, &h1[i]);
+            t01[i] = time_to(r, ss[i], 0.001, &h01[i]);
             if (!strcmp(r->cfg->name, "base")) t1_base = t1[i], t01_base = t01[i];
         }
         for (int i = 0; i < nr; i++) {

@@ -213,6 +213,10 @@ try {
       .filter((e) => !(e.labels && e.labels.length) && !e.getAttribute('aria-label') && !e.textContent.trim())
       .map((e) => e.id || e.outerHTML.slice(0, 60)));
     assert(unlabelled.length === 0, 'unlabelled controls: ' + unlabelled.join(', '));
+    // Pick the first job for the preview with the keyboard: its button, then Enter.
+    await page.getByRole('button', { name: 'show job cornell-path (' + first.id + ') in the preview' }).focus();
+    await page.keyboard.press('Enter');
+    await page.waitForFunction(() => Number(document.getElementById('canvas').dataset.tiles) >= 9, null, { timeout: 5000 });
     await page.focus('#exposure');
     await page.keyboard.press('ArrowRight');
     await page.keyboard.press('ArrowRight');
