@@ -35,6 +35,12 @@ ts_bxdf ts_bxdf_lambertian(ts_rgb r)
     return (ts_bxdf){.type = TS_BXDF_LAMBERTIAN, .flags = TS_BXDF_REFLECTION | TS_BXDF_DIFFUSE, .r = r};
 }
 
+ts_bxdf ts_bxdf_lambertian_coupled(ts_rgb r, ts_rgb ks, ts_fresnel fr)
+{
+    return (ts_bxdf){.type = TS_BXDF_LAMBERTIAN, .flags = TS_BXDF_REFLECTION | TS_BXDF_DIFFUSE, .r = r, .rs = ks,
+                     .fresnel = fr, .diffuse_coupled = true};
+}
+
 ts_bxdf ts_bxdf_oren_nayar(ts_rgb r, float sigma_deg)
 {
     float s = ts_radians(sigma_deg), s2 = s * s;
@@ -188,11 +194,21 @@ static ts_rgb fresnel_blend_f(const ts_bxdf *b, ts_vec3 wo, ts_vec3 wi)
     return rgb_finite(ts_rgb_add(diffuse, spec));
 }
 
+/* Lambertian under a coat: light crossing the coat twice loses what the coat's specular
+ * lobe reflects at each crossing (|cos| so both sides of the surface agree). */
+static ts_rgb coupled_diffuse_f(const ts_bxdf *b, ts_vec3 wo, ts_vec3 wi)
+{
+    ts_rgb fo = ts_fresnel_eval(&b->fresnel, fabsf(wo.z)), fi = ts_fresnel_eval(&b->fresnel, fabsf(wi.z));
+    ts_rgb t = {(1 - b->rs.r * fo.r) * (1 - b->rs.r * fi.r), (1 - b->rs.g * fo.g) * (1 - b->rs.g * fi.g),
+                (1 - b->rs.b * fo.b) * (1 - b->rs.b * fi.b)};
+    return rgb_finite(ts_rgb_scale(ts_rgb_mul(b->r, t), TS_INV_PI));
+}
+
 ts_rgb ts_bxdf_f(const ts_bxdf *b, ts_vec3 wo, ts_vec3 wi)
 {
     if (wo.z == 0 || !ts_vec3_is_finite(wo) || !ts_vec3_is_finite(wi)) return black();
     switch (b->type) {
-    case TS_BXDF_LAMBERTIAN: return ts_rgb_scale(b->r, TS_INV_PI);
+    case TS_BXDF_LAMBERTIAN: return b->diffuse_coupled ? coupled_diffuse_f(b, wo, wi) : ts_rgb_scale(b->r, TS_INV_PI);
     case TS_BXDF_OREN_NAYAR: return oren_nayar_f(b, wo, wi);
     case TS_BXDF_MICROFACET_REFLECTION: return microfacet_reflection_f(b, wo, wi);
     case TS_BXDF_MICROFACET_TRANSMISSION:

@@ -38,7 +38,7 @@ enum {
 };
 
 typedef enum ts_bxdf_type {
-    TS_BXDF_LAMBERTIAN,             /* r: reflectance */
+    TS_BXDF_LAMBERTIAN,             /* r: reflectance; diffuse_coupled: × (1 − rs·F(|cosθo|))(1 − rs·F(|cosθi|)) */
     TS_BXDF_OREN_NAYAR,             /* r, on_a, on_b */
     TS_BXDF_MICROFACET_REFLECTION,  /* r, dist, fresnel */
     TS_BXDF_MICROFACET_TRANSMISSION,/* t, dist, eta_a (outside, +z side), eta_b (inside) */
@@ -57,6 +57,7 @@ typedef struct ts_bxdf {
     float on_a, on_b;   /* Oren–Nayar A and B */
     float eta_a, eta_b; /* indices outside (+z side) and inside */
     bool blend_glossy;  /* FresnelBlend has its glossy term */
+    bool diffuse_coupled; /* Lambertian under a specular coat (plastic): see ts_bxdf_lambertian_coupled */
     ts_microfacet dist;
     ts_fresnel fresnel;
     const struct ts_fourier_table *fourier;
@@ -72,6 +73,10 @@ typedef struct ts_bxdf_sample {
 
 /* ---- constructors (validate nothing: the scene loader has) ---- */
 ts_bxdf ts_bxdf_lambertian(ts_rgb r);
+/* Lambertian(r) under a specular coat of scale ks and Fresnel fr (the plastic material):
+ * f = r/π · (1 − ks·F(|cosθo|)) · (1 − ks·F(|cosθi|)), per channel. Symmetric in wo and
+ * wi (reciprocal); sampled like the Lambertian (cosine-weighted). material.c explains why. */
+ts_bxdf ts_bxdf_lambertian_coupled(ts_rgb r, ts_rgb ks, ts_fresnel fr);
 ts_bxdf ts_bxdf_oren_nayar(ts_rgb r, float sigma_deg);
 ts_bxdf ts_bxdf_microfacet_reflection(ts_rgb r, ts_microfacet dist, ts_fresnel fresnel);
 ts_bxdf ts_bxdf_microfacet_transmission(ts_rgb t, ts_microfacet dist, float eta_a, float eta_b);

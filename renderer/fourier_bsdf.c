@@ -11,7 +11,11 @@
 
 #define HEADER_BYTES 64
 #define MAX_MU 4096
-#define MAX_M 1000000
+/* Scratch for the interpolated coefficients of one lookup, on the stack (the hot path
+ * allocates nothing): mMax × nChannels must fit. Real files use a few hundred
+ * coefficients per channel; larger tables are refused at load time rather than rendered
+ * black or truncated. */
+#define AK_STACK 4096
 
 /* ------------------------------------------------------------------ loading ---- */
 
@@ -120,9 +124,15 @@ ts_status ts_fourier_table_load_memory(const unsigned char *buf, size_t size, co
         st = ts_error_set(err, TS_ERR_UNSUPPORTED, "%s: unsupported basis count %d (expected 1)", path, (int)n_bases);
         return st;
     }
-    if (n_mu < 2 || n_mu > MAX_MU || n_coeffs < 0 || m_max < 1 || m_max > MAX_M) {
+    if (n_mu < 2 || n_mu > MAX_MU || n_coeffs < 0 || m_max < 1) {
         st = ts_error_set(err, TS_ERR_INVALID, "%s: invalid sizes (nMu %d, nCoeffs %d, mMax %d)", path, (int)n_mu,
                           (int)n_coeffs, (int)m_max);
+        return st;
+    }
+    if ((int64_t)m_max * n_channels > AK_STACK) {
+        st = ts_error_set(err, TS_ERR_UNSUPPORTED,
+                          "%s: mMax %d with %d channel(s) exceeds the supported %d coefficients per lookup", path,
+                          (int)m_max, (int)n_channels, AK_STACK);
         return st;
     }
     if (!(eta > 0) || !isfinite(eta)) {
@@ -324,11 +334,6 @@ static ts_rgb to_rgb(const ts_fourier_table *t, const float *ak, int m, double c
     float g = 1.39829f * y - 0.100913f * b - 0.297375f * r;
     return (ts_rgb){ts_maxf(0, r * scale), ts_maxf(0, g * scale), ts_maxf(0, b * scale)};
 }
-
-/* Scratch for the interpolated coefficients without heap use: tables with larger mMax
- * are evaluated through a bounded prefix (the loader accepts any mMax; real files use a
- * few hundred). */
-#define AK_STACK 4096
 
 ts_rgb ts_fourier_f(const ts_fourier_table *t, ts_vec3 wo, ts_vec3 wi)
 {

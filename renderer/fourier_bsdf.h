@@ -9,8 +9,9 @@
  *
  * A table is immutable after loading and may be shared by any number of threads. The
  * loader checks everything a malformed file could break (magic, flags, counts, monotone
- * nodes, offsets and lengths inside the coefficient array) so evaluation never reads out
- * of bounds; errors name the file and the problem. */
+ * nodes, offsets and lengths inside the coefficient array, mMax × channels ≤ 4096 — the
+ * evaluator's stack scratch) so evaluation never reads out of bounds or silently drops
+ * terms; errors name the file and the problem. */
 #ifndef TS_FOURIER_BSDF_H
 #define TS_FOURIER_BSDF_H
 

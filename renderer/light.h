@@ -56,7 +56,7 @@ typedef struct ts_light {
     ts_xform to_world;     /* infinite: map space → world */
     ts_vec3 scene_center;  /* distant/infinite: filled by ts_lights_prepare */
     float scene_radius;
-    /* area: how triangles are sampled (loader leaves 0 = AUTO; the benchmark may force one) */
+    /* area: how triangles are sampled (loader leaves 0 = AUTO; ts_lights_set_triangle_sampling forces one) */
     ts_triangle_sampling triangle_sampling;
     /* prepare: area sampling data (area, sphere centre/radius, …) */
     ts_shape_sample_info geom;

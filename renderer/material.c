@@ -1,4 +1,25 @@
-/* material.c — scene materials to BSDFs (see material.h). */
+/* material.c — scene materials to BSDFs (see material.h).
+ *
+ * Design note — plastic departs from pbrt-v3. pbrt-v3's PlasticMaterial adds a
+ * Lambertian(kd) and a Fresnel-weighted specular lobe(ks) without coupling them, so with
+ * kd = ks = 1 it reflects up to 1 + F: about 1.04 at normal incidence, ~2 at grazing.
+ * Issue 3 requires that no material with unit parameters reflects more than 1.01 (the
+ * lead's decision: that rule wins over pbrt-v3), so the diffuse lobe is the light that
+ * passes the coat twice:
+ *     f_d(wo, wi) = kd/π · (1 − ks·F(|cosθo|)) · (1 − ks·F(|cosθi|)),
+ * F the dielectric Fresnel from 1 into 1.5 the specular lobe uses (ts_bxdf_lambertian_
+ * coupled). Why this form rather than 1 − the specular lobe's directional albedo E(wo):
+ *  - reciprocity holds by construction (the factor is symmetric), while 1 − E(wo) alone
+ *    is not reciprocal and its symmetric form (1 − E(o))(1 − E(i))/(1 − Ē) (Kelemen)
+ *    needs an albedo table per roughness;
+ *  - it is closed-form, costs two Fresnel evaluations, and keeps cosine sampling exact;
+ *  - the bound is exact for the smooth coat: albedo = ks·F(o) + kd(1 − ks·F(o))(1 − ks·F̄)
+ *    ≤ ks·F(o) + (1 − ks·F(o)) = 1, F̄ = 2∫F(μ)μ dμ, for kd, ks ≤ 1; for the rough coat
+ *    the specular lobe reflects ≤ ks·F averaged over visible microfacets minus its
+ *    shadowing loss, and test_material proves the 1.01 bound across roughness and wo.
+ * It is not energy-*preserving* (the coat's internal reflections are not re-added:
+ * white plastic is a little darker than 1 at grazing), which the issue does not ask for.
+ * Substrate (FresnelBlend) is already coupled in its own formula and is pbrt-v3's. */
 #include "material.h"
 
 #include "bsdf.h"
@@ -47,9 +68,9 @@ void ts_material_bsdf(const ts_material *m, const ts_interaction *si, ts_bsdf *o
         break;
     }
     case TS_MATERIAL_PLASTIC: {
-        if (nonblack(m->diffuse)) ts_bsdf_add(out, ts_bxdf_lambertian(m->diffuse));
-        if (!nonblack(m->specular)) break;
         ts_fresnel fr = ts_fresnel_make_dielectric(1, 1.5f);
+        if (nonblack(m->diffuse)) ts_bsdf_add(out, ts_bxdf_lambertian_coupled(m->diffuse, m->specular, fr));
+        if (!nonblack(m->specular)) break;
         if (smooth) ts_bsdf_add(out, ts_bxdf_specular_reflection(m->specular, fr));
         else
             ts_bsdf_add(out, ts_bxdf_microfacet_reflection(m->specular, ts_microfacet_make(TS_MICROFACET_GGX, alpha, alpha),

@@ -53,8 +53,10 @@ struct ts_bsdf; /* bsdf.h */
  *              dielectric Fresnel + microfacet transmission, GGX(roughness)
  *   conductor  microfacet reflection (distribution, roughness) with conductor Fresnel
  *              (eta, k), or specular reflection when smooth
- *   plastic    Lambertian(diffuse) + microfacet (GGX) or specular reflection(specular)
- *              with dielectric Fresnel from 1 into 1.5
+ *   plastic    microfacet (GGX) or specular reflection(specular) with dielectric
+ *              Fresnel F from 1 into 1.5, over Lambertian(diffuse) scaled by
+ *              (1 − specular·F(cosθo))(1 − specular·F(cosθi)) (a departure from
+ *              pbrt-v3 so unit plastic conserves energy; material.c explains)
  *   substrate  FresnelBlend(diffuse, specular, GGX roughness); when smooth, its diffuse
  *              part + a specular reflection with Schlick's Fresnel(specular)
  *   fourier    the tabulated lobe (out->eta from the table)

@@ -36,4 +36,6 @@ export default {
   base: './',
   build: { outDir: process.env.TS_WEB_OUT || 'dist', emptyOutDir: true, assetsInlineLimit: 0, chunkSizeWarningLimit: 1000 },
   plugins: [exampleScenes()],
+  // `npx vite` for live reload while working on the UI: the API of a running tessera serve.
+  server: { proxy: { '/api': process.env.TS_SERVER || 'http://127.0.0.1:8080' } },
 };

@@ -2,11 +2,12 @@
  * how to run it and read it: bench/README.md, results: docs/accuracy.md).
  *
  *   bench_accuracy [--width W] [--max-spp N] [--ref-spp N] [--threads T] [--cache DIR]
- *                  [--configs LIST] [--header] SCENE.json...
+ *                  [--configs LIST] [--summary FILE] [--header] SCENE.json...
+ *   bench_accuracy --summarise ACCURACY.csv      (the summary again from the CSV)
  *
  * For every scene it renders each configuration of the list below (those that apply to
  * the scene) progressively at 1, 2, 4, … N samples per pixel (default 128) on a film W
- * pixels wide (default 128; the height keeps the scene's aspect), and after each doubling
+ * pixels wide (default 96; the height keeps the scene's aspect), and after each doubling
  * measures the error of the image against a reference:
  *
  *   relMSE = mean over pixels and channels of (x − r)² / (r² + 0.01)
@@ -18,7 +19,7 @@
  * ts_render over the passes (loading and error computation excluded).
  *
  * References: the scene's own settings at that film size (path for path scenes, `direct
- * all` for the direct configurations), --ref-spp samples (default 4096) as two independent
+ * all` for the direct configurations), --ref-spp samples (default 1024) as two independent
  * halves (seeds 1000 and 1001), cached in DIR (default: none, always rendered) under a
  * name holding the scene's digest. The reference is the mean of the halves; its own error
  * is estimated from them (E[(h₁−h₂)²] = 4·Var[mean]) and subtracted from the measured
@@ -27,15 +28,22 @@
  *
  * Output (stdout): CSV rows
  *   scene, config, integrator, spp, seconds, relmse, rmse, relmse_raw, rmse_raw,
- *   ref_relmse, ref_rmse, ref_spp
+ *   ref_relmse, ref_rmse, ref_spp, relmse_trim
+ * (relmse_trim: relMSE without the 0.1% largest per-pixel-channel terms, i.e. without the
+ * few fireflies that dominate relMSE in caustic and environment scenes; raw, not corrected)
  * and on --summary FILE one row per (scene, config):
  *   scene, config, integrator, slope_spp, slope_time, final_spp, final_seconds, final_relmse,
- *   t_1pct, how_1pct, t_01pct, how_01pct, ratio_1pct, ratio_01pct
- * slope_*: least-squares slope of log relMSE against log spp / log seconds over the
+ *   t_1pct, how_1pct, t_01pct, how_01pct, ratio_1pct, ratio_01pct, slope_mse_spp, final_rmse,
+ *   slope_trim_spp, final_relmse_trim, seconds_per_spp
+ * slope_spp / slope_time: least-squares slope of log relMSE against log spp / log seconds
+ * (slope_mse_spp: of log MSE = RMSE² against log spp) over the
  * counts ≥ 4 spp. t_X: seconds to relMSE X = the spp that reaches X, `interpolated`
  * (log-log between the two measured counts that bracket it) or `extrapolated` (from the
- * last count along the fitted spp slope), × the measured seconds per spp of the series;
- * ratio_X = t_X ÷ the same scene's `base` t_X.
+ * last count along the fitted spp slope, when that slope is below −0.3), × seconds per
+ * spp; ratio_X = t_X ÷ the same scene's `base` t_X. seconds_per_spp: after the series,
+ * R rounds (--reps, default 7) each render N/4 (≥ 4) more samples of every configuration
+ * side by side, order rotated per round; the fastest round per configuration. It is printed in
+ * the CSV as a row with spp 0 (seconds = seconds per spp).
  *
  * Configurations (--configs, comma-separated; default all):
  *   base           the scene's integrator as in its file (path: MIS, Sobol, power, RR)
@@ -69,9 +77,9 @@
 #define REL_EPS     0.01
 
 typedef struct options {
-    int width, threads, header;
+    int width, threads, header, reps;
     uint32_t max_spp, ref_spp;
-    const char *cache, *configs, *summary;
+    const char *cache, *configs, *summary, *summarise;
 } options;
 
 typedef enum ref_kind { REF_PATH, REF_DIRECT } ref_kind;
@@ -96,14 +104,16 @@ typedef struct reference {
 } reference;
 
 typedef struct run {
+    char name[32], integ[16]; /* configuration, integrator */
     const config *cfg;
     ts_scene *scene;
     ts_film *film;
     int generic;
     ref_kind kind;
     int n;
+    double per_spp; /* median seconds per spp of the timing rounds (0: use the series') */
     uint32_t spp[MAX_LEVELS];
-    double seconds[MAX_LEVELS], relmse[MAX_LEVELS], rmse[MAX_LEVELS];
+    double seconds[MAX_LEVELS], relmse[MAX_LEVELS], rmse[MAX_LEVELS], trim[MAX_LEVELS];
 } run;
 
 /* ---------------------------------------------------------------- files and JSON */
@@ -230,16 +240,30 @@ static double render_pass(const ts_scene *s, ts_film *f, uint32_t b, uint32_t e,
     return ts_now_seconds() - t0;
 }
 
-static void errors(const float *x, const reference *r, double *relmse, double *mse)
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* relMSE, MSE, and relMSE without the 0.1% largest per-value terms (fireflies), each
+ * against the reference mean. scratch: 3·w·h doubles. */
+static void errors(const float *x, const reference *r, double *scratch, double *relmse, double *mse, double *trim)
 {
     size_t n = (size_t)3 * r->w * r->h;
     double a = 0, b = 0;
     for (size_t i = 0; i < n; i++) {
         double d = (double)x[i] - r->mean[i];
-        a += d * d / ((double)r->mean[i] * r->mean[i] + REL_EPS);
+        scratch[i] = d * d / ((double)r->mean[i] * r->mean[i] + REL_EPS);
+        a += scratch[i];
         b += d * d;
     }
     *relmse = a / n, *mse = b / n;
+    qsort(scratch, n, sizeof *scratch, cmp_double);
+    size_t keep = n - n / 1000;
+    double t = 0;
+    for (size_t i = 0; i < keep; i++) t += scratch[i];
+    *trim = t / keep;
 }
 
 static int mkdirs(const char *dir)
@@ -363,7 +387,7 @@ static double time_to(const run *r, double slope_spp, double target, const char 
         *how = "-";
         return NAN;
     }
-    double per_spp = r->seconds[l] / r->spp[l];
+    double per_spp = r->per_spp > 0 ? r->per_spp : r->seconds[l] / r->spp[l];
     for (int i = 0; i < r->n; i++) {
         if (r->relmse[i] > target) continue;
         *how = "interpolated";
@@ -372,12 +396,87 @@ static double time_to(const run *r, double slope_spp, double target, const char 
         double f = (log(target) - e0) / (e1 - e0);
         return exp(log(r->spp[i - 1]) + f * (log(r->spp[i]) - log(r->spp[i - 1]))) * per_spp;
     }
-    if (!(slope_spp < -0.05) || !(r->relmse[l] > 0)) {
+    if (!(slope_spp < -0.3) || !(r->relmse[l] > 0)) { /* not converging in the measured range */
         *how = "-";
         return NAN;
     }
     *how = "extrapolated";
     return r->spp[l] * pow(target / r->relmse[l], 1 / slope_spp) * per_spp;
+}
+
+/* Summary rows of one scene: slopes and times to 1% and 0.1% relMSE, ratios to `base`. */
+static void write_summary(FILE *out, const char *scene, const run *runs, int nr)
+{
+    double t1_base = NAN, t01_base = NAN;
+    double t1[MAX_CONFIGS], t01[MAX_CONFIGS], ss[MAX_CONFIGS], st[MAX_CONFIGS], sm[MAX_CONFIGS], sr[MAX_CONFIGS];
+    const char *h1[MAX_CONFIGS], *h01[MAX_CONFIGS];
+    for (int i = 0; i < nr; i++) {
+        const run *r = &runs[i];
+        double x[MAX_LEVELS], mse[MAX_LEVELS];
+        for (int k = 0; k < r->n; k++) x[k] = r->spp[k], mse[k] = r->rmse[k] * r->rmse[k];
+        ss[i] = fit_slope(x, r->relmse, r->spp, r->n);
+        sm[i] = fit_slope(x, mse, r->spp, r->n);
+        sr[i] = fit_slope(x, r->trim, r->spp, r->n);
+        st[i] = fit_slope(r->seconds, r->relmse, r->spp, r->n);
+        t1[i] = time_to(r, ss[i], 0.01, &h1[i]);
+        t01[i] = time_to(r, ss[i], 0.001, &h01[i]);
+        if (!strcmp(r->name, "base")) t1_base = t1[i], t01_base = t01[i];
+    }
+    for (int i = 0; i < nr; i++) {
+        const run *r = &runs[i];
+        int l = r->n - 1;
+        if (l < 0) continue;
+        fprintf(out, "%s,%s,%s,%.3f,%.3f,%u,%.4f,%.6g,%.4g,%s,%.4g,%s,%.3g,%.3g,%.3f,%.4g,%.3f,%.4g,%.6g\n", scene, r->name,
+                r->integ, ss[i], st[i], r->spp[l], r->seconds[l], r->relmse[l], t1[i], h1[i], t01[i], h01[i],
+                t1[i] / t1_base, t01[i] / t01_base, sm[i], r->rmse[l], sr[i], r->trim[l],
+                r->per_spp > 0 ? r->per_spp : r->seconds[l] / r->spp[l]);
+    }
+    fflush(out);
+}
+
+/* --summarise CSV: the summary again from bench_accuracy's CSV (e.g. after changing it). */
+static int summarise(const char *csv, FILE *out)
+{
+    FILE *f = fopen(csv, "r");
+    if (!f) {
+        fprintf(stderr, "bench_accuracy: cannot read %s\n", csv);
+        return 1;
+    }
+    static run runs[MAX_CONFIGS];
+    char line[1024], scene[256] = "", sc[256], cf[64], in[64];
+    int nr = 0;
+    while (fgets(line, sizeof line, f)) {
+        unsigned spp, rs;
+        double sec, rel, rmse, d[4], tr = NAN;
+        int k = sscanf(line, "%255[^,],%63[^,],%63[^,],%u,%lf,%lf,%lf,%lf,%lf,%lf,%lf,%u,%lf", sc, cf, in, &spp, &sec,
+                       &rel, &rmse, &d[0], &d[1], &d[2], &d[3], &rs, &tr);
+        if (k < 5 || (k < 7 && spp != 0)) continue;
+        if (strcmp(sc, scene)) {
+            if (nr) write_summary(out, scene, runs, nr);
+            snprintf(scene, sizeof scene, "%s", sc);
+            nr = 0;
+        }
+        int i = 0;
+        while (i < nr && strcmp(runs[i].name, cf)) i++;
+        if (i == nr) {
+            if (nr == MAX_CONFIGS) continue;
+            memset(&runs[nr], 0, sizeof runs[nr]);
+            snprintf(runs[nr].name, sizeof runs[nr].name, "%s", cf);
+            snprintf(runs[nr].integ, sizeof runs[nr].integ, "%s", in);
+            nr++;
+        }
+        run *r = &runs[i];
+        if (spp == 0) { /* the timing rounds' seconds per spp */
+            r->per_spp = sec;
+            continue;
+        }
+        if (r->n == MAX_LEVELS) continue;
+        r->spp[r->n] = spp, r->seconds[r->n] = sec, r->relmse[r->n] = rel, r->rmse[r->n] = rmse, r->trim[r->n] = tr;
+        r->n++;
+    }
+    if (nr) write_summary(out, scene, runs, nr);
+    fclose(f);
+    return 0;
 }
 
 /* ---------------------------------------------------------------- one scene */
@@ -454,6 +553,8 @@ static int bench_scene(const char *path, const options *o, FILE *summary)
         run *r = &runs[nr++];
         memset(r, 0, sizeof *r);
         r->cfg = cf, r->scene = s, r->generic = !strcmp(cf->name, "generic");
+        snprintf(r->name, sizeof r->name, "%s", cf->name);
+        snprintf(r->integ, sizeof r->integ, "%s", ts_integrator_name(s->integrator.type));
         r->kind = s->integrator.type == TS_INTEGRATOR_DIRECT ? REF_DIRECT : REF_PATH;
         need[r->kind] = 1;
         if (!(r->film = new_film(s))) {
@@ -478,6 +579,7 @@ static int bench_scene(const char *path, const options *o, FILE *summary)
     }
     size_t npx = (size_t)3 * refs[need[0] ? 0 : 1].w * refs[need[0] ? 0 : 1].h;
     float *img = malloc(npx * sizeof(float));
+    double *scratch = malloc(npx * sizeof(double));
     double total = 0;
     int level = 0;
     for (uint32_t e = 1, b = 0; e <= o->max_spp && level < MAX_LEVELS; b = e, e *= 2, level++) {
@@ -491,48 +593,54 @@ static int bench_scene(const char *path, const options *o, FILE *summary)
             total += dt;
             const reference *ref = &refs[r->kind];
             ts_film_resolve(r->film, img);
-            double rel, mse;
-            errors(img, ref, &rel, &mse);
+            double rel, mse, trim;
+            errors(img, ref, scratch, &rel, &mse, &trim);
             int i = r->n++;
             r->spp[i] = e;
             r->seconds[i] = (i ? r->seconds[i - 1] : 0) + dt;
             r->relmse[i] = rel - ref->relmse_floor;
             r->rmse[i] = sqrt(fmax(mse - ref->mse_floor, 0));
-            printf("%s,%s,%s,%u,%.6f,%.6g,%.6g,%.6g,%.6g,%.3g,%.3g,%u\n", name, r->cfg->name,
+            r->trim[i] = trim;
+            printf("%s,%s,%s,%u,%.6f,%.6g,%.6g,%.6g,%.6g,%.3g,%.3g,%u,%.6g\n", name, r->cfg->name,
                    ts_integrator_name(r->scene->integrator.type), e, r->seconds[i], r->relmse[i], r->rmse[i], rel,
-                   sqrt(mse), ref->relmse_floor, sqrt(ref->mse_floor), o->ref_spp);
+                   sqrt(mse), ref->relmse_floor, sqrt(ref->mse_floor), o->ref_spp, trim);
         }
         fflush(stdout);
         if (rc) break;
         fprintf(stderr, "\rbench_accuracy: %s: %u spp, %d configurations, %.0f s ", name, e, nr, total);
     }
     fprintf(stderr, "\n");
-    free(img);
 
-    /* Summary: slopes and times to 1% and 0.1% relMSE, ratios against `base`. */
-    if (summary && !rc) {
-        double t1_base = NAN, t01_base = NAN;
-        double t1[MAX_CONFIGS], t01[MAX_CONFIGS], ss[MAX_CONFIGS], st[MAX_CONFIGS];
-        const char *h1[MAX_CONFIGS], *h01[MAX_CONFIGS];
-        for (int i = 0; i < nr; i++) {
-            run *r = &runs[i];
-            double x[MAX_LEVELS];
-            for (int k = 0; k < r->n; k++) x[k] = r->spp[k];
-            ss[i] = fit_slope(x, r->relmse, r->spp, r->n);
-            st[i] = fit_slope(r->seconds, r->relmse, r->spp, r->n);
-            t1[i] = time_to(r, ss[i], 0.01, &h1[i]);
-            t01[i] = time_to(r, ss[i], 0.001, &h01[i]);
-            if (!strcmp(r->cfg->name, "base")) t1_base = t1[i], t01_base = t01[i];
+    /* Timing rounds: the cost per sample, side by side. Each round renders K more samples
+     * of every configuration (rotated order) into a scratch film; the fastest round's
+     * seconds per spp is what the times to 1% and 0.1% use (on a shared machine the
+     * other jobs only ever add time, so the minimum is the steadiest estimate of the cost;
+     * medians of 5 still moved by ±30% between identical configurations). */
+    uint32_t K = o->max_spp / 4 < 4 ? 4 : o->max_spp / 4;
+    double per[MAX_CONFIGS][32];
+    int reps = o->reps > 32 ? 32 : o->reps;
+    for (int k = 0; k < reps && !rc; k++)
+        for (int j = 0; j < nr && !rc; j++) {
+            int i = (j + k) % nr;
+            ts_film *f = new_film(runs[i].scene);
+            double dt = f ? render_pass(runs[i].scene, f, o->max_spp, o->max_spp + K, o->threads, runs[i].generic) : -1;
+            ts_film_destroy(f);
+            if (dt < 0) rc = -1;
+            else per[i][k] = dt / K;
         }
-        for (int i = 0; i < nr; i++) {
-            run *r = &runs[i];
-            int l = r->n - 1;
-            fprintf(summary, "%s,%s,%s,%.3f,%.3f,%u,%.4f,%.6g,%.4g,%s,%.4g,%s,%.3g,%.3g\n", name, r->cfg->name,
-                    ts_integrator_name(r->scene->integrator.type), ss[i], st[i], r->spp[l], r->seconds[l],
-                    r->relmse[l], t1[i], h1[i], t01[i], h01[i], t1[i] / t1_base, t01[i] / t01_base);
-        }
-        fflush(summary);
+    for (int i = 0; i < nr && !rc && reps > 0; i++) {
+        qsort(per[i], (size_t)reps, sizeof(double), cmp_double);
+        runs[i].per_spp = per[i][0];
+        fprintf(stderr, "bench_accuracy: %s: %s: %.3g ms/spp (fastest of %d rounds of %u spp)\n", name,
+                runs[i].name, 1e3 * runs[i].per_spp, reps, K);
+        /* A CSV row with spp 0 carries it, for --summarise. */
+        printf("%s,%s,%s,0,%.6f,,,,,,,,\n", name, runs[i].name, runs[i].integ, runs[i].per_spp);
     }
+    fflush(stdout);
+    free(img);
+    free(scratch);
+
+    if (summary && !rc) write_summary(summary, name, runs, nr);
 done_refs:
     for (int k = 0; k < 2; k++) free(refs[k].mean), free(refs[k].h1), free(refs[k].h2);
 done:
@@ -545,14 +653,15 @@ done:
 
 static int usage(void)
 {
-    fprintf(stderr, "usage: bench_accuracy [--width W] [--max-spp N] [--ref-spp N] [--threads T] [--cache DIR]\n"
-                    "                      [--configs LIST] [--summary FILE] [--header] SCENE.json...\n");
+    fprintf(stderr, "usage: bench_accuracy [--width W] [--max-spp N] [--ref-spp N] [--threads T] [--reps R] [--cache DIR]\n"
+                    "                      [--configs LIST] [--summary FILE] [--header] SCENE.json...\n"
+                    "       bench_accuracy --summarise ACCURACY.csv   (the summary again, to stdout)\n");
     return 2;
 }
 
 int main(int argc, char **argv)
 {
-    options o = {.width = 128, .threads = (int)sysconf(_SC_NPROCESSORS_ONLN), .max_spp = 128, .ref_spp = 4096};
+    options o = {.reps = 7, .width = 96, .threads = (int)sysconf(_SC_NPROCESSORS_ONLN), .max_spp = 128, .ref_spp = 1024};
     if (o.threads < 1) o.threads = 1;
     int i = 1;
     for (; i < argc && argv[i][0] == '-'; i++) {
@@ -567,10 +676,18 @@ int main(int argc, char **argv)
         else if (!strcmp(a, "--max-spp")) o.max_spp = (uint32_t)strtoul(v, NULL, 10);
         else if (!strcmp(a, "--ref-spp")) o.ref_spp = (uint32_t)strtoul(v, NULL, 10);
         else if (!strcmp(a, "--threads")) o.threads = atoi(v);
+        else if (!strcmp(a, "--reps")) o.reps = atoi(v);
         else if (!strcmp(a, "--cache")) o.cache = v;
         else if (!strcmp(a, "--configs")) o.configs = v;
         else if (!strcmp(a, "--summary")) o.summary = v;
+        else if (!strcmp(a, "--summarise")) o.summarise = v;
         else return usage();
+    }
+    if (o.summarise && i == argc) {
+        printf("scene,config,integrator,slope_spp,slope_time,final_spp,final_seconds,final_relmse,"
+               "t_1pct,how_1pct,t_01pct,how_01pct,ratio_1pct,ratio_01pct,slope_mse_spp,final_rmse,"
+                         "slope_trim_spp,final_relmse_trim,seconds_per_spp\n");
+        return summarise(o.summarise, stdout);
     }
     if (i >= argc || o.width < 8 || o.max_spp < 1 || o.ref_spp < 2 || o.threads < 1) return usage();
     FILE *summary = NULL;
@@ -581,10 +698,12 @@ int main(int argc, char **argv)
             return 1;
         }
         fprintf(summary, "scene,config,integrator,slope_spp,slope_time,final_spp,final_seconds,final_relmse,"
-                         "t_1pct,how_1pct,t_01pct,how_01pct,ratio_1pct,ratio_01pct\n");
+                         "t_1pct,how_1pct,t_01pct,how_01pct,ratio_1pct,ratio_01pct,slope_mse_spp,final_rmse,"
+                         "slope_trim_spp,final_relmse_trim,seconds_per_spp\n");
     }
     if (o.header)
-        printf("scene,config,integrator,spp,seconds,relmse,rmse,relmse_raw,rmse_raw,ref_relmse,ref_rmse,ref_spp\n");
+        printf("scene,config,integrator,spp,seconds,relmse,rmse,relmse_raw,rmse_raw,ref_relmse,ref_rmse,ref_spp,"
+               "relmse_trim\n");
     int rc = 0;
     for (; i < argc; i++)
         if (bench_scene(argv[i], &o, summary)) rc = 1;

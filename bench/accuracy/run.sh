@@ -10,7 +10,7 @@
 #
 # Environment (defaults in brackets):
 #   ACCURACY_WIDTH [96]      film width in pixels (height keeps the scene's aspect)
-#   ACCURACY_MAX_SPP [64]    last sample count of the doubling series 1, 2, 4, …
+#   ACCURACY_MAX_SPP [128]    last sample count of the doubling series 1, 2, 4, …
 #   ACCURACY_REF_SPP [1024]  reference spp (two halves; cached)
 #   ACCURACY_THREADS [all]   render threads
 #   ACCURACY_SCENES          scene files [scenes/{cornell-box,cornell-box-direct,veach-mis,glass-caustic,environment}.json]
@@ -27,7 +27,7 @@ BIN=$BUILD/bench_accuracy
 [ -x "$BIN" ] || { echo "bench: $BIN is missing; build first" >&2; exit 1; }
 
 WIDTH=${ACCURACY_WIDTH:-96}
-MAX_SPP=${ACCURACY_MAX_SPP:-64}
+MAX_SPP=${ACCURACY_MAX_SPP:-128}
 REF_SPP=${ACCURACY_REF_SPP:-1024}
 THREADS=${ACCURACY_THREADS:-$(nproc)}
 CACHE=${ACCURACY_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/tessera/accuracy}

@@ -9,6 +9,7 @@
 // labelled, keyboard-operable controls.
 import { spawn } from 'node:child_process';
 import fs from 'node:fs';
+import net from 'node:net';
 import os from 'node:os';
 import path from 'node:path';
 import { createRequire } from 'node:module';
@@ -37,9 +38,9 @@ async function check(name, fn) {
 function assert(cond, msg) { if (!cond) throw new Error(msg); }
 
 // ---------------------------------------------------------------- the server
-function startServer() {
+function startServer(extra = []) {
   return new Promise((resolve, reject) => {
-    const srv = spawn(TS_BINARY, ['serve', '--bind', '127.0.0.1', '--port', '0', '--threads', '2'],
+    const srv = spawn(TS_BINARY, ['serve', '--bind', '127.0.0.1', '--port', '0', '--threads', '2', ...extra],
       { stdio: ['ignore', 'pipe', 'pipe'] });
     let out = '';
     const timer = setTimeout(() => reject(new Error('tessera serve printed no URL in 10 s: ' + out)), 10000);
@@ -84,8 +85,28 @@ async function submit(page, { scene, integrator = '', spp = '', time = '', targe
 }
 
 // ---------------------------------------------------------------- the run
-const { srv, url } = await startServer();
-log('server at', url);
+const { srv, url: serverUrl } = await startServer();
+log('server at', serverUrl);
+// The browser talks to the server through a loopback TCP relay, so a test can drop its
+// connections for real (a network that fails, not a page that closes).
+const proxy = await new Promise((resolve) => {
+  const target = new URL(serverUrl), sockets = new Set();
+  const server = net.createServer((c) => {
+    const u = net.connect(Number(target.port), target.hostname);
+    for (const [a, b] of [[c, u], [u, c]]) {
+      sockets.add(a);
+      a.on('error', () => b.destroy());
+      a.on('close', () => { sockets.delete(a); b.destroy(); });
+      a.pipe(b);
+    }
+  });
+  server.listen(0, '127.0.0.1', () => resolve({
+    url: `http://127.0.0.1:${server.address().port}/`,
+    drop: () => { for (const s of sockets) s.destroy(); },
+    close: () => { for (const s of sockets) s.destroy(); server.close(); },
+  }));
+});
+const url = proxy.url;
 const userDir = fs.mkdtempSync(path.join(os.tmpdir(), 'tessera-chromium-'));
 process.on('exit', () => { srv.kill('SIGTERM'); fs.rmSync(userDir, { recursive: true, force: true }); });
 // A fresh profile per run (--user-data-dir, which Playwright passes for a persistent context).
@@ -116,7 +137,7 @@ try {
   });
 
   await check('submit the Cornell box; the canvas changes as tiles arrive', async () => {
-    first = await submit(page, { scene: small(), spp: 1024, time: 8, name: 'cornell-path' });
+    first = await submit(page, { scene: small(), spp: 1024, time: 20, name: 'cornell-path' });
     assert(first.id, 'POST answered ' + JSON.stringify(first));
     await jobRow(page, first.id).waitFor({ timeout: 5000 });
     await page.waitForFunction(() => Number(document.getElementById('canvas').dataset.tiles) > 0, null, { timeout: 15000 });
@@ -124,8 +145,11 @@ try {
     assert(a.n === 96 * 96, 'the canvas is the film size, got ' + a.n + ' pixels');
     await page.waitForFunction((n) => Number(document.getElementById('canvas').dataset.tiles) >= n + 9, 
       Number(await page.getAttribute('#canvas', 'data-tiles')), { timeout: 15000 });
+    // The tiles of the pass under way are outlined while the job runs.
+    await page.waitForFunction(() => Number(document.getElementById('overlay').dataset.outlined) > 0, null, { timeout: 10000 });
     const b = await canvasDigest(page);
     assert(b.h !== a.h, 'the canvas did not change');
+    assert(await page.getAttribute('#canvas', 'data-source') === 'exr', 'tiles are read as EXR (linear floats)');
     assert(b.lit > 0.5 * b.n, 'most of the canvas is painted, lit ' + b.lit);
     await shot('01-live-preview');
   });
@@ -144,12 +168,30 @@ try {
     const t = Date.now();
     await page.reload({ waitUntil: 'load' });
     await page.waitForFunction(() => { const c = document.getElementById('canvas'); return Number(c.dataset.tiles) >= 9; },
-      null, { timeout: 3000 });
+      null, { timeout: 5000 });
     const d = await canvasDigest(page);
     const ms = Date.now() - t;
     assert(d.lit > 0.9 * d.n, 'after reload the canvas is whole, lit ' + d.lit + ' of ' + d.n);
     log(`  image back ${ms} ms after the reload`);
     await shot('03-after-reload');
+  });
+
+  await check('a dropped connection: the stream comes back and repaints the current image', async () => {
+    const opens = Number(await page.getAttribute('#canvas', 'data-opens'));
+    proxy.drop();
+    await page.waitForFunction(() => /reconnecting/.test(document.getElementById('preview-status').textContent), null,
+      { timeout: 5000 });
+    await shot('03b-connection-lost');
+    const before = Number(await page.getAttribute('#canvas', 'data-tiles'));
+    // EventSource reconnects by itself; the server replays every rendered tile first.
+    await page.waitForFunction((n) => Number(document.getElementById('canvas').dataset.opens) > n, opens, { timeout: 15000 });
+    await page.waitForFunction((n) => Number(document.getElementById('canvas').dataset.tiles) >= n + 9, before,
+      { timeout: 15000 });
+  });
+
+  await check('upload a scene file', async () => {
+    await page.setInputFiles('#f-file', { name: 'uploaded.json', mimeType: 'application/json', buffer: Buffer.from(small()) });
+    await page.waitForFunction(() => JSON.parse(document.getElementById('f-scene').value || '{}').film?.width === 96);
   });
 
   await check('overlay two jobs of the same scene (path and direct)', async () => {
@@ -162,7 +204,8 @@ try {
       document.querySelectorAll('#plot-error .u-legend .u-series').length >= 2, null,
       { timeout: 5000 });
     // Both series hold points: the compared job's history was gathered while it ran.
-    await page.waitForFunction(() => Number(document.getElementById('plot-error').dataset.points) >= 4, null, { timeout: 15000 });
+    await page.waitForFunction(() => (document.getElementById('plot-error').dataset.seriesPoints || '').split(',')
+      .filter((n) => Number(n) >= 2).length === 2, null, { timeout: 20000 });
     await shot('04-overlay');
   });
 
@@ -228,7 +271,7 @@ try {
     // Tab reaches the submit form's controls in order.
     await page.focus('#f-name');
     await page.keyboard.press('Tab');
-    assert(await page.evaluate(() => document.activeElement.id) === 'f-integrator', 'Tab goes to the integrator');
+    assert(await page.evaluate(() => document.activeElement.id) === 'f-priority', 'Tab goes to the priority');
     await page.keyboard.press('Home');
     await page.focus('#exposure');
     await page.keyboard.press('Home');
@@ -255,11 +298,33 @@ try {
     await phone.close();
   });
 
+  await check('a server with --token: the page works from /?access_token=', async () => {
+    const tok = await startServer(['--token', 's3cret']);
+    try {
+      const p = await context.newPage();
+      p.on('pageerror', (e) => pageErrors.push('token page: ' + e));
+      const noToken = await p.request.get(tok.url + 'api/v1/jobs');
+      assert(noToken.status() === 401, 'the API needs the token, got ' + noToken.status());
+      await p.goto(tok.url + '?access_token=s3cret', { waitUntil: 'load' });
+      await p.waitForFunction(() => document.getElementById('conn').textContent === 'connected', null, { timeout: 5000 });
+      await p.fill('#f-scene', small());
+      await p.fill('#f-spp', '4');
+      await p.click('#f-submit');
+      await p.waitForFunction(() => Number(document.getElementById('canvas').dataset.tiles) >= 9, null, { timeout: 15000 });
+      await p.locator('#jobs .state-done').waitFor({ timeout: 15000 });
+      await shot('10-token', p);
+      await p.close();
+    } finally {
+      tok.srv.kill('SIGTERM');
+    }
+  });
+
   await check('no script errors in the page', async () => {
     assert(pageErrors.length === 0, pageErrors.join('\n'));
   });
 } finally {
   await context.close();
+  proxy.close();
 }
 log(`${passes} passed, ${failures} failed; screenshots in ${TS_ARTIFACTS}`);
 process.exit(failures ? 1 : 0);

@@ -1,6 +1,7 @@
 // tessera web UI (issue 7): jobs, submit, live preview, accuracy-against-time plots.
 // Talks only to the public API v1 (DESIGN.md §5, proto/openapi.yaml).
 import uPlot from 'uplot';
+import { decodeExr } from './exr.js';
 import 'uplot/dist/uPlot.min.css';
 import './style.css';
 
@@ -85,19 +86,19 @@ function renderJobs() {
   const rows = list.map((j) => {
     const frac = j.spp_target > 0 ? Math.min(1, j.spp_done / j.spp_target) : 0;
     const row = el('tr', { 'data-id': j.id, class: j.id === selectedId ? 'selected' : '' },
-      el('td', {}, el('button', { class: 'link', type: 'button', 'aria-label': 'show job ' + jobLabel(j) + ' in the preview',
+      el('td', { 'data-label': 'Job' }, el('button', { class: 'link', type: 'button', 'aria-label': 'show job ' + jobLabel(j) + ' in the preview',
         'aria-pressed': j.id === selectedId ? 'true' : 'false', onclick: () => select(j.id) }, jobLabel(j)),
         el('div', { class: 'muted small' }, j.integrator || '')),
-      el('td', {}, el('span', { class: 'state state-' + j.state, title: j.error || j.halt_reason || '' }, j.state),
+      el('td', { 'data-label': 'State' }, el('span', { class: 'state state-' + j.state, title: j.error || j.halt_reason || '' }, j.state),
         j.error ? el('div', { class: 'err small' }, j.error) : ''),
-      el('td', {}, el('progress', { max: '1', value: String(frac), 'aria-label': 'progress of ' + j.id }),
+      el('td', { 'data-label': 'Progress' }, el('progress', { max: '1', value: String(frac), 'aria-label': 'progress of ' + j.id }),
         el('span', { class: 'small' }, ' ' + Math.round(100 * frac) + '%')),
-      el('td', { class: 'num' }, j.spp_done + ' / ' + j.spp_target),
-      el('td', { class: 'num' }, fmtRate(j.samples_per_s)),
-      el('td', { class: 'num' }, fmtNum(j.error_estimate)),
-      el('td', { class: 'num' }, fmtTime(j.elapsed_s)),
-      el('td', { class: 'effects small' }, (j.effects || []).join(', ')),
-      el('td', { class: 'actions' },
+      el('td', { 'data-label': 'spp', class: 'num' }, j.spp_done + ' / ' + j.spp_target),
+      el('td', { 'data-label': 'Samples/s', class: 'num' }, fmtRate(j.samples_per_s)),
+      el('td', { 'data-label': 'Error', class: 'num' }, fmtNum(j.error_estimate)),
+      el('td', { 'data-label': 'Elapsed', class: 'num' }, fmtTime(j.elapsed_s)),
+      el('td', { 'data-label': 'Effects', class: 'effects small' }, (j.effects || []).join(', ')),
+      el('td', { 'data-label': 'Actions', class: 'actions' },
         el('button', { type: 'button', class: 'cancel', disabled: finished(j.state), 'aria-label': 'cancel job ' + j.id,
           onclick: () => cancel(j.id) }, 'Cancel'),
         el('a', { href: withToken(j.urls.exr), download: j.id + '.exr', 'aria-label': 'download EXR of job ' + j.id }, 'EXR'),
@@ -166,56 +167,67 @@ async function cancel(id) {
 }
 
 // ------------------------------------------------------------------ preview
-// The canvas shows the tiles' 8-bit sRGB PNGs scaled by 2^exposure in linear light. `base`
-// keeps the unscaled pixels, so changing the exposure repaints without refetching.
+// The canvas shows linear radiance scaled by 2^exposure, encoded to sRGB. Tiles come as EXR
+// (the real floats, so darkening shows what was clipped); where the EXR cannot be read the
+// tile's 8-bit sRGB PNG is used instead. `base` keeps the unscaled pixels, so changing the
+// exposure repaints without refetching.
 const canvas = $('canvas'), overlay = $('overlay');
 const ctx = canvas.getContext('2d', { willReadFrequently: true });
 const octx = overlay.getContext('2d');
-let base = null;                 // ImageData of the unexposed image (crop window)
+let base = null;                 // {w, h, rgb: Float32Array linear, alpha: Uint8Array} of the crop window
 let film = null;                 // the selected job's film
 let tileSpp = new Map();         // "tx,ty" -> spp painted
 let passSpp = 0, jobState = '';
-let lut = null, lutEv = null;
+let useExr = typeof DecompressionStream === 'function';
 
 const srgbToLinear = (c) => (c <= 0.04045 ? c / 12.92 : Math.pow((c + 0.055) / 1.055, 2.4));
 const linearToSrgb = (c) => (c <= 0.0031308 ? 12.92 * c : 1.055 * Math.pow(c, 1 / 2.4) - 0.055);
-function exposureLut() {
-  const ev = Number($('exposure').value);
-  if (lut && lutEv === ev) return lut;
-  lut = new Uint8ClampedArray(256);
-  const k = Math.pow(2, ev);
-  for (let i = 0; i < 256; i++) lut[i] = Math.round(255 * linearToSrgb(Math.min(1, k * srgbToLinear(i / 255))));
-  lutEv = ev;
-  return lut;
-}
 function paintRegion(x, y, w, h) {
   if (!base) return;
-  const L = exposureLut();
+  const k = Math.pow(2, Number($('exposure').value));
   const out = ctx.createImageData(w, h);
-  const W = base.width;
+  const W = base.w;
   for (let r = 0; r < h; r++) {
-    let si = ((y + r) * W + x) * 4, di = r * w * 4;
-    for (let c = 0; c < w; c++, si += 4, di += 4) {
-      out.data[di] = L[base.data[si]];
-      out.data[di + 1] = L[base.data[si + 1]];
-      out.data[di + 2] = L[base.data[si + 2]];
-      out.data[di + 3] = base.data[si + 3];
+    let si = (y + r) * W + x, di = r * w * 4;
+    for (let c = 0; c < w; c++, si++, di += 4) {
+      for (let ch = 0; ch < 3; ch++) {
+        const v = k * base.rgb[si * 3 + ch];
+        out.data[di + ch] = v > 0 ? Math.round(255 * linearToSrgb(Math.min(1, v))) : 0;
+      }
+      out.data[di + 3] = base.alpha[si];
     }
   }
   ctx.putImageData(out, x, y);
 }
 
+function storeTile(x, y, w, h, get) {
+  for (let r = 0; r < h; r++)
+    for (let c = 0; c < w; c++) {
+      const i = (y + r) * base.w + x + c;
+      base.rgb[i * 3] = get(r, c, 0);
+      base.rgb[i * 3 + 1] = get(r, c, 1);
+      base.rgb[i * 3 + 2] = get(r, c, 2);
+      base.alpha[i] = 255;
+    }
+}
+
 const scratch = document.createElement('canvas');
 const sctx = scratch.getContext('2d', { willReadFrequently: true });
-function paintTile(t, img) {
+function paintTilePng(t, img) {
   if (!film) return;
   const x = t.x - film.x0, y = t.y - film.y0;
   scratch.width = t.w; scratch.height = t.h;
   sctx.clearRect(0, 0, t.w, t.h);
   sctx.drawImage(img, 0, 0);
-  const px = sctx.getImageData(0, 0, t.w, t.h);
-  for (let r = 0; r < t.h; r++)
-    base.data.set(px.data.subarray(r * t.w * 4, (r + 1) * t.w * 4), ((y + r) * base.width + x) * 4);
+  const px = sctx.getImageData(0, 0, t.w, t.h).data;
+  storeTile(x, y, t.w, t.h, (r, c, ch) => srgbToLinear(px[(r * t.w + c) * 4 + ch] / 255));
+  paintRegion(x, y, t.w, t.h);
+}
+function paintTileExr(t, im) {
+  if (!film) return;
+  const x = t.x - film.x0, y = t.y - film.y0;
+  if (im.width !== t.w || im.height !== t.h) throw new Error('tile EXR of an unexpected size');
+  storeTile(x, y, t.w, t.h, (r, c, ch) => { const v = im.rgb[(r * t.w + c) * 3 + ch]; return isFinite(v) ? v : 0; });
   paintRegion(x, y, t.w, t.h);
 }
 
@@ -289,19 +301,38 @@ function openStream(id) {
     const key = t.tx + ',' + t.ty;
     if ((tileSpp.get(key) || 0) > t.spp) return; // an older state than what is painted
     if (t.spp > passSpp) passSpp = t.spp;
-    const img = new Image();
-    img.onload = () => {
-      if (id !== selectedId || (tileSpp.get(key) || 0) > t.spp) return;
+    const painted = () => {
       tileSpp.set(key, t.spp);
-      paintTile(t, img);
       canvas.dataset.tiles = String(Number(canvas.dataset.tiles || 0) + 1);
       drawOutlines();
     };
-    img.src = withToken(t.png + '?spp=' + t.spp);
+    const stale = () => id !== selectedId || (tileSpp.get(key) || 0) > t.spp;
+    const viaPng = () => {
+      const img = new Image();
+      img.onload = () => { if (!stale()) { paintTilePng(t, img); painted(); } };
+      img.src = withToken(t.png + '?spp=' + t.spp);
+    };
+    if (!useExr) return viaPng();
+    fetch(withToken(t.exr + '?spp=' + t.spp), { headers: authHeaders })
+      .then((r) => { if (!r.ok) throw new Error('HTTP ' + r.status); return r.arrayBuffer(); })
+      .then(decodeExr)
+      .then((im) => { if (!stale()) { paintTileExr(t, im); painted(); canvas.dataset.source = 'exr'; } })
+      .catch((e) => { console.warn('tile EXR unreadable, using PNG tiles:', e); useExr = false; canvas.dataset.source = 'png'; viaPng(); });
   });
   es.addEventListener('progress', (ev) => onProgress(id, JSON.parse(ev.data), false));
   es.addEventListener('done', (ev) => onProgress(id, JSON.parse(ev.data), true));
-  es.addEventListener('open', () => { if (id === selectedId) $('preview-job').dataset.live = 'yes'; });
+  es.addEventListener('open', () => {
+    if (id !== selectedId) return;
+    canvas.dataset.opens = String(Number(canvas.dataset.opens || 0) + 1);
+    $('preview-job').classList.remove('stale');
+  });
+  es.addEventListener('error', () => {
+    // EventSource retries by itself; say so meanwhile.
+    if (id === selectedId && es.readyState !== EventSource.CLOSED) {
+      $('preview-status').textContent = 'connection lost, reconnecting…';
+      $('preview-job').classList.add('stale');
+    }
+  });
 }
 
 function select(id) {
@@ -318,7 +349,8 @@ function select(id) {
   canvas.dataset.tiles = '0';
   canvas.style.aspectRatio = film.crop_width + ' / ' + film.crop_height;
   ctx.clearRect(0, 0, canvas.width, canvas.height);
-  base = ctx.createImageData(film.crop_width, film.crop_height);
+  base = { w: film.crop_width, h: film.crop_height, rgb: new Float32Array(film.crop_width * film.crop_height * 3),
+    alpha: new Uint8Array(film.crop_width * film.crop_height) };
   $('preview-job').textContent = '— ' + jobLabel(j);
   $('preview-status').textContent = j.state;
   openStream(id);
@@ -328,7 +360,7 @@ function select(id) {
 
 $('exposure').addEventListener('input', () => {
   $('exposure-out').textContent = Number($('exposure').value).toFixed(1) + ' EV';
-  if (base) paintRegion(0, 0, base.width, base.height);
+  if (base) paintRegion(0, 0, base.w, base.h);
 });
 $('outline').addEventListener('change', drawOutlines);
 
@@ -345,13 +377,14 @@ function setCompare(id) {
 $('compare').addEventListener('change', (e) => setCompare(e.target.value));
 
 let plots = null, plotKey = '';
+const PLOT_H = 190;
 function plotWidth() {
-  return Math.max(240, Math.min(640, $('plot-error').parentElement.clientWidth - 8));
+  return Math.max(240, Math.min(640, $('plot-error').clientWidth));
 }
 function makePlot(target, title, ylabel, names) {
   const colors = ['#2f7ed8', '#e4572e'];
   return new uPlot({
-    title, width: plotWidth(), height: 220,
+    title, width: plotWidth(), height: PLOT_H, padding: [8, 18, 0, 0],
     scales: { x: { time: false, distr: 3 }, y: { distr: 3 } },
     axes: [{ label: 'elapsed (s)' }, { label: ylabel, size: 60 }],
     series: [{ label: 'elapsed (s)' }, ...names.map((n, i) => ({ label: n, stroke: colors[i], width: 2, spanGaps: true,
@@ -385,14 +418,16 @@ function updatePlots(rebuild) {
   plots.err.setData(e);
   plots.spp.setData(s);
   $('plot-error').dataset.series = $('plot-spp').dataset.series = String(ids.length);
+  // Points per series (for tests and curious readers of the DOM), e.g. "5,3".
+  $('plot-error').dataset.seriesPoints = e.slice(1).map((y) => y.filter((v) => v != null).length).join(',');
   $('plot-error').dataset.points = String(e[0].length);
   $('plot-spp').dataset.points = String(s[0].length);
 }
 window.addEventListener('resize', () => {
   if (!plots) return;
   const w = plotWidth();
-  plots.err.setSize({ width: w, height: 220 });
-  plots.spp.setSize({ width: w, height: 220 });
+  plots.err.setSize({ width: w, height: PLOT_H });
+  plots.spp.setSize({ width: w, height: PLOT_H });
 });
 
 // ------------------------------------------------------------------ submit
@@ -402,11 +437,12 @@ const FIELD_OF_PATH = [
   [/^job\.time_limit_s\b/, 'time'],
   [/^job\.target_error\b/, 'target'],
   [/^job\.name\b/, 'name'],
+  [/^job\.priority\b/, 'priority'],
   [/^integrator\.max_depth\b/, 'maxdepth'],
   [/^integrator(\.type)?\b/, 'integrator'],
 ];
-const FIELDS = ['scene', 'name', 'integrator', 'maxdepth', 'spp', 'time', 'target', 'form'];
-const inputOf = { scene: 'f-scene', name: 'f-name', integrator: 'f-integrator', maxdepth: 'f-maxdepth', spp: 'f-spp',
+const FIELDS = ['scene', 'name', 'priority', 'integrator', 'maxdepth', 'spp', 'time', 'target', 'form'];
+const inputOf = { scene: 'f-scene', name: 'f-name', priority: 'f-priority', integrator: 'f-integrator', maxdepth: 'f-maxdepth', spp: 'f-spp',
   time: 'f-time', target: 'f-target', form: 'f-submit' };
 function clearErrors() {
   for (const f of FIELDS) {
@@ -448,6 +484,8 @@ $('submit-form').addEventListener('submit', async (e) => {
   const job = { ...(doc.job || {}) };
   const name = $('f-name').value.trim();
   if (name) job.name = name;
+  const prio = numberOrNull('f-priority');
+  if (prio !== null) job.priority = prio;
   const spp = numberOrNull('f-spp'), tl = numberOrNull('f-time'), te = numberOrNull('f-target');
   if (spp !== null) job.spp = spp;
   if (tl !== null) job.time_limit_s = tl;
