@@ -216,6 +216,17 @@ static void test_area_irradiance(void **state)
         r = ref_at((ts_vec3){3, 0.4f, 1}, (ts_vec3){-1, 0, 0});
         assert_true(irradiance(ql, 2, &q, &r, 16) == 0);
     }
+    /* The accuracy benchmark's switch: prepared as AUTO, then forced; same irradiance. */
+    for (int m = 0; m < 2; m++) {
+        ts_light ql[2] = {area_light(0, 0, 2), area_light(0, 1, 2)};
+        prepare(ql, 2, &q);
+        assert_int_equal(ts_lights_set_triangle_sampling(ql, 2, &q, modes[m]), 2);
+        assert_int_equal(ql[0].triangle_sampling, modes[m]);
+        assert_int_equal(ql[1].geom.triangle_mode, modes[m]);
+        r = ref_at((ts_vec3){0, 0, 0}, (ts_vec3){0, 0, 1});
+        e = irradiance(ql, 2, &q, &r, k);
+        assert_rel(e, TS_PI_D * 2 * F, 1e-3, "rectangle form factor, forced sampling");
+    }
 
     /* Cylinder vs a finely tessellated mesh of it, the mesh's irradiance by Lambert's
      * exact polygon formula E = L/2 Σ_edges θ_e (n · û_e) over the triangles facing the
@@ -251,6 +262,8 @@ static void test_area_irradiance(void **state)
     lambert *= 2;
     print_message("cylinder: E = %.9g, tessellated mesh (Lambert) %.9g\n", e, lambert);
     assert_rel(e, lambert, 1e-3, "cylinder vs mesh");
+    /* Only triangle emitters are switched. */
+    assert_int_equal(ts_lights_set_triangle_sampling(&l, 1, &cy, TS_TRIANGLE_SAMPLING_AREA), 0);
 }
 
 static void test_infinite(void **state)

@@ -7,7 +7,7 @@ OUT=${1:?usage: report.sh OUT_DIR [SECONDS]}
 ELAPSED=${2:-}
 CSV=$OUT/accuracy.csv
 SUM=$OUT/accuracy_summary.csv
-[ -s "$CSV" ] && [ -s "$SUM" ] || { echo "report: $CSV or $SUM missing" >&2; exit 1; }
+if [ ! -s "$CSV" ] || [ ! -s "$SUM" ]; then echo "report: $CSV or $SUM missing" >&2; exit 1; fi
 
 scenes=$(awk -F, 'NR > 1 && !seen[$1]++ { print $1 }' "$CSV")
 
