@@ -17,8 +17,10 @@
  *    ≤ ks·F(o) + (1 − ks·F(o)) = 1, F̄ = 2∫F(μ)μ dμ, for kd, ks ≤ 1; for the rough coat
  *    the specular lobe reflects ≤ ks·F averaged over visible microfacets minus its
  *    shadowing loss, and test_material proves the 1.01 bound across roughness and wo.
- * It is not energy-*preserving* (the coat's internal reflections are not re-added:
- * white plastic is a little darker than 1 at grazing), which the issue does not ask for.
+ * It is not energy-*preserving*, which the issue does not ask for: light reflected back
+ * down by the coat is not re-added, so kd = ks = 1 smooth plastic reflects 0.91 at normal
+ * incidence rising to ~1 at grazing, and rough plastic (whose microfacet lobe also loses
+ * its shadowed energy) at most 0.89 (α = 1) to 0.99 (α → 0) (test_material prints them).
  * Substrate (FresnelBlend) is already coupled in its own formula and is pbrt-v3's. */
 #include "material.h"
 
