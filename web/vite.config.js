@@ -13,19 +13,38 @@ function usesFiles(v) {
   return false;
 }
 
+// [file, title, text] of each example scene an HTTP job can use.
+function sceneIndex() {
+  const out = [];
+  for (const f of fs.readdirSync(scenesDir).filter((f) => f.endsWith('.json')).sort()) {
+    const text = fs.readFileSync(path.join(scenesDir, f), 'utf8');
+    let doc;
+    try { doc = JSON.parse(text); } catch { continue; }
+    if (usesFiles(doc)) continue;
+    const w = doc.film && doc.film.width, h = doc.film && doc.film.height;
+    out.push([f, `${f.replace(/\.json$/, '')} (${(doc.integrator && doc.integrator.type) || 'path'}, ${w}×${h})`, text]);
+  }
+  return out;
+}
+
 function exampleScenes() {
   return {
     name: 'tessera-example-scenes',
+    // `npx vite`: the same files, from the scenes folder.
+    configureServer(server) {
+      server.middlewares.use('/scenes/', (req, res, next) => {
+        const f = decodeURIComponent(req.url.split('?')[0]).replace(/^\//, '');
+        if (f === 'index.json') return res.end(JSON.stringify(sceneIndex().map(([file, title]) => ({ file, title }))));
+        if (!/^[\w.-]+\.json$/.test(f) || !fs.existsSync(path.join(scenesDir, f))) return next();
+        res.setHeader('Content-Type', 'application/json');
+        res.end(fs.readFileSync(path.join(scenesDir, f)));
+      });
+    },
     generateBundle() {
       const index = [];
-      for (const f of fs.readdirSync(scenesDir).filter((f) => f.endsWith('.json')).sort()) {
-        const text = fs.readFileSync(path.join(scenesDir, f), 'utf8');
-        let doc;
-        try { doc = JSON.parse(text); } catch { continue; }
-        if (usesFiles(doc)) continue;
-        const w = doc.film && doc.film.width, h = doc.film && doc.film.height;
-        index.push({ file: f, title: `${f.replace(/\.json$/, '')} (${(doc.integrator && doc.integrator.type) || 'path'}, ${w}×${h})` });
-        this.emitFile({ type: 'asset', fileName: 'scenes/' + f, source: text });
+      for (const [file, title, text] of sceneIndex()) {
+        index.push({ file, title });
+        this.emitFile({ type: 'asset', fileName: 'scenes/' + file, source: text });
       }
       this.emitFile({ type: 'asset', fileName: 'scenes/index.json', source: JSON.stringify(index) });
     },

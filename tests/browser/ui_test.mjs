@@ -268,6 +268,18 @@ try {
     await page.keyboard.press('End');
     const after = await canvasDigest(page);
     assert(after.h !== before.h, 'exposure repaints the canvas');
+    // At -4 EV the light is no longer clipped white: its warm colour (radiance 17, 12, 4)
+    // is still there, which an 8-bit PNG (clipped at 1 before scaling) could not show.
+    await page.keyboard.press('Home');
+    assert((await page.textContent('#exposure-out')).startsWith('-4.0'), 'Home sets -4 EV');
+    const light = await page.evaluate(() => {
+      const c = document.getElementById('canvas'), d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+      let best = [0, 0, 0];
+      for (let i = 0; i < d.length; i += 4) if (d[i] + d[i + 1] + d[i + 2] > best[0] + best[1] + best[2]) best = [d[i], d[i + 1], d[i + 2]];
+      return best;
+    });
+    assert(light[0] - light[2] > 60, 'the light keeps its colour at -4 EV, brightest pixel ' + light);
+    await shot('08b-exposure-minus-4');
     // Tab reaches the submit form's controls in order.
     await page.focus('#f-name');
     await page.keyboard.press('Tab');
