@@ -140,7 +140,7 @@ void ts_shard_info_init(ts_shard_info *info, const ts_scene *scene, const ts_fil
     info->full_width = film->full_width, info->full_height = film->full_height;
     info->x0 = film->x0, info->y0 = film->y0, info->width = film->width, info->height = film->height;
     info->n_ranges = n_ranges < TS_SHARD_MAX_RANGES ? n_ranges : TS_SHARD_MAX_RANGES;
-    memcpy(info->ranges, ranges, (size_t)info->n_ranges * sizeof *ranges);
+    if (info->n_ranges) memcpy(info->ranges, ranges, (size_t)info->n_ranges * sizeof *ranges);
     info->render_time_s = render_time_s;
 }
 

@@ -295,7 +295,7 @@ int srv_persist_restore_all(const char *dir, srv_store *st, const ts_scene_limit
         n++;
     }
     closedir(d);
-    qsort(e, (size_t)n, sizeof *e, cmp_entry);
+    if (n) qsort(e, (size_t)n, sizeof *e, cmp_entry); /* e may be NULL when the folder is empty */
     for (int i = 0; i < n; i++) restore_one(dir, e[i].id, st, limits);
     free(e);
     return n;
