@@ -11,9 +11,11 @@ CMAKE_ARGS ?=
 # Debian packages the build and tests need (DESIGN.md §3).
 DEB_PACKAGES := cmake make gcc pkg-config libembree-dev libopenexr-dev libpng-dev libcjson-dev nettle-dev \
                 libmicrohttpd-dev libcmocka-dev libcurl4-openssl-dev \
-                clang libclang-rt-14-dev chromium
-# (clang + libclang-rt: the libFuzzer harnesses, whose smoke runs are part of `make test`;
-#  chromium: the browser tests of the web UI, tests/browser.)
+                clang libclang-rt-14-dev
+# (clang + libclang-rt: the libFuzzer harnesses, whose smoke runs are part of `make test`.)
+# Optional: installed when possible; without them the tests that need them say so and skip.
+#  chromium: the browser tests of the web UI, tests/browser.
+OPTIONAL_PACKAGES := chromium
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
@@ -32,6 +34,13 @@ deps:
 	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $$missing >/dev/null && \
 	  echo "deps: done"; \
 	fi
+	@for p in $(OPTIONAL_PACKAGES); do \
+	  dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q '^install ok installed' && continue; \
+	  echo "deps: installing optional $$p"; \
+	  { $(SUDO) apt-get update -qq && \
+	    DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $$p >/dev/null; } || \
+	    echo "deps: could not install $$p; the tests that need it will report SKIPPED"; \
+	done
 
 $(BUILD)/CMakeCache.txt: | deps
 	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) $(CMAKE_ARGS)
