@@ -183,6 +183,12 @@ static ts_rgb li_path(const ts_scene *s, uint32_t fx, ts_ray ray, ts_sample_stre
     if (!(fx & TS_EFFECTS_SCATTERING)) max_depth = 0;
     else if (!(fx & TS_EFFECT_INDIRECT) && max_depth > 1) max_depth = 1;
     for (int bounces = 0;; bounces++) {
+        /* At the last depth the hit can only add emission, and only after a specular bounce
+         * towards something that emits; otherwise the ray need not be traced at all (it
+         * draws no sample dimensions, so nothing else changes). */
+        if (bounces > 0 && bounces >= max_depth &&
+            !(specular_bounce && (fx & (TS_EFFECT_AREA_LIGHTS | TS_EFFECT_ENVIRONMENT))))
+            break;
         ts_interaction si;
         bool found = ts_accel_intersect(s->accel, &ray, &si);
         if (bounces > 0) c->other_rays++;
