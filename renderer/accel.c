@@ -282,9 +282,21 @@ static void ray_to_rtc(const ts_ray *ray, struct RTCRay *r)
     r->flags = 0;
 }
 
+/* Embree requires |origin| and |direction| components ≤ 1.844e18 (its FLT_LARGE) and a
+ * non-NaN tfar, and asserts otherwise. Scenes are kept far inside that at load time, but
+ * a ray derived from extreme values must still never reach it: such a ray misses (and a
+ * shadow ray counts as blocked, so no light arrives along it). */
+#define TS_EMBREE_LARGE 1.0e18f
+static inline bool ray_valid(const ts_ray *r)
+{
+    return fabsf(r->o.x) <= TS_EMBREE_LARGE && fabsf(r->o.y) <= TS_EMBREE_LARGE && fabsf(r->o.z) <= TS_EMBREE_LARGE &&
+           fabsf(r->d.x) <= TS_EMBREE_LARGE && fabsf(r->d.y) <= TS_EMBREE_LARGE && fabsf(r->d.z) <= TS_EMBREE_LARGE &&
+           (r->d.x != 0 || r->d.y != 0 || r->d.z != 0) && !isnan(r->tmax);
+}
+
 bool ts_accel_intersect(const ts_accel *a, const ts_ray *ray, ts_interaction *si)
 {
-    if (!(ray->tmax > 0)) return false;
+    if (!(ray->tmax > 0) || !ray_valid(ray)) return false;
     if (__builtin_expect(a->log != NULL, 0)) log_ray(a->log, ray, TS_RAY_LOG_INTERSECT);
     query_ctx q;
     rtcInitIntersectContext(&q.rtc);
@@ -304,6 +316,7 @@ bool ts_accel_intersect(const ts_accel *a, const ts_ray *ray, ts_interaction *si
 bool ts_accel_occluded(const ts_accel *a, const ts_ray *ray)
 {
     if (!(ray->tmax > 0)) return false;
+    if (!ray_valid(ray)) return true;
     if (__builtin_expect(a->log != NULL, 0)) log_ray(a->log, ray, TS_RAY_LOG_OCCLUDED);
     query_ctx q;
     rtcInitIntersectContext(&q.rtc);

@@ -906,6 +906,20 @@ static ts_status build(loader *ld)
     s->accel = ts_accel_create(s->shapes, s->n_shapes, ld->err);
     if (!s->accel) return ld->err->status ? ld->err->status : TS_ERR_INTERNAL;
     s->bounds = ts_accel_bounds(s->accel);
+    /* Rays carry float coordinates and Embree refuses components beyond ~1.8e18; far before
+     * that, float spacing makes geometry meaningless. Refuse scenes that reach beyond. */
+    const float limit = 1e15f;
+    if (!ts_bounds3_is_empty(s->bounds) &&
+        !(fabsf(s->bounds.lo.x) <= limit && fabsf(s->bounds.lo.y) <= limit && fabsf(s->bounds.lo.z) <= limit &&
+          fabsf(s->bounds.hi.x) <= limit && fabsf(s->bounds.hi.y) <= limit && fabsf(s->bounds.hi.z) <= limit))
+        return ts_error_set(ld->err, TS_ERR_INVALID,
+                            "shapes: the scene reaches beyond ±1e15 units from the origin (bounds [%g, %g, %g] to "
+                            "[%g, %g, %g]); scale or move it",
+                            s->bounds.lo.x, s->bounds.lo.y, s->bounds.lo.z, s->bounds.hi.x, s->bounds.hi.y,
+                            s->bounds.hi.z);
+    ts_vec3 from = s->camera.origin;
+    if (!(fabsf(from.x) <= limit && fabsf(from.y) <= limit && fabsf(from.z) <= limit))
+        return ts_error_set(ld->err, TS_ERR_INVALID, "camera.from: farther than 1e15 units from the origin");
     TRY(ts_lights_prepare(s->lights, s->n_lights, s->shapes, s->bounds, ld->err));
     ts_light_sampling mode = s->integrator.type == TS_INTEGRATOR_PATH && s->integrator.light_sampling == TS_LIGHT_SELECT_UNIFORM
                                  ? TS_LIGHT_SAMPLING_UNIFORM
