@@ -1,7 +1,9 @@
 #!/bin/sh
 # run.sh — runs libFuzzer harnesses (tests/fuzz/README.md).
-#   tests/fuzz/run.sh [--keep] BUILD_DIR SECONDS HARNESS...
-# Each harness BUILD_DIR/fuzz_<h> runs for SECONDS over its seed corpus
+#   tests/fuzz/run.sh [--keep] BUILD_DIR SECONDS|runs:N HARNESS...
+# Each harness BUILD_DIR/fuzz_<h> runs for SECONDS (or, with runs:N, exactly N inputs from
+# the fixed seed 1, so the run is deterministic: what `make test` uses, so CI fails on a
+# regression but never by the luck of a new mutation) over its seed corpus
 # tests/fuzz/corpus/<h> (with the dictionary tests/fuzz/<h>.dict where there is one). New inputs go to a scratch folder (removed afterwards) or, with
 # --keep, to BUILD_DIR/fuzz-corpus/<h>, kept between runs; the seed corpus is never
 # written. Crash inputs are saved in BUILD_DIR/fuzz-artifacts/<h>/. Prints executions
@@ -34,7 +36,12 @@ for h in "$@"; do
   # -timeout: one input taking this long is a hang; -rss_limit_mb: libFuzzer's default.
   dict=
   [ -f "$src/tests/fuzz/$h.dict" ] && dict="-dict=$src/tests/fuzz/$h.dict"
-  "$bin" -max_total_time="$seconds" -timeout=25 -rss_limit_mb=2048 -print_final_stats=1 $dict \
+  case $seconds in
+    runs:*) budget="-runs=${seconds#runs:} -seed=1" ;;
+    *) budget="-max_total_time=$seconds" ;;
+  esac
+  # shellcheck disable=SC2086 # $budget and $dict are lists of options
+  "$bin" $budget -timeout=25 -rss_limit_mb=2048 -print_final_stats=1 $dict \
          -artifact_prefix="$art/" "$work" "$src/tests/fuzz/corpus/$h" >"$log" 2>&1
   rc=$?
   runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
@@ -45,7 +52,7 @@ for h in "$@"; do
     tail -n 80 "$log" >&2
     status=1
   else
-    echo "fuzz $h: ${runs} executions, ${rate} exec/s, ${cov:-cov: ?} in ${seconds}s"
+    echo "fuzz $h: ${runs} executions, ${rate} exec/s, ${cov:-cov: ?} (budget ${seconds})"
     total=$((total + runs))
   fi
   rm -f "$log"
