@@ -15,62 +15,20 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "cli_support.h"
 #include "exr.h"
 #include "image.h"
 
 static char tmpdir[256];
 static char errlog[512];
 
-/* Runs the tessera binary with args (NULL-terminated); stderr goes to errlog. Returns the
- * exit status. */
-static int run(const char *const *args)
-{
-    const char *bin = getenv("TS_BINARY");
-    if (!bin) fail_msg("TS_BINARY is not set (run through ctest)");
-    pid_t pid = fork();
-    if (pid == 0) {
-        int fd = open(errlog, O_WRONLY | O_CREAT | O_TRUNC, 0644);
-        dup2(fd, 2);
-        int null = open("/dev/null", O_WRONLY);
-        dup2(null, 1);
-        char *argv[32];
-        int n = 0;
-        argv[n++] = (char *)bin;
-        for (; args[n - 1] && n < 31; n++) argv[n] = (char *)args[n - 1];
-        argv[n] = NULL;
-        execv(bin, argv);
-        _exit(127);
-    }
-    int status;
-    waitpid(pid, &status, 0);
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
-}
-
-static char *read_log(void)
-{
-    static char buf[8192];
-    FILE *f = fopen(errlog, "r");
-    size_t n = f ? fread(buf, 1, sizeof buf - 1, f) : 0;
-    if (f) fclose(f);
-    buf[n] = '\0';
-    return buf;
-}
+static int run(const char *const *args) { return cli_run(errlog, args, NULL); }
+static const char *read_log(void) { return cli_read_log(errlog); }
 
 static void path_in_tmp(char *out, size_t n, const char *name) { snprintf(out, n, "%s/%s", tmpdir, name); }
 
-static void write_file(const char *path, const char *text)
-{
-    FILE *f = fopen(path, "w");
-    assert_non_null(f);
-    fputs(text, f);
-    fclose(f);
-}
-
-static bool exists(const char *path)
-{
-    struct stat st;
-    return stat(path, &st) == 0;
-}
+static void write_file(const char *path, const char *text) { cli_write_file(path, text); }
+static bool exists(const char *path) { return cli_exists(path); }
 
 static int setup(void **state)
 {

@@ -28,6 +28,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "cli_support.h"
 #include "exr.h"
 #include "film_image.h"
 #include "hash.h"
@@ -42,53 +43,11 @@ static char errlog[512];
 
 /* ---------------------------------------------------------------- helpers */
 
-/* Starts the tessera binary with args (NULL-terminated) and optional "NAME=value"
- * environment additions (NULL-terminated or NULL); stderr goes to errlog. */
-static pid_t start(const char *const *args, const char *const *env)
-{
-    const char *bin = getenv("TS_BINARY");
-    if (!bin) fail_msg("TS_BINARY is not set (run through ctest)");
-    pid_t pid = fork();
-    if (pid == 0) {
-        int fd = open(errlog, O_WRONLY | O_CREAT | O_TRUNC, 0644);
-        dup2(fd, 2);
-        int null = open("/dev/null", O_WRONLY);
-        dup2(null, 1);
-        unsetenv("JOB_COMPLETION_INDEX");
-        unsetenv("SLURM_ARRAY_TASK_ID");
-        unsetenv("SLURM_ARRAY_TASK_COUNT");
-        unsetenv("SLURM_ARRAY_TASK_MIN");
-        for (int i = 0; env && env[i]; i++) putenv((char *)env[i]);
-        char *argv[48];
-        int n = 0;
-        argv[n++] = (char *)bin;
-        for (; args[n - 1] && n < 47; n++) argv[n] = (char *)args[n - 1];
-        argv[n] = NULL;
-        execv(bin, argv);
-        _exit(127);
-    }
-    return pid;
-}
-
-static int finish(pid_t pid)
-{
-    int status;
-    waitpid(pid, &status, 0);
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-}
-
-static int run_env(const char *const *args, const char *const *env) { return finish(start(args, env)); }
+static pid_t start(const char *const *args, const char *const *env) { return cli_start(errlog, args, env); }
+static int finish(pid_t pid) { return cli_finish(pid); }
+static int run_env(const char *const *args, const char *const *env) { return cli_run(errlog, args, env); }
 static int run(const char *const *args) { return run_env(args, NULL); }
-
-static char *read_log(void)
-{
-    static char buf[8192];
-    FILE *f = fopen(errlog, "r");
-    size_t n = f ? fread(buf, 1, sizeof buf - 1, f) : 0;
-    if (f) fclose(f);
-    buf[n] = '\0';
-    return buf;
-}
+static const char *read_log(void) { return cli_read_log(errlog); }
 
 /* Asserts the last command's stderr contains want (prints the log when it does not). */
 static void log_has(const char *want)
@@ -106,19 +65,8 @@ static const char *tmp(const char *name)
     return b;
 }
 
-static void write_file(const char *path, const char *text)
-{
-    FILE *f = fopen(path, "w");
-    assert_non_null(f);
-    fputs(text, f);
-    fclose(f);
-}
-
-static bool exists(const char *path)
-{
-    struct stat st;
-    return stat(path, &st) == 0;
-}
+static void write_file(const char *path, const char *text) { cli_write_file(path, text); }
+static bool exists(const char *path) { return cli_exists(path); }
 
 /* The Cornell box shrunk for tests: w×h pixels, spp, a filter, optional crop. */
 static void write_cornell(const char *path, int w, int h, int spp, const char *filter, const char *crop, int red)
