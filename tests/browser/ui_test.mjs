@@ -167,7 +167,9 @@ try {
     assert(st.state === 'running', 'the job should still be running, is ' + st.state);
     const t = Date.now();
     await page.reload({ waitUntil: 'load' });
-    await page.waitForFunction(() => { const c = document.getElementById('canvas'); return Number(c.dataset.tiles) >= 9; },
+    // Every one of the 9 tiles painted (tile events can repeat a tile: a replayed state and a
+    // newer pass's state of the same tile both count in data-tiles, so count distinct ones).
+    await page.waitForFunction(() => { const c = document.getElementById('canvas'); return Number(c.dataset.painted) >= 9; },
       null, { timeout: 5000 });
     const d = await canvasDigest(page);
     const ms = Date.now() - t;

@@ -304,6 +304,7 @@ function openStream(id) {
     const painted = () => {
       tileSpp.set(key, t.spp);
       canvas.dataset.tiles = String(Number(canvas.dataset.tiles || 0) + 1);
+      canvas.dataset.painted = String(tileSpp.size); // distinct tiles on the canvas
       drawOutlines();
     };
     const stale = () => id !== selectedId || (tileSpp.get(key) || 0) > t.spp;
@@ -347,6 +348,7 @@ function select(id) {
   jobState = j.state;
   for (const c of [canvas, overlay]) { c.width = film.crop_width; c.height = film.crop_height; }
   canvas.dataset.tiles = '0';
+  canvas.dataset.painted = '0';
   canvas.style.aspectRatio = film.crop_width + ' / ' + film.crop_height;
   ctx.clearRect(0, 0, canvas.width, canvas.height);
   base = { w: film.crop_width, h: film.crop_height, rgb: new Float32Array(film.crop_width * film.crop_height * 3),
