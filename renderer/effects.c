@@ -70,7 +70,7 @@ static uint32_t material_effects(const ts_material *m)
     si.wo = (ts_vec3){0, 0, 1};
     ts_bsdf b;
     ts_material_bsdf(m, &si, &b);
-    uint32_t flags = ts_bsdf_flags(&b), fx = 0;
+    uint32_t flags = ts_bsdf_flags(&b), fx = b.n_bxdfs > 1 ? TS_EFFECT_LOBE_CHOICE : 0;
     if (flags & TS_BXDF_DIFFUSE) fx |= TS_EFFECT_DIFFUSE;
     if (flags & TS_BXDF_GLOSSY) fx |= TS_EFFECT_GLOSSY;
     if ((flags & TS_BXDF_SPECULAR) && (flags & TS_BXDF_REFLECTION)) fx |= TS_EFFECT_SPECULAR_REFLECTION;

@@ -5,7 +5,11 @@
  * integrators test these flags to skip what cannot contribute: emission lookups where
  * nothing emits, environment lookups without an environment, light sampling without
  * lights, specular-chain and refraction bookkeeping without specular lobes, the lens
- * without depth of field, and bounces that cannot carry light. The specialisation never
+ * without depth of field, bounces that cannot carry light, and the random numbers of
+ * what is skipped: next-event estimation draws no BSDF sample when every light is a
+ * delta light, and no lobe is picked where every material has a single lobe. A skipped
+ * value's sample dimension is still consumed (the sampler's values depend only on the
+ * dimension's number), so later dimensions stay where they were. The specialisation never
  * changes an estimate: every skipped computation would have added exactly zero, and the
  * sample dimensions a path consumes are the same either way (tests/test_effects.c renders
  * with the analysis forced off and on and compares bit for bit). A job may also switch
@@ -26,14 +30,15 @@
     X(TS_EFFECT_SPECULAR_TRANSMISSION, 6, "specular_transmission", "refraction through smooth dielectrics") \
     X(TS_EFFECT_FOURIER, 7, "fourier", "measured (Fourier) BSDFs")                \
     X(TS_EFFECT_DEPTH_OF_FIELD, 8, "depth_of_field", "a thin-lens camera")        \
-    X(TS_EFFECT_INDIRECT, 9, "indirect", "light after more than one bounce")
+    X(TS_EFFECT_INDIRECT, 9, "indirect", "light after more than one bounce")       \
+    X(TS_EFFECT_LOBE_CHOICE, 10, "lobe_choice", "materials of several lobes, one picked per sample")
 
 enum {
 #define TS_EFFECT_ENUM(name, bit, key, text) name = 1u << bit,
     TS_EFFECT_LIST(TS_EFFECT_ENUM)
 #undef TS_EFFECT_ENUM
 };
-#define TS_EFFECT_COUNT 10
+#define TS_EFFECT_COUNT 11
 #define TS_EFFECTS_ALL ((1u << TS_EFFECT_COUNT) - 1)
 /* Lobes that scatter light at all. */
 #define TS_EFFECTS_SCATTERING                                                                          \

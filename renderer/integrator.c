@@ -127,14 +127,35 @@ static ts_rgb estimate_direct(const ts_scene *s, const ts_interaction *si, const
     return ts_rgb_add(Ld, ts_rgb_scale(ts_rgb_mul(f, Li), w / bs.pdf));
 }
 
+/* The random numbers of what the effects rule out are not computed; their dimensions are
+ * still consumed, so every later value is the same as without the specialisation. */
+
+/* Lobe choice: ts_bsdf_sample_f never reads it from a BSDF of one lobe. */
+static float lobe_u(uint32_t fx, ts_sample_stream *st)
+{
+    if (fx & TS_EFFECT_LOBE_CHOICE) return ts_sample_1d(st);
+    st->dim++;
+    return 0;
+}
+
+/* Whether next-event estimation samples the BSDF too: only towards lights that are not
+ * delta lights (estimate_direct). */
+static bool nee_samples_bsdf(uint32_t fx) { return (fx & (TS_EFFECT_AREA_LIGHTS | TS_EFFECT_ENVIRONMENT)) != 0; }
+
 /* pbrt's UniformSampleOneLight: one light from the distribution, divided by its pmf. */
-static ts_rgb sample_one_light(const ts_scene *s, const ts_interaction *si, const ts_bsdf *bsdf, ts_sample_stream *st,
-                               ts_counters *c)
+static ts_rgb sample_one_light(const ts_scene *s, uint32_t fx, const ts_interaction *si, const ts_bsdf *bsdf,
+                               ts_sample_stream *st, ts_counters *c)
 {
     float u_select = ts_sample_1d(st);
     ts_vec2 u_light = ts_sample_2d(st);
-    float u_lobe = ts_sample_1d(st);
-    ts_vec2 u_bsdf = ts_sample_2d(st);
+    float u_lobe = 0;
+    ts_vec2 u_bsdf = {0, 0};
+    if (nee_samples_bsdf(fx)) {
+        u_lobe = lobe_u(fx, st);
+        u_bsdf = ts_sample_2d(st);
+    } else {
+        st->dim += 2;
+    }
     float pmf;
     uint32_t li = ts_light_distribution_sample(&s->light_distribution, u_select, &pmf);
     if (li == TS_NONE || !(pmf > 0)) return ts_rgb_gray(0);
@@ -143,8 +164,8 @@ static ts_rgb sample_one_light(const ts_scene *s, const ts_interaction *si, cons
 
 /* pbrt's UniformSampleAllLights: samples_per_light samples of every light, drawn as arrays
  * (consecutive sequence indices of one dimension) so that they are stratified together. */
-static ts_rgb sample_all_lights(const ts_scene *s, const ts_interaction *si, const ts_bsdf *bsdf, ts_sample_stream *st,
-                                ts_counters *c)
+static ts_rgb sample_all_lights(const ts_scene *s, uint32_t fx, const ts_interaction *si, const ts_bsdf *bsdf,
+                                ts_sample_stream *st, ts_counters *c)
 {
     ts_rgb L = ts_rgb_gray(0);
     uint32_t n = (uint32_t)s->integrator.samples_per_light;
@@ -156,9 +177,13 @@ static ts_rgb sample_all_lights(const ts_scene *s, const ts_interaction *si, con
         for (uint32_t j = 0; j < n; j++) {
             uint32_t index = st->index * n + j;
             ts_vec2 u_light = ts_sampler_value_2d(&sampler, st->px, st->py, index, dim);
-            ts_vec2 u_lobe = ts_sampler_value_2d(&sampler, st->px, st->py, index, dim + 1);
-            ts_vec2 u_bsdf = ts_sampler_value_2d(&sampler, st->px, st->py, index, dim + 2);
-            Ll = ts_rgb_add(Ll, estimate_direct(s, si, bsdf, li, u_light, u_lobe.x, u_bsdf, c));
+            float u_lobe = 0;
+            ts_vec2 u_bsdf = {0, 0};
+            if (nee_samples_bsdf(fx)) {
+                if (fx & TS_EFFECT_LOBE_CHOICE) u_lobe = ts_sampler_value_1d(&sampler, st->px, st->py, index, dim + 1);
+                u_bsdf = ts_sampler_value_2d(&sampler, st->px, st->py, index, dim + 2);
+            }
+            Ll = ts_rgb_add(Ll, estimate_direct(s, si, bsdf, li, u_light, u_lobe, u_bsdf, c));
         }
         L = ts_rgb_add(L, ts_rgb_scale(Ll, 1.0f / (float)n));
     }
@@ -204,12 +229,15 @@ static ts_rgb li_path(const ts_scene *s, uint32_t fx, ts_ray ray, ts_sample_stre
         ts_material_bsdf(&s->materials[s->shapes[si.shape].material], &si, &bsdf);
         uint32_t flags = ts_bsdf_flags(&bsdf);
         if (flags & ~TS_BXDF_SPECULAR & (TS_BXDF_DIFFUSE | TS_BXDF_GLOSSY))
-            L = ts_rgb_add(L, ts_rgb_mul(beta, sample_one_light(s, &si, &bsdf, st, c)));
+            L = ts_rgb_add(L, ts_rgb_mul(beta, sample_one_light(s, fx, &si, &bsdf, st, c)));
         else
             st->dim += 4; /* keep later dimensions where they would be */
-        float u_lobe = ts_sample_1d(st);
+        float u_lobe = lobe_u(fx, st);
         ts_vec2 u = ts_sample_2d(st);
-        float u_rr = ts_sample_1d(st);
+        /* Roulette's value is computed only where roulette can happen. */
+        float u_rr = 0;
+        if (bounces > rr_depth) u_rr = ts_sample_1d(st);
+        else st->dim++;
         ts_bsdf_sample bs;
         if (!ts_bsdf_sample_f(&bsdf, si.wo, u_lobe, u, &bs) || !(bs.pdf > 0) || ts_rgb_is_black(bs.f)) break;
         beta = ts_rgb_mul(beta, ts_rgb_scale(bs.f, ts_vec3_absdot(bs.wi, si.ns) / bs.pdf));
@@ -248,11 +276,11 @@ static ts_rgb li_direct(const ts_scene *s, uint32_t fx, ts_ray ray, ts_sample_st
     ts_material_bsdf(&s->materials[s->shapes[si.shape].material], &si, &bsdf);
     uint32_t flags = ts_bsdf_flags(&bsdf);
     if (s->n_lights > 0 && (flags & (TS_BXDF_DIFFUSE | TS_BXDF_GLOSSY))) {
-        if (s->integrator.strategy == TS_LIGHTS_ALL) L = ts_rgb_add(L, sample_all_lights(s, &si, &bsdf, st, c));
-        else L = ts_rgb_add(L, sample_one_light(s, &si, &bsdf, st, c));
+        if (s->integrator.strategy == TS_LIGHTS_ALL) L = ts_rgb_add(L, sample_all_lights(s, fx, &si, &bsdf, st, c));
+        else L = ts_rgb_add(L, sample_one_light(s, fx, &si, &bsdf, st, c));
     }
     if ((fx & TS_EFFECT_INDIRECT) && depth + 1 < s->integrator.max_depth && (flags & TS_BXDF_SPECULAR)) {
-        float u_lobe = ts_sample_1d(st);
+        float u_lobe = lobe_u(fx, st);
         ts_vec2 u = ts_sample_2d(st);
         ts_bsdf_sample bs;
         if (ts_bsdf_sample_f(&bsdf, si.wo, u_lobe, u, &bs) && (bs.flags & TS_BXDF_SPECULAR) && bs.pdf > 0 &&

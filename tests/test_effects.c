@@ -63,7 +63,21 @@ static const struct {
      "{\"tessera\":1," CAMERA "," FILM ",\"integrator\":{\"type\":\"path\",\"max_depth\":3},"
      "\"materials\":{\"floor\":{\"type\":\"plastic\",\"roughness\":0.2}},\"shapes\":[" FLOOR "],"
      "\"lights\":[{\"type\":\"spot\",\"from\":[0,3,0],\"to\":[0,0,0],\"intensity\":30}]}",
-     TS_EFFECT_DELTA_LIGHTS | TS_EFFECT_DIFFUSE | TS_EFFECT_GLOSSY | TS_EFFECT_INDIRECT},
+     TS_EFFECT_DELTA_LIGHTS | TS_EFFECT_DIFFUSE | TS_EFFECT_GLOSSY | TS_EFFECT_INDIRECT | TS_EFFECT_LOBE_CHOICE},
+    {"diffuse, point light, direct all",
+     "{\"tessera\":1," CAMERA "," FILM ",\"integrator\":{\"type\":\"direct\",\"strategy\":\"all\","
+     "\"samples_per_light\":2},\"materials\":{\"floor\":{\"type\":\"diffuse\",\"sigma\":10}},\"shapes\":[" FLOOR
+     ",{\"type\":\"sphere\",\"center\":[0,0.5,0],\"radius\":0.5,\"material\":\"floor\"}],"
+     "\"lights\":[{\"type\":\"point\",\"position\":[1,3,1],\"intensity\":10},"
+     "{\"type\":\"distant\",\"from\":[0,1,1],\"to\":[0,0,0],\"irradiance\":1}]}",
+     TS_EFFECT_DELTA_LIGHTS | TS_EFFECT_DIFFUSE},
+    {"plastic under a sphere light and a point light, direct all",
+     "{\"tessera\":1," CAMERA "," FILM ",\"integrator\":{\"type\":\"direct\",\"strategy\":\"all\"},"
+     "\"materials\":{\"floor\":{\"type\":\"plastic\",\"roughness\":0.3},\"black\":{\"type\":\"diffuse\","
+     "\"reflectance\":0}},\"shapes\":[" FLOOR ",{\"type\":\"sphere\",\"center\":[0,2,0],\"radius\":0.3,"
+     "\"material\":\"black\",\"emission\":20}],"
+     "\"lights\":[{\"type\":\"point\",\"position\":[1,3,1],\"intensity\":10}]}",
+     TS_EFFECT_DELTA_LIGHTS | TS_EFFECT_AREA_LIGHTS | TS_EFFECT_DIFFUSE | TS_EFFECT_GLOSSY | TS_EFFECT_LOBE_CHOICE},
     {"nothing emits",
      "{\"tessera\":1," CAMERA "," FILM ",\"integrator\":{\"type\":\"path\"},"
      "\"materials\":{\"floor\":{\"type\":\"diffuse\"}},\"shapes\":[" FLOOR "]}",
