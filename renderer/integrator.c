@@ -192,46 +192,112 @@ static ts_rgb sample_all_lights(const ts_scene *s, uint32_t fx, const ts_interac
 
 /* ---------------------------------------------------------------- path */
 
-/* pbrt-v3's PathIntegrator: emission added at the camera vertex and after specular
- * bounces (elsewhere next-event estimation counts it), MIS next-event estimation at every
- * vertex with a non-specular lobe, Russian roulette after rr_depth on β·η-scale. */
+/* Next-event estimation of the path integrator (pbrt-v4's SampleLd): one light from the
+ * distribution, one light sample. Its MIS partner is the path's own next BSDF sample,
+ * whose hit adds the emission it finds weighted by the power heuristic (li_path), so no
+ * extra BSDF ray is traced here. Both pdfs include the light's selection pmf. */
+static ts_rgb path_nee(const ts_scene *s, const ts_interaction *si, const ts_bsdf *bsdf, float u_select,
+                       ts_vec2 u_light, ts_counters *c)
+{
+    float pmf;
+    uint32_t li = ts_light_distribution_sample(&s->light_distribution, u_select, &pmf);
+    if (li == TS_NONE || !(pmf > 0)) return ts_rgb_gray(0);
+    ts_light_sample ls = {0};
+    if (!ts_light_sample_li(&s->lights[li], s->shapes, si, u_light, &ls) || !(ls.pdf > 0)) return ts_rgb_gray(0);
+    /* BSDF-only sampling still light-samples delta lights, which no BSDF ray can hit. */
+    if (!ls.is_delta && s->integrator.sampling == TS_SAMPLING_BSDF) return ts_rgb_gray(0);
+    ts_rgb f = ts_rgb_scale(ts_bsdf_f(bsdf, si->wo, ls.wi), ts_vec3_absdot(ls.wi, si->ns));
+    if (ts_rgb_is_black(f) || ts_rgb_is_black(ls.L)) return ts_rgb_gray(0);
+    ts_ray shadow = ts_spawn_ray_to(si, s->shapes, ls.p_light, ls.p_light_error, ls.n_light);
+    c->other_rays++;
+    if (ts_accel_occluded(s->accel, &shadow)) return ts_rgb_gray(0);
+    float light_pdf = ls.pdf * pmf;
+    float w = 1;
+    if (!ls.is_delta && s->integrator.sampling == TS_SAMPLING_MIS)
+        w = power_heuristic(light_pdf, ts_bsdf_pdf(bsdf, si->wo, ls.wi));
+    return ts_rgb_scale(ts_rgb_mul(f, ls.L), w / light_pdf);
+}
+
+/* Emission a path ray finds: at the camera and after specular bounces (and for BSDF-only
+ * sampling) in full; after a non-specular bounce weighted against next-event estimation
+ * at the vertex it left (prev, whose BSDF sampled the ray with pdf prev_pdf). */
+static ts_rgb path_emission(const ts_scene *s, uint32_t fx, const ts_ray *ray, bool found, const ts_interaction *si,
+                            bool full, const ts_interaction *prev, float prev_pdf)
+{
+    const ts_light_distribution *d = &s->light_distribution;
+    ts_rgb L = ts_rgb_gray(0);
+    if (found) {
+        const ts_shape *sh = &s->shapes[si->shape];
+        if (!(fx & TS_EFFECT_AREA_LIGHTS) || !sh->emissive) return L;
+        uint32_t li = sh->first_light + (sh->type == TS_SHAPE_MESH ? si->prim : 0);
+        const ts_light *l = &s->lights[li];
+        L = ts_area_light_l(l, si, si->wo);
+        if (full || ts_rgb_is_black(L)) return L;
+        float light_pdf = ts_light_distribution_pmf(d, li) * ts_light_pdf_li_hit(l, s->shapes, prev, si->p);
+        return ts_rgb_scale(L, power_heuristic(prev_pdf, light_pdf));
+    }
+    if (!(fx & TS_EFFECT_ENVIRONMENT)) return L;
+    for (uint32_t i = 0; i < s->n_infinite_lights; i++) {
+        uint32_t li = s->infinite_lights[i];
+        const ts_light *l = &s->lights[li];
+        ts_rgb Le = ts_light_le(l, ray);
+        if (!full && !ts_rgb_is_black(Le)) {
+            float light_pdf = ts_light_distribution_pmf(d, li) * ts_light_pdf_li(l, s->shapes, prev, ray->d);
+            Le = ts_rgb_scale(Le, power_heuristic(prev_pdf, light_pdf));
+        }
+        L = ts_rgb_add(L, Le);
+    }
+    return L;
+}
+
+/* The path integrator: incremental path construction from the camera (pbrt's
+ * PathIntegrator), next-event estimation with MIS at every vertex with a non-specular
+ * lobe, the BSDF-sampled continuation ray doubling as MIS's BSDF sample (as pbrt-v4: two
+ * rays a vertex, not pbrt-v3's three), Russian roulette after rr_depth on β·η-scale.
+ * max_depth counts scattering events as pbrt: the emission found by the BSDF ray leaving
+ * the last vertex is light after max_depth bounces and counts. */
 static ts_rgb li_path(const ts_scene *s, uint32_t fx, ts_ray ray, ts_sample_stream *st, ts_counters *c)
 {
     ts_rgb L = ts_rgb_gray(0), beta = ts_rgb_gray(1);
     bool specular_bounce = false;
     float eta_scale = 1;
     const int rr_depth = s->integrator.rr_depth;
+    const ts_direct_sampling sampling = s->integrator.sampling;
     /* Depth cap where further bounces cannot carry light: nothing emits → nothing to see;
      * nothing scatters → only emission seen directly; no indirect → direct light only. */
     if (!(fx & TS_EFFECTS_LIGHTS)) return L;
     int max_depth = s->integrator.max_depth;
     if (!(fx & TS_EFFECTS_SCATTERING)) max_depth = 0;
     else if (!(fx & TS_EFFECT_INDIRECT) && max_depth > 1) max_depth = 1;
+    const bool emitters = (fx & (TS_EFFECT_AREA_LIGHTS | TS_EFFECT_ENVIRONMENT)) != 0;
+    ts_interaction prev = {0};
+    float prev_pdf = 0;
     for (int bounces = 0;; bounces++) {
-        /* At the last depth the hit can only add emission, and only after a specular bounce
-         * towards something that emits; otherwise the ray need not be traced at all (it
-         * draws no sample dimensions, so nothing else changes). */
-        if (bounces > 0 && bounces >= max_depth &&
-            !(specular_bounce && (fx & (TS_EFFECT_AREA_LIGHTS | TS_EFFECT_ENVIRONMENT))))
-            break;
+        /* Emission found by this ray counts at the camera, after a specular bounce, and
+         * (MIS-weighted, or in full for BSDF-only sampling) unless light sampling alone
+         * is asked for. A ray whose hit can add nothing — the last one, when nothing
+         * emits or its emission does not count — is not traced; it draws no sample
+         * dimensions, so nothing else changes. */
+        bool counts = emitters && (bounces == 0 || specular_bounce || sampling != TS_SAMPLING_LIGHT);
+        if (bounces > 0 && bounces >= max_depth && !counts) break;
         ts_interaction si;
         bool found = ts_accel_intersect(s->accel, &ray, &si);
         if (bounces > 0) c->other_rays++;
-        if (bounces == 0 || specular_bounce) {
-            if (found) {
-                if (fx & TS_EFFECT_AREA_LIGHTS) L = ts_rgb_add(L, ts_rgb_mul(beta, emitted(s, &si, si.wo)));
-            } else if (fx & TS_EFFECT_ENVIRONMENT) {
-                L = ts_rgb_add(L, ts_rgb_mul(beta, escaped(s, &ray)));
-            }
+        if (counts) {
+            bool full = bounces == 0 || specular_bounce || sampling == TS_SAMPLING_BSDF;
+            L = ts_rgb_add(L, ts_rgb_mul(beta, path_emission(s, fx, &ray, found, &si, full, &prev, prev_pdf)));
         }
         if (!found || bounces >= max_depth) break;
         ts_bsdf bsdf;
         ts_material_bsdf(&s->materials[s->shapes[si.shape].material], &si, &bsdf);
         uint32_t flags = ts_bsdf_flags(&bsdf);
-        if (flags & ~TS_BXDF_SPECULAR & (TS_BXDF_DIFFUSE | TS_BXDF_GLOSSY))
-            L = ts_rgb_add(L, ts_rgb_mul(beta, sample_one_light(s, fx, &si, &bsdf, st, c)));
-        else
-            st->dim += 4; /* keep later dimensions where they would be */
+        if (flags & ~TS_BXDF_SPECULAR & (TS_BXDF_DIFFUSE | TS_BXDF_GLOSSY)) {
+            float u_select = ts_sample_1d(st);
+            ts_vec2 u_light = ts_sample_2d(st);
+            L = ts_rgb_add(L, ts_rgb_mul(beta, path_nee(s, &si, &bsdf, u_select, u_light, c)));
+        } else {
+            st->dim += 2; /* keep later dimensions where they would be */
+        }
         float u_lobe = lobe_u(fx, st);
         ts_vec2 u = ts_sample_2d(st);
         /* Roulette's value is computed only where roulette can happen. */
@@ -246,6 +312,10 @@ static ts_rgb li_path(const ts_scene *s, uint32_t fx, ts_ray ray, ts_sample_stre
          * radiance by 1/1.5², which this undoes for roulette (pbrt's etaScale). */
         if ((fx & TS_EFFECT_SPECULAR_TRANSMISSION) && specular_bounce && (bs.flags & TS_BXDF_TRANSMISSION))
             eta_scale *= bs.eta * bs.eta;
+        if (emitters) {
+            prev = si;
+            prev_pdf = bs.pdf;
+        }
         ray = ts_spawn_ray(&si, s->shapes, bs.wi);
         ts_rgb rr_beta = ts_rgb_scale(beta, eta_scale);
         float m = ts_rgb_max(rr_beta);
