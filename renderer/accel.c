@@ -55,6 +55,7 @@ struct ts_accel {
     /* Written only by the Embree error callback while the creating thread builds; never
      * touched once ts_accel_create has returned. */
     char build_error[256];
+    enum RTCError build_code; /* the first error's code, with build_error */
 };
 
 /* The per-query context: Embree's first, then what our callbacks need. */
@@ -81,6 +82,7 @@ static void on_embree_error(void *user, enum RTCError code, const char *str)
 {
     ts_accel *a = user;
     if (!a || a->build_error[0]) return; /* keep the first */
+    a->build_code = code;
     snprintf(a->build_error, sizeof a->build_error, "%s%s%s", rtc_error_name(code), str ? ": " : "", str ? str : "");
 }
 
@@ -206,8 +208,9 @@ ts_accel *ts_accel_create(const ts_shape *shapes, uint32_t n_shapes, ts_error *e
 
     a->device = rtcNewDevice(EMBREE_DEVICE_CONFIG);
     if (!a->device) {
-        ts_error_set(err, TS_ERR_INTERNAL, "cannot create the Embree device (%s)",
-                     rtc_error_name(rtcGetDeviceError(NULL)));
+        enum RTCError code = rtcGetDeviceError(NULL);
+        ts_error_set(err, code == RTC_ERROR_OUT_OF_MEMORY ? TS_ERR_NOMEM : TS_ERR_INTERNAL,
+                     "cannot create the Embree device (%s)", rtc_error_name(code));
         goto fail_device;
     }
     rtcSetDeviceErrorFunction(a->device, on_embree_error, a);
@@ -240,9 +243,12 @@ ts_accel *ts_accel_create(const ts_shape *shapes, uint32_t n_shapes, ts_error *e
     return a;
 
 fail_embree:
-    if (!a->build_error[0]) snprintf(a->build_error, sizeof a->build_error, "%s", rtc_error_name(rtcGetDeviceError(a->device)));
-    ts_error_set(err, TS_ERR_INTERNAL, "Embree failed to build the scene's ray-intersection structure: %s",
-                 a->build_error);
+    if (!a->build_error[0]) {
+        a->build_code = rtcGetDeviceError(a->device);
+        snprintf(a->build_error, sizeof a->build_error, "%s", rtc_error_name(a->build_code));
+    }
+    ts_error_set(err, a->build_code == RTC_ERROR_OUT_OF_MEMORY ? TS_ERR_NOMEM : TS_ERR_INTERNAL,
+                 "Embree failed to build the scene's ray-intersection structure: %s", a->build_error);
     if (a->scene) rtcReleaseScene(a->scene);
     rtcReleaseDevice(a->device);
 fail_device:

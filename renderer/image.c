@@ -4,6 +4,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <libgen.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -151,10 +152,13 @@ static void sync_parent_dir(const char *path)
 ts_status ts_image_write_file_atomic(const char *path, const void *bytes, size_t len, ts_error *err)
 {
     if (!path || !path[0]) return ts_error_set(err, TS_ERR_INVALID, "no output file name given");
-    size_t n = strlen(path) + 32;
+    /* The temporary name is unique per process and per call, so two threads writing the
+     * same file (a server's submission and its checkpointer) never share one. */
+    static atomic_uint serial;
+    size_t n = strlen(path) + 48;
     char *tmp = malloc(n);
     if (!tmp) return ts_error_set(err, TS_ERR_NOMEM, "out of memory writing '%s'", path);
-    snprintf(tmp, n, "%s.tmp.%ld", path, (long)getpid());
+    snprintf(tmp, n, "%s.tmp.%ld.%u", path, (long)getpid(), atomic_fetch_add(&serial, 1u));
 
     ts_status st = TS_OK;
     int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);

@@ -1,6 +1,7 @@
 /* json_check.c — path-aware JSON validation; see json_check.h. */
 #include "json_check.h"
 
+#include <errno.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdio.h>
@@ -233,24 +234,66 @@ ts_status ts_json_object(const cJSON *obj, const char *path, const char *key, bo
     return TS_OK;
 }
 
+/* Offset of the first byte of text that does not start a complete, shortest-form UTF-8
+ * sequence of a scalar value (no surrogates, at most U+10FFFF), or len. */
+static size_t utf8_invalid_at(const unsigned char *t, size_t len)
+{
+    size_t i = 0;
+    while (i < len) {
+        unsigned c = t[i];
+        size_t n = c < 0x80 ? 1 : (c & 0xe0) == 0xc0 ? 2 : (c & 0xf0) == 0xe0 ? 3 : (c & 0xf8) == 0xf0 ? 4 : 0;
+        if (!n || i + n > len) return i;
+        uint32_t v = n == 1 ? c : n == 2 ? (c & 0x1f) : n == 3 ? (c & 0x0f) : (c & 0x07);
+        for (size_t k = 1; k < n; k++) {
+            if ((t[i + k] & 0xc0) != 0x80) return i;
+            v = (v << 6) | (t[i + k] & 0x3f);
+        }
+        static const uint32_t min[5] = {0, 0, 0x80, 0x800, 0x10000};
+        if (v < min[n] || v > 0x10ffff || (v >= 0xd800 && v <= 0xdfff)) return i;
+        i += n;
+    }
+    return len;
+}
+
+/* Line and column (1-based) of byte off. */
+static void line_col(const char *text, size_t off, int *line, int *col)
+{
+    *line = 1, *col = 1;
+    for (size_t i = 0; i < off; i++) {
+        if (text[i] == '\n') ++*line, *col = 1;
+        else ++*col;
+    }
+}
+
 ts_status ts_json_parse(const char *text, size_t len, cJSON **out, ts_error *err)
 {
     *out = NULL;
+    /* JSON text is UTF-8 (RFC 8259); cJSON would pass other bytes through into names and
+     * messages that the server then echoes. */
+    size_t bad = utf8_invalid_at((const unsigned char *)text, len);
+    if (bad < len) {
+        int line, col;
+        line_col(text, bad, &line, &col);
+        return ts_error_set(err, TS_ERR_INVALID, "the document is not valid UTF-8 at line %d, column %d (byte %zu)",
+                            line, col, bad);
+    }
     const char *end = NULL;
     /* cJSON records the position of a syntax error in a static variable; parses are
      * serialised so concurrent loads (server threads) do not race on it. */
     static pthread_mutex_t parse_lock = PTHREAD_MUTEX_INITIALIZER;
     pthread_mutex_lock(&parse_lock);
+    errno = 0;
     cJSON *doc = cJSON_ParseWithLengthOpts(text, len, &end, 0);
+    /* cJSON answers NULL for a failed allocation too; malloc then set ENOMEM (nothing
+     * else in a parse does: strtod sets at most ERANGE). */
+    bool nomem = !doc && errno == ENOMEM;
     pthread_mutex_unlock(&parse_lock);
+    if (nomem) return ts_error_set(err, TS_ERR_NOMEM, "out of memory while parsing the JSON document");
     if (!doc) {
         /* cJSON reports where it stopped; turn the offset into line and column. */
         size_t off = (end && end >= text && (size_t)(end - text) <= len) ? (size_t)(end - text) : 0;
-        int line = 1, col = 1;
-        for (size_t i = 0; i < off; i++) {
-            if (text[i] == '\n') line++, col = 1;
-            else col++;
-        }
+        int line, col;
+        line_col(text, off, &line, &col);
         if (len == 0) return ts_error_set(err, TS_ERR_INVALID, "the document is empty");
         return ts_error_set(err, TS_ERR_INVALID, "malformed JSON at line %d, column %d (byte %zu)", line, col, off);
     }

@@ -1,10 +1,9 @@
 /* mesh_file.c — Wavefront OBJ and PLY meshes; see mesh_file.h for the accepted formats.
  *
- * Design note: the path is checked lexically (no absolute path, no `..` above the
- * folder), then resolved with realpath and compared with realpath(base_dir); the resolved
- * path is opened with O_NOFOLLOW and must be a regular file. (A folder that is rewritten
- * between the check and the open is outside this module's threat model: scene folders
- * are not writable by the scene's author during a load.)
+ * Design note: confinement and reading are scene_path.c's (one rule for every file a
+ * scene names): the path is checked lexically, resolved with realpath inside the
+ * scene's folder, opened with O_NOFOLLOW, must be a regular file, and its size is checked
+ * against max_file_bytes before the buffer is allocated.
  *
  * The file is read whole into a NUL-terminated buffer, so strtod never runs off the end.
  * OBJ takes two passes: the first counts v/vt/vn statements so the attribute arrays are
@@ -17,14 +16,8 @@
  * the elements in order through one cursor that is either a line reader (ASCII) or a
  * bounds-checked little-endian byte reader (binary). Nothing here is shared between
  * calls, so loads on different threads are independent. */
-#ifndef _XOPEN_SOURCE
-#define _XOPEN_SOURCE 700 /* realpath, O_CLOEXEC, O_NOFOLLOW */
-#endif
-
 #include "mesh_file.h"
 
-#include <errno.h>
-#include <fcntl.h>
 #include <float.h>
 #include <limits.h>
 #include <math.h>
@@ -34,10 +27,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include "hash.h"
+#include "scene_path.h"
 
 #define NO_INDEX UINT32_MAX
 
@@ -82,30 +74,6 @@ static ts_status fail_line(const load_ctx *c, unsigned long line, ts_status st, 
 
 static ts_status nomem(const load_ctx *c) { return fail(c, TS_ERR_NOMEM, "out of memory"); }
 
-static const char *errno_text(int e)
-{
-    switch (e) { /* strerror is not guaranteed thread-safe; these are the ones users meet */
-    case ENOENT:
-        return "no such file or directory";
-    case EACCES:
-        return "permission denied";
-    case ENOTDIR:
-        return "a component of the path is not a folder";
-    case ELOOP:
-        return "too many levels of symbolic links";
-    case ENAMETOOLONG:
-        return "path too long";
-    case EISDIR:
-        return "is a folder";
-    case EIO:
-        return "input/output error";
-    case ENOMEM:
-        return "out of memory";
-    default:
-        return "system error";
-    }
-}
-
 /* Grows *ptr (of *cap elements of size elem) to hold at least need elements. */
 static bool grow(void **ptr, size_t *cap, size_t need, size_t elem)
 {
@@ -123,160 +91,6 @@ static bool grow(void **ptr, size_t *cap, size_t need, size_t elem)
 }
 
 static bool over(uint64_t value, uint64_t limit) { return limit != 0 && value > limit; }
-
-/* ---- path confinement and reading ---- */
-
-static bool path_inside(const char *p, const char *base)
-{
-    size_t n = strlen(base);
-    if (n == 1 && base[0] == '/') return true;
-    return strncmp(p, base, n) == 0 && (p[n] == '/' || p[n] == '\0');
-}
-
-/* The lexical part of confinement: relative, and no `..` above the folder (caught here
- * even when the target is missing). */
-static ts_status check_relative(const load_ctx *c, const char *rel)
-{
-    if (!rel || !*rel) return fail(c, TS_ERR_INVALID, "empty path");
-    if (rel[0] == '/') return fail(c, TS_ERR_INVALID, "absolute paths are not allowed");
-    long depth = 0;
-    for (const char *s = rel; *s;) {
-        while (*s == '/')
-            s++;
-        const char *e = s;
-        while (*e && *e != '/')
-            e++;
-        size_t n = (size_t)(e - s);
-        if (n == 2 && s[0] == '.' && s[1] == '.') {
-            if (--depth < 0) return fail(c, TS_ERR_INVALID, "path leaves the scene's folder");
-        } else if (n > 0 && !(n == 1 && s[0] == '.')) {
-            depth++;
-        }
-        s = e;
-    }
-    return TS_OK;
-}
-
-/* Resolves base_dir/rel (already through check_relative) into *real (malloc-owned),
- * confined to realpath(base_dir). */
-static ts_status resolve_path(const load_ctx *c, const char *base_dir, const char *rel, char **real)
-{
-    *real = NULL;
-    if (!base_dir || !*base_dir) base_dir = ".";
-    char *base_real = realpath(base_dir, NULL);
-    if (!base_real) {
-        int e = errno;
-        return fail(c, e == ENOMEM ? TS_ERR_NOMEM : TS_ERR_IO, "scene folder '%s' cannot be opened (%s)",
-                    base_dir, errno_text(e));
-    }
-    ts_status st = TS_OK;
-    size_t nb = strlen(base_dir), nr = strlen(rel);
-    char *joined = malloc(nb + nr + 2);
-    if (!joined) {
-        st = nomem(c);
-        goto fail_base;
-    }
-    memcpy(joined, base_dir, nb);
-    joined[nb] = '/';
-    memcpy(joined + nb + 1, rel, nr + 1);
-    *real = realpath(joined, NULL);
-    if (!*real) {
-        int e = errno;
-        if (e == ENOMEM) {
-            st = nomem(c);
-            goto fail_joined;
-        }
-        /* Say "leaves the folder" rather than "missing" when the part that does exist
-         * already resolves outside: a symlink must not become a probe for outside paths. */
-        for (size_t cut = nb + 1 + nr; cut > nb;) {
-            while (cut > nb && joined[cut - 1] != '/')
-                cut--;
-            if (cut <= nb) break;
-            joined[--cut] = '\0';
-            char *prefix = realpath(joined, NULL);
-            if (prefix) {
-                bool inside = path_inside(prefix, base_real);
-                free(prefix);
-                if (!inside) {
-                    st = fail(c, TS_ERR_INVALID, "path leaves the scene's folder");
-                    goto fail_joined;
-                }
-                break;
-            }
-        }
-        st = fail(c, TS_ERR_IO, "cannot open (%s)", errno_text(e));
-        goto fail_joined;
-    }
-    if (!path_inside(*real, base_real)) {
-        st = fail(c, TS_ERR_INVALID, "path leaves the scene's folder");
-        free(*real);
-        *real = NULL;
-    }
-fail_joined:
-    free(joined);
-fail_base:
-    free(base_real);
-    return st;
-}
-
-/* Reads the whole regular file at path into *buf (NUL-terminated, malloc-owned). */
-static ts_status read_file(const load_ctx *c, const char *path, char **buf, size_t *size)
-{
-    *buf = NULL;
-    *size = 0;
-    /* O_NONBLOCK: opening a FIFO must not hang; it is refused below as not regular. */
-    int fd = open(path, O_RDONLY | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK);
-    if (fd < 0) return fail(c, TS_ERR_IO, "cannot open (%s)", errno_text(errno));
-    ts_status st = TS_OK;
-    struct stat sb;
-    if (fstat(fd, &sb) != 0) {
-        st = fail(c, TS_ERR_IO, "cannot read (%s)", errno_text(errno));
-        goto fail_fd;
-    }
-    if (!S_ISREG(sb.st_mode)) {
-        st = fail(c, TS_ERR_INVALID, "not a regular file");
-        goto fail_fd;
-    }
-    if (sb.st_size <= 0) {
-        st = fail(c, TS_ERR_INVALID, "file is empty");
-        goto fail_fd;
-    }
-    uint64_t want = (uint64_t)sb.st_size;
-    if (over(want, c->lim.max_file_bytes) || want >= SIZE_MAX) {
-        st =
-            fail(c, TS_ERR_LIMIT, "file is %llu bytes, more than the limit of %llu", (unsigned long long)want,
-                 (unsigned long long)(c->lim.max_file_bytes ? c->lim.max_file_bytes : SIZE_MAX - 1));
-        goto fail_fd;
-    }
-    char *b = malloc((size_t)want + 1);
-    if (!b) {
-        st = nomem(c);
-        goto fail_fd;
-    }
-    size_t got = 0;
-    while (got < want) {
-        ssize_t r = read(fd, b + got, (size_t)want - got);
-        if (r < 0) {
-            if (errno == EINTR) continue;
-            st = fail(c, TS_ERR_IO, "cannot read (%s)", errno_text(errno));
-            free(b);
-            goto fail_fd;
-        }
-        if (r == 0) break; /* shrank since fstat: parse what is there */
-        got += (size_t)r;
-    }
-    if (got == 0) {
-        st = fail(c, TS_ERR_INVALID, "file is empty");
-        free(b);
-        goto fail_fd;
-    }
-    b[got] = '\0';
-    *buf = b;
-    *size = got;
-fail_fd:
-    close(fd);
-    return st;
-}
 
 /* ---- small lexical helpers shared by both formats ---- */
 
@@ -1369,21 +1183,18 @@ ts_status ts_mesh_file_load(const char *base_dir, const char *rel_path, const ts
     if (limits) c.lim = *limits;
     if (!out) return fail(&c, TS_ERR_INVALID, "no output mesh given");
     *out = (ts_mesh_data){0};
-    ts_status st = check_relative(&c, rel_path);
-    if (st) return st;
-    const char *slash = strrchr(rel_path, '/'), *leaf = slash ? slash + 1 : rel_path;
+    if (!*c.name) return fail(&c, TS_ERR_INVALID, "empty path");
+    const char *slash = strrchr(c.name, '/'), *leaf = slash ? slash + 1 : c.name;
     const char *dot = strrchr(leaf, '.');
     bool is_obj = dot && ext_is(dot + 1, "obj"), is_ply = dot && ext_is(dot + 1, "ply");
     if (!is_obj && !is_ply) return fail(&c, TS_ERR_INVALID, "unknown extension (expected .obj or .ply)");
-    char *real;
-    if ((st = resolve_path(&c, base_dir, rel_path, &real))) return st;
     char *buf;
     size_t size;
-    if ((st = read_file(&c, real, &buf, &size))) goto fail_real;
+    ts_status st = ts_scene_path_read(base_dir && *base_dir ? base_dir : ".", c.name, "mesh file",
+                                      c.lim.max_file_bytes, &buf, &size, err);
+    if (st) return st;
     st = parse_buffer(&c, is_obj, buf, size, out);
     free(buf);
-fail_real:
-    free(real);
     return st;
 }
 

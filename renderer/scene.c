@@ -16,6 +16,7 @@
 
 #include "effects.h"
 #include "envmap.h"
+#include "exr.h"
 #include "fourier_bsdf.h"
 #include "json_check.h"
 #include "mesh_file.h"
@@ -436,10 +437,13 @@ static ts_status parse_material(loader *ld, const cJSON *m, const char *path, ts
         const char *file;
         TRY(ts_json_string(m, path, "file", true, &file, ld->err));
         ts_jpath fp = ts_jpath_key(path, "file");
-        char full[PATH_MAX];
-        TRY(ts_scene_path_resolve(ld->s->base_dir, file, full, sizeof full, ld->err));
+        char *bytes = NULL;
+        size_t n_bytes = 0;
         struct ts_fourier_table *t = NULL;
-        ts_status st = ts_fourier_table_load(full, &t, ld->err);
+        ts_status st = ts_scene_path_read(ld->s->base_dir, file, "Fourier BSDF file", ld->lim->max_file_bytes, &bytes,
+                                          &n_bytes, ld->err);
+        if (!st) st = ts_fourier_table_load_memory((const unsigned char *)bytes, n_bytes, file, &t, ld->err);
+        free(bytes);
         if (st) {
             ts_error_prefix(ld->err, "%s", fp.s);
             return st;
@@ -538,7 +542,8 @@ static ts_status parse_mesh(loader *ld, const cJSON *sh, const char *path, const
         ts_mesh_data md = {0};
         ts_status st;
         if (!s->base_dir)
-            st = ts_error_set(ld->err, TS_ERR_INVALID, "mesh file '%s': this scene may not reference files", file);
+            st = ts_error_set(ld->err, TS_ERR_INVALID,
+                              "mesh file '%s': this scene may not refer to files (no asset folder is configured)", file);
         else
             st = ts_mesh_file_load(s->base_dir, file, &ml, &md, ld->err);
         if (st) {
@@ -808,11 +813,20 @@ static ts_status parse_light(loader *ld, const cJSON *l, const char *path, ts_li
         } else {
             out->color = ts_rgb_gray(1);
             TRY(ts_json_rgb(l, path, "scale", false, TS_J_NONNEG, &out->color, ld->err));
-            char full[PATH_MAX];
             ts_jpath mp = ts_jpath_key(path, "map");
-            ts_status st = ts_scene_path_resolve(ld->s->base_dir, map, full, sizeof full, ld->err);
+            char *bytes = NULL;
+            size_t n_bytes = 0;
             struct ts_envmap *em = NULL;
-            if (!st) st = ts_envmap_load(full, &em, ld->err);
+            ts_status st = ts_scene_path_read(ld->s->base_dir, map, "environment map", ld->lim->max_file_bytes, &bytes,
+                                              &n_bytes, ld->err);
+            if (!st) {
+                ts_image img = {0};
+                st = ts_exr_read_memory((const unsigned char *)bytes, n_bytes, &img, ld->err);
+                if (st) ts_error_prefix(ld->err, "environment map '%s'", map);
+                else st = ts_envmap_from_image(&img, map, &em, ld->err);
+                ts_image_fini(&img);
+            }
+            free(bytes);
             if (st) {
                 ts_error_prefix(ld->err, "%s", mp.s);
                 return st;
