@@ -1,7 +1,7 @@
 # tessera — the README's two commands, set-up included.
 #   make run    install what is missing, build, render the built-in Cornell box, serve it
 #   make test   install what is missing, build, run the whole suite through ctest
-# Also: make build, make deps, make test-asan, make test-tsan, make fuzz, make bench, make clean.
+# Also: make build, make deps, make test-asan, make test-tsan, make fuzz, make bench (+ bench-deps), make clean.
 
 BUILD      ?= build
 BUILD_TYPE ?= Release
@@ -11,15 +11,20 @@ CMAKE_ARGS ?=
 # Debian packages the build and tests need (DESIGN.md §3).
 DEB_PACKAGES := cmake make gcc pkg-config libembree-dev libopenexr-dev libpng-dev libcjson-dev nettle-dev \
                 libmicrohttpd-dev libcmocka-dev libcurl4-openssl-dev \
-                clang libclang-rt-14-dev
-# (clang + libclang-rt: the libFuzzer harnesses, whose smoke runs are part of `make test`.)
+                clang libclang-rt-14-dev wrk curl
+# (clang + libclang-rt: the libFuzzer harnesses, whose smoke runs are part of `make test`;
+#  wrk + curl: the load test bench/load, whose light version is part of `make test`.)
 # Optional: installed when possible; without them the tests that need them say so and skip.
 #  chromium: the browser tests of the web UI, tests/browser.
 OPTIONAL_PACKAGES := chromium
+# Benchmark-only (installed by `make bench`, never by `make test`): Blender for the Cycles
+# comparison (bench/cycles), bc for the timing arithmetic of the bench scripts, valgrind for
+# the instruction counts of bench_effects, gnuplot-nox for the accuracy plots.
+BENCH_PACKAGES := blender bc valgrind gnuplot-nox
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: all run test build deps test-asan test-tsan fuzz fuzz-build bench clean
+.PHONY: all run test build deps test-asan test-tsan fuzz fuzz-build bench bench-deps clean
 
 all: build
 
@@ -83,7 +88,7 @@ test-tsan:
 # $(FUZZ_BUILD)/fuzz-corpus. `make test` runs each for a few seconds (ctest fuzz_*).
 FUZZ_BUILD   ?= build-fuzz
 FUZZ_SECONDS ?= 60
-FUZZERS      ?= scene obj ply bsdf exr json
+FUZZERS      ?= scene obj ply bsdf exr json http sse
 
 $(FUZZ_BUILD)/CMakeCache.txt: | deps
 	CC=clang cmake -S . -B $(FUZZ_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTS_FUZZ=ON -DTS_WERROR=OFF
@@ -94,7 +99,19 @@ fuzz-build: deps $(FUZZ_BUILD)/CMakeCache.txt
 fuzz: fuzz-build
 	tests/fuzz/run.sh --keep $(FUZZ_BUILD) $(FUZZ_SECONDS) $(FUZZERS)
 
-bench: build
+bench-deps:
+	@missing=""; \
+	for p in $(BENCH_PACKAGES); do \
+	  dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q '^install ok installed' || missing="$$missing $$p"; \
+	done; \
+	if [ -n "$$missing" ]; then \
+	  echo "bench-deps: installing from Debian:$$missing"; \
+	  $(SUDO) apt-get update -qq && \
+	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $$missing >/dev/null && \
+	  echo "bench-deps: done"; \
+	fi
+
+bench: build bench-deps
 	@if [ -x bench/run ]; then bench/run $(BUILD); else echo "bench: no benchmarks yet"; fi
 
 clean:

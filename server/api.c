@@ -11,6 +11,7 @@
 #include "exr.h"
 #include "film_image.h"
 #include "job_store.h"
+#include "persist.h"
 #include "png_encode.h"
 #include "scheduler.h"
 
@@ -87,6 +88,18 @@ static int reply_cjson(srv_request *r, unsigned status, cJSON *o)
     return ret;
 }
 
+/* True when given equals the configured token. The time taken depends only on the
+ * configured token's length, never on where the first difference is: every byte of the
+ * token is compared (no early exit; past the end of given, its terminating NUL is used),
+ * and a length mismatch is folded into the result rather than tested first. */
+static bool token_matches(const char *given, const char *token)
+{
+    size_t a = strlen(given), b = strlen(token);
+    volatile unsigned diff = a != b;
+    for (size_t i = 0; i < b; i++) diff |= (unsigned char)token[i] ^ (unsigned char)given[i < a ? i : a];
+    return diff == 0;
+}
+
 static bool authorised(srv_request *r)
 {
     const char *token = r->srv->cfg.token;
@@ -96,11 +109,7 @@ static bool authorised(srv_request *r)
     if (h && !strncasecmp(h, "Bearer ", 7)) given = h + 7;
     /* EventSource cannot send headers: the token may come as ?access_token=. */
     if (!given) given = MHD_lookup_connection_value(r->conn, MHD_GET_ARGUMENT_KIND, "access_token");
-    if (!given) return false;
-    size_t a = strlen(given), b = strlen(token);
-    unsigned diff = (unsigned)(a ^ b);
-    for (size_t i = 0; i < b; i++) diff |= (unsigned char)token[i] ^ (unsigned char)(i < a ? given[i] : 0);
-    return diff == 0;
+    return given && token_matches(given, token);
 }
 
 /* ---------------------------------------------------------------- images (deferred) */
@@ -219,20 +228,20 @@ static int get_image(srv_request *r, srv_job *j, const parsed *p)
 static void initial_state(void *arg, srv_events_append_fn append, void *ctx)
 {
     srv_job *j = arg;
-    char url[160];
     for (int ty = 0; ty < j->ny; ty++)
         for (int tx = 0; tx < j->nx; tx++) {
             ts_tile_snapshot *s = j->sj ? ts_sched_job_tile(j->sj, tx, ty) : NULL;
             if (!s) continue;
-            char buf[640];
-            int n = snprintf(buf, sizeof buf, "{\"tx\":%d,\"ty\":%d,\"x\":%d,\"y\":%d,\"w\":%d,\"h\":%d,\"spp\":%u,", s->tx,
-                             s->ty, s->x, s->y, s->w, s->h, s->spp);
-            snprintf(url, sizeof url, "/api/v1/jobs/%s/tiles/%d/%d", j->id, tx, ty);
-            snprintf(buf + n, sizeof buf - (size_t)n, "\"png\":\"%s.png\",\"exr\":\"%s.exr\"}", url, url);
+            /* The same document as the live `tile` events (job_store.c). */
+            ts_tile_event ev = {s->tx, s->ty, s->x, s->y, s->w, s->h, s->spp};
             ts_tile_snapshot_release(s);
-            char *e = srv_events_format("tile", buf);
+            cJSON *o = srv_job_tile_json(j, &ev);
+            char *t = o ? cJSON_PrintUnformatted(o) : NULL;
+            cJSON_Delete(o);
+            char *e = t ? srv_events_format("tile", t) : NULL;
             if (e) append(ctx, e);
             free(e);
+            free(t);
         }
     if (!j->sj) return;
     ts_job_progress p;
@@ -275,6 +284,13 @@ static int post_job(srv_request *r)
     int status = 500;
     srv_job *j = srv_store_submit(r->srv->store, r->body, r->body_len, &status, &err);
     if (!j) return srv_http_error(r, (unsigned)status, "%s", err.message);
+    if (r->srv->cfg.data_dir) {
+        /* On disk before the 201: an accepted job is not lost to a crash before its first
+         * checkpoint. If that fails the job renders on and its status says why. */
+        ts_error perr = {0};
+        if (srv_persist_save_submitted(r->srv->cfg.data_dir, j, &perr) && srv_job_set_checkpoint_error(j, perr.message))
+            fprintf(stderr, "tessera: recording job %s failed, it renders on unrecorded: %s\n", j->id, perr.message);
+    }
     cJSON *o = srv_job_status_json(j);
     char loc[96];
     snprintf(loc, sizeof loc, API_PREFIX "/%s", j->id);
@@ -413,6 +429,12 @@ int srv_api_handle(srv_request *r)
     if (!j) return srv_http_error(r, 404, "no job with id '%s'", p.id);
     switch (p.route) {
     case SRV_ROUTE_JOB: {
+        if (!strcmp(m, "DELETE") && (j->failure[0] || ts_job_state_finished(srv_job_state(j)))) {
+            /* A finished job is deleted: its slot (--max-jobs) and its files are freed. */
+            if (srv_store_remove(r->srv->store, j) && cfg->data_dir) srv_persist_remove(cfg->data_dir, j);
+            srv_job_release(j);
+            return srv_http_reply(r, 204, NULL, "", 0);
+        }
         if (!strcmp(m, "DELETE") && j->sj) ts_sched_job_cancel(j->sj);
         cJSON *o = srv_job_status_json(j);
         srv_job_release(j);

@@ -67,9 +67,26 @@ static void wake(sub *s)
 
 char *srv_events_format(const char *name, const char *json)
 {
-    size_t n = strlen(name) + strlen(json) + 32;
+    /* A line break inside the data (CR, LF or CR LF; never in cJSON's unformatted output)
+     * would end the field: each line goes on a `data:` line of its own, which the client
+     * joins with LF (the SSE framing of the HTML standard). */
+    size_t lines = 1, len = strlen(json);
+    for (size_t i = 0; i < len; i++)
+        if (json[i] == '\n' || (json[i] == '\r' && json[i + 1] != '\n')) lines++;
+    size_t n = strlen(name) + len + 6 * lines + 16;
     char *t = malloc(n);
-    if (t) snprintf(t, n, "event: %s\ndata: %s\n\n", name, json);
+    if (!t) return NULL;
+    size_t at = (size_t)snprintf(t, n, "event: %s\ndata: ", name);
+    for (size_t i = 0; i < len; i++) {
+        if (json[i] == '\r' || json[i] == '\n') {
+            if (json[i] == '\r' && json[i + 1] == '\n') i++;
+            memcpy(t + at, "\ndata: ", 7);
+            at += 7;
+        } else {
+            t[at++] = json[i];
+        }
+    }
+    memcpy(t + at, "\n\n", 3);
     return t;
 }
 

@@ -37,7 +37,8 @@ struct MHD_Response *srv_events_subscribe(srv_events *h, struct MHD_Connection *
                                           void (*initial)(void *arg, srv_events_append_fn append, void *ctx),
                                           void *arg);
 
-/* Formats one event into a malloc'd string ("event: …\ndata: …\n\n"). */
+/* Formats one event into a malloc'd string ("event: …\ndata: …\n\n"); each line of a
+ * multi-line `json` gets its own data line. `name` is a token (no line break). */
 char *srv_events_format(const char *name, const char *json);
 
 #endif

@@ -54,13 +54,42 @@ int srv_http_reply_json(srv_request *r, unsigned status, const char *json)
     return srv_http_reply(r, status, "application/json", json, strlen(json));
 }
 
+/* Copies s into out (out_len > 0) as valid UTF-8: each byte that does not start a
+ * complete, shortest-form sequence becomes U+FFFD; stops at a character boundary when out
+ * is full. Error sentences quote the client's URL and scene text and are cut to fit
+ * buffers, possibly inside a character; JSON must be UTF-8 (RFC 8259). */
+static void utf8_clean(const char *s, char *out, size_t out_len)
+{
+    const unsigned char *u = (const unsigned char *)s;
+    size_t at = 0;
+    while (*u) {
+        unsigned c = u[0];
+        size_t n = c < 0x80 ? 1 : c >= 0xc2 && c <= 0xdf ? 2 : c >= 0xe0 && c <= 0xef ? 3 : 0;
+        if (c >= 0xf0 && c <= 0xf4) n = 4;
+        for (size_t i = 1; i < n; i++)
+            if ((u[i] & 0xc0) != 0x80) n = 0;
+        /* overlong forms, UTF-16 surrogates, beyond U+10FFFF */
+        if ((n == 3 && ((c == 0xe0 && u[1] < 0xa0) || (c == 0xed && u[1] >= 0xa0))) ||
+            (n == 4 && ((c == 0xf0 && u[1] < 0x90) || (c == 0xf4 && u[1] >= 0x90))))
+            n = 0;
+        const char *src = n ? (const char *)u : "\xef\xbf\xbd";
+        size_t len = n ? n : 3;
+        if (at + len >= out_len) break;
+        memcpy(out + at, src, len);
+        at += len;
+        u += n ? n : 1;
+    }
+    out[at] = '\0';
+}
+
 int srv_http_error(srv_request *r, unsigned status, const char *fmt, ...)
 {
-    char msg[1024];
+    char text[1024], msg[1024];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
+    vsnprintf(text, sizeof text, fmt, ap);
     va_end(ap);
+    utf8_clean(text, msg, sizeof msg);
     cJSON *o = cJSON_CreateObject();
     cJSON_AddStringToObject(o, "error", msg);
     cJSON_AddNumberToObject(o, "status", status);
@@ -73,10 +102,22 @@ int srv_http_error(srv_request *r, unsigned status, const char *fmt, ...)
 
 int srv_http_method_not_allowed(srv_request *r, const char *allow)
 {
-    char msg[256];
-    snprintf(msg, sizeof msg, "{\"error\":\"method %s is not allowed here; allowed: %s\",\"status\":405}", r->method, allow);
-    struct MHD_Response *resp = MHD_create_response_from_buffer(strlen(msg), msg, MHD_RESPMEM_MUST_COPY);
-    if (!resp) return MHD_NO;
+    /* The method is the client's: through cJSON, so quotes and backslashes in it are escaped
+     * (found by tests/fuzz/fuzz_http.c). */
+    char text[256], clean[256];
+    snprintf(text, sizeof text, "method %s is not allowed here; allowed: %s", r->method, allow);
+    utf8_clean(text, clean, sizeof clean);
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddStringToObject(o, "error", clean);
+    cJSON_AddNumberToObject(o, "status", 405);
+    char *msg = cJSON_PrintUnformatted(o);
+    cJSON_Delete(o);
+    if (!msg) return MHD_NO;
+    struct MHD_Response *resp = MHD_create_response_from_buffer(strlen(msg), msg, MHD_RESPMEM_MUST_FREE);
+    if (!resp) {
+        free(msg);
+        return MHD_NO;
+    }
     MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, "application/json");
     MHD_add_response_header(resp, MHD_HTTP_HEADER_ALLOW, allow);
     return srv_http_queue(r, 405, resp);
@@ -225,7 +266,11 @@ srv_http *srv_http_start(srv_server *srv, int *port_out, char *err, size_t err_l
                             MHD_OPTION_NOTIFY_COMPLETED, completed, srv,
                             MHD_OPTION_THREAD_POOL_SIZE, (unsigned)(srv->cfg.http_threads > 0 ? srv->cfg.http_threads : 1),
                             MHD_OPTION_CONNECTION_LIMIT, (unsigned)4000,
-                            MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)120,
+                            /* Slow clients hold no thread (the pool polls); these bound
+                             * what they hold: idle connections close, and one address may
+                             * keep only so many open (more are refused at accept). */
+                            MHD_OPTION_CONNECTION_TIMEOUT, srv->cfg.client_timeout_s ? srv->cfg.client_timeout_s : 60u,
+                            MHD_OPTION_PER_IP_CONNECTION_LIMIT, srv->cfg.max_client_conns,
                             MHD_OPTION_LISTEN_BACKLOG_SIZE, (unsigned)1024,
                             MHD_OPTION_END);
     if (!h->d) {
@@ -247,6 +292,12 @@ void srv_http_quiesce(srv_http *h)
     if (!h || !h->d) return;
     MHD_socket fd = MHD_quiesce_daemon(h->d);
     if (fd != MHD_INVALID_SOCKET) close(fd);
+}
+
+unsigned srv_http_connections(srv_http *h)
+{
+    const union MHD_DaemonInfo *info = h && h->d ? MHD_get_daemon_info(h->d, MHD_DAEMON_INFO_CURRENT_CONNECTIONS) : NULL;
+    return info ? info->num_connections : 0;
 }
 
 void srv_http_stop(srv_http *h)

@@ -47,6 +47,9 @@ srv_http *srv_http_start(srv_server *srv, int *port_out, char *err, size_t err_l
 /* Stops accepting connections (existing ones continue). */
 void srv_http_quiesce(srv_http *h);
 void srv_http_stop(srv_http *h);
+/* Connections the daemon holds now (a request's completion callback has run once its
+ * connection is no longer counted): for tests. */
+unsigned srv_http_connections(srv_http *h);
 
 /* Replies (from a handler). body is copied. Adds CORS headers when configured. */
 int srv_http_reply(srv_request *r, unsigned status, const char *type, const void *body, size_t len);

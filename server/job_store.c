@@ -15,6 +15,8 @@ struct srv_store {
     srv_server *srv;
     pthread_mutex_t mu;
     srv_job *jobs; /* guarded by mu: newest first */
+    int n_jobs;    /* guarded by mu: jobs in the list */
+    int n_pending; /* guarded by mu: submissions that hold a slot and are not in the list yet */
 };
 
 srv_store *srv_store_create(srv_server *srv)
@@ -30,6 +32,8 @@ static void job_free(srv_job *j)
 {
     ts_sched_job_release(j->sj);
     srv_events_destroy(j->events);
+    pthread_mutex_destroy(&j->ckpt_mu);
+    pthread_mutex_destroy(&j->disk_mu);
     free(j->name);
     free(j->scene_text);
     free(j);
@@ -59,6 +63,7 @@ static void store_add(srv_store *st, srv_job *j)
     pthread_mutex_lock(&st->mu);
     j->next = st->jobs;
     st->jobs = j;
+    st->n_jobs++;
     pthread_mutex_unlock(&st->mu);
 }
 
@@ -70,6 +75,22 @@ srv_job *srv_store_get(srv_store *st, const char *id)
     if (j) atomic_fetch_add(&j->refs, 1);
     pthread_mutex_unlock(&st->mu);
     return j;
+}
+
+bool srv_store_remove(srv_store *st, srv_job *j)
+{
+    pthread_mutex_lock(&st->mu);
+    srv_job **link = &st->jobs;
+    while (*link && *link != j) link = &(*link)->next;
+    bool found = *link == j;
+    if (found) {
+        *link = j->next;
+        j->next = NULL;
+        st->n_jobs--;
+    }
+    pthread_mutex_unlock(&st->mu);
+    if (found) srv_job_release(j); /* the list's reference */
+    return found;
 }
 
 srv_job **srv_store_list(srv_store *st, int *n)
@@ -104,20 +125,20 @@ static void publish_json(srv_job *j, const char *name, cJSON *o)
     free(s);
 }
 
-static cJSON *tile_json(const srv_job *j, int tx, int ty, int x, int y, int w, int h, uint32_t spp)
+cJSON *srv_job_tile_json(const srv_job *j, const ts_tile_event *ev)
 {
     cJSON *o = cJSON_CreateObject();
     char url[160];
-    cJSON_AddNumberToObject(o, "tx", tx);
-    cJSON_AddNumberToObject(o, "ty", ty);
-    cJSON_AddNumberToObject(o, "x", x);
-    cJSON_AddNumberToObject(o, "y", y);
-    cJSON_AddNumberToObject(o, "w", w);
-    cJSON_AddNumberToObject(o, "h", h);
-    cJSON_AddNumberToObject(o, "spp", spp);
-    snprintf(url, sizeof url, "/api/v1/jobs/%s/tiles/%d/%d.png", j->id, tx, ty);
+    cJSON_AddNumberToObject(o, "tx", ev->tx);
+    cJSON_AddNumberToObject(o, "ty", ev->ty);
+    cJSON_AddNumberToObject(o, "x", ev->x);
+    cJSON_AddNumberToObject(o, "y", ev->y);
+    cJSON_AddNumberToObject(o, "w", ev->w);
+    cJSON_AddNumberToObject(o, "h", ev->h);
+    cJSON_AddNumberToObject(o, "spp", ev->spp);
+    snprintf(url, sizeof url, "/api/v1/jobs/%s/tiles/%d/%d.png", j->id, ev->tx, ev->ty);
     cJSON_AddStringToObject(o, "png", url);
-    snprintf(url, sizeof url, "/api/v1/jobs/%s/tiles/%d/%d.exr", j->id, tx, ty);
+    snprintf(url, sizeof url, "/api/v1/jobs/%s/tiles/%d/%d.exr", j->id, ev->tx, ev->ty);
     cJSON_AddStringToObject(o, "exr", url);
     return o;
 }
@@ -127,7 +148,7 @@ static void on_tile(void *user, ts_sched_job *sj, const ts_tile_event *ev)
     (void)sj;
     srv_job *j = user;
     atomic_fetch_add(&j->version, 1);
-    publish_json(j, "tile", tile_json(j, ev->tx, ev->ty, ev->x, ev->y, ev->w, ev->h, ev->spp));
+    publish_json(j, "tile", srv_job_tile_json(j, ev));
 }
 
 static void on_pass(void *user, ts_sched_job *sj, const ts_job_progress *p)
@@ -168,6 +189,8 @@ static srv_job *job_new(srv_store *st, const char *id, const char *text, size_t 
     if (!j) return NULL;
     atomic_init(&j->refs, 1);
     atomic_init(&j->version, 1);
+    pthread_mutex_init(&j->ckpt_mu, NULL);
+    pthread_mutex_init(&j->disk_mu, NULL);
     j->srv = st->srv;
     j->events = srv_events_create();
     j->scene_text = malloc(len + 1);
@@ -183,19 +206,56 @@ static srv_job *job_new(srv_store *st, const char *id, const char *text, size_t 
     return j;
 }
 
-static void describe_scene(srv_job *j, const ts_scene *s)
+/* False when out of memory for the name. */
+static bool describe_scene(srv_job *j, const ts_scene *s)
 {
-    if (!j->name && s->job.name) j->name = strdup(s->job.name);
-    else if (!j->name && s->name) j->name = strdup(s->name);
+    const char *name = s->job.name ? s->job.name : s->name;
+    if (!j->name && name && !(j->name = strdup(name))) return false;
     snprintf(j->integrator, sizeof j->integrator, "%s", ts_integrator_name(s->integrator.type));
     ts_effects_format(s->effects, j->effects, sizeof j->effects);
     j->full_w = s->width, j->full_h = s->height;
     j->x0 = s->crop_x0, j->y0 = s->crop_y0, j->w = s->crop_x1 - s->crop_x0, j->h = s->crop_y1 - s->crop_y0;
     j->nx = (j->w + TS_TILE_SIZE - 1) / TS_TILE_SIZE;
     j->ny = (j->h + TS_TILE_SIZE - 1) / TS_TILE_SIZE;
+    return true;
 }
 
+/* Takes a slot for one more job if the store holds fewer than cfg.max_jobs (0: no limit),
+ * counting submissions under way, so concurrent POSTs cannot overshoot. */
+static bool reserve_slot(srv_store *st, int max_jobs)
+{
+    pthread_mutex_lock(&st->mu);
+    bool ok = max_jobs <= 0 || st->n_jobs + st->n_pending < max_jobs;
+    if (ok) st->n_pending++;
+    pthread_mutex_unlock(&st->mu);
+    return ok;
+}
+
+static void release_slot(srv_store *st)
+{
+    pthread_mutex_lock(&st->mu);
+    st->n_pending--;
+    pthread_mutex_unlock(&st->mu);
+}
+
+static srv_job *submit(srv_store *st, const char *text, size_t len, int *http_status, ts_error *err);
+
 srv_job *srv_store_submit(srv_store *st, const char *text, size_t len, int *http_status, ts_error *err)
+{
+    /* Checked before the document is parsed: a full server allocates nothing for it. */
+    int max_jobs = st->srv->cfg.max_jobs;
+    if (!reserve_slot(st, max_jobs)) {
+        *http_status = 503;
+        ts_error_set(err, TS_ERR_LIMIT,
+                     "this server already holds %d jobs, its limit (--max-jobs); no new job can be queued", max_jobs);
+        return NULL;
+    }
+    srv_job *j = submit(st, text, len, http_status, err);
+    release_slot(st); /* after store_add: the job now counts in n_jobs */
+    return j;
+}
+
+static srv_job *submit(srv_store *st, const char *text, size_t len, int *http_status, ts_error *err)
 {
     const srv_config *cfg = &st->srv->cfg;
     /* Resolution and spp are checked here (422) against the server's limits; the loader
@@ -205,7 +265,7 @@ srv_job *srv_store_submit(srv_store *st, const char *text, size_t len, int *http
     lim.max_width = def.max_width, lim.max_height = def.max_height;
     lim.max_pixels = def.max_pixels, lim.max_spp = def.max_spp;
     ts_scene *s = NULL;
-    ts_status stt = ts_scene_load_text(text, len, NULL, "scene", &lim, &s, err);
+    ts_status stt = ts_scene_load_text(text, len, cfg->assets_dir, "scene", &lim, &s, err);
     if (stt) {
         *http_status = stt == TS_ERR_LIMIT ? 413 : stt == TS_ERR_NOMEM ? 500 : 400;
         return NULL;
@@ -233,11 +293,11 @@ srv_job *srv_store_submit(srv_store *st, const char *text, size_t len, int *http
     }
     *http_status = 500;
     srv_job *j = job_new(st, NULL, text, len);
-    if (!j) {
+    if (!j || !describe_scene(j, s)) {
         ts_error_set(err, TS_ERR_NOMEM, "out of memory for a job");
+        if (j) job_free(j);
         goto fail_scene;
     }
-    describe_scene(j, s);
     j->priority = s->job.priority;
     j->spp_target = spp;
     j->time_limit_s = s->job.time_limit_s;
@@ -253,17 +313,20 @@ srv_job *srv_store_submit(srv_store *st, const char *text, size_t len, int *http
     d.time_limit_s = j->time_limit_s;
     d.target_error = j->target_error;
     d.callbacks = (ts_job_callbacks){on_tile, on_pass, on_done, j};
-    /* The store holds the job before the scheduler can call back into it. */
-    store_add(st, j); /* the store's reference outlives the scheduler job and its callbacks */
+    /* j->sj is set before the job is listed (store_add's lock publishes it to the threads
+     * that find the job there); our reference keeps j alive for the scheduler's callbacks
+     * until the store holds its own, which outlives them. */
     j->sj = ts_scheduler_submit(st->srv->sched, &d, err);
     if (!j->sj) {
         /* Unlikely (out of memory): it stays in the store as failed. */
         snprintf(j->failure, sizeof j->failure, "%s", err->message);
         srv_events_close(j->events);
+        store_add(st, j);
         srv_job_release(j);
         ts_scene_destroy(s);
         return NULL;
     }
+    store_add(st, j);
     *http_status = 201;
     return j;
 fail_scene:
@@ -283,8 +346,11 @@ srv_job *srv_store_restore(srv_store *st, const srv_restore *r, ts_error *err)
     j->time_limit_s = r->time_limit_s;
     j->target_error = r->target_error;
     j->created_unix = r->created_unix;
-    if (r->name) j->name = strdup(r->name);
-    if (r->scene) describe_scene(j, r->scene);
+    if ((r->name && !(j->name = strdup(r->name))) || (r->scene && !describe_scene(j, r->scene))) {
+        job_free(j);
+        ts_error_set(err, TS_ERR_NOMEM, "out of memory for a job");
+        return NULL;
+    }
     if (r->failure) snprintf(j->failure, sizeof j->failure, "%s", r->failure);
     if (!r->scene && r->film) {
         j->full_w = r->film->full_width, j->full_h = r->film->full_height;
@@ -319,8 +385,8 @@ srv_job *srv_store_restore(srv_store *st, const srv_restore *r, ts_error *err)
         d.full_width = r->film->full_width;
         d.full_height = r->film->full_height;
     }
-    store_add(st, j);
     j->sj = ts_scheduler_submit(st->srv->sched, &d, err);
+    store_add(st, j); /* after j->sj is set, as in submit */
     if (!j->sj) {
         snprintf(j->failure, sizeof j->failure, "%s", err->message);
         srv_events_close(j->events);
@@ -332,6 +398,15 @@ srv_job *srv_store_restore(srv_store *st, const srv_restore *r, ts_error *err)
 }
 
 /* ---------------------------------------------------------------- status */
+
+bool srv_job_set_checkpoint_error(srv_job *j, const char *message)
+{
+    pthread_mutex_lock(&j->ckpt_mu);
+    bool changed = strcmp(j->checkpoint_error, message ? message : "") != 0;
+    snprintf(j->checkpoint_error, sizeof j->checkpoint_error, "%s", message ? message : "");
+    pthread_mutex_unlock(&j->ckpt_mu);
+    return changed;
+}
 
 ts_job_state srv_job_state(srv_job *j)
 {
@@ -375,6 +450,9 @@ cJSON *srv_job_status_json(srv_job *j)
     else cJSON_AddNullToObject(o, "name");
     cJSON_AddStringToObject(o, "state", j->failure[0] ? "failed" : ts_job_state_name(p.state));
     if (j->failure[0]) cJSON_AddStringToObject(o, "error", j->failure);
+    pthread_mutex_lock(&j->ckpt_mu);
+    if (j->checkpoint_error[0]) cJSON_AddStringToObject(o, "checkpoint_error", j->checkpoint_error);
+    pthread_mutex_unlock(&j->ckpt_mu);
     cJSON_AddNumberToObject(o, "priority", j->priority);
     cJSON_AddNumberToObject(o, "created_at", j->created_unix);
     cJSON_AddNumberToObject(o, "spp_done", p.spp_done);

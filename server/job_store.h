@@ -37,6 +37,14 @@ typedef struct srv_job {
     srv_events *events;
     srv_server *srv;
     char failure[512];           /* why a restored job failed, or "" */
+    /* The last checkpoint's failure ("" when it was written): set by the maintenance
+     * thread, read by status requests; guarded by ckpt_mu. */
+    pthread_mutex_t ckpt_mu;
+    char checkpoint_error[512];
+    /* Serialises the job's files under --data (checkpoints and removal); removed is set
+     * under it when the job has been deleted, after which nothing writes them again. */
+    pthread_mutex_t disk_mu;
+    bool removed;
     /* atomic: bumped whenever the pixels or the state change */
     atomic_uint_fast64_t version;
     uint64_t saved_version;      /* maintenance thread only */
@@ -49,8 +57,10 @@ srv_store *srv_store_create(srv_server *srv);
 /* Releases every job (after the scheduler and HTTP daemon stopped). */
 void srv_store_destroy(srv_store *st);
 
-/* Loads, checks and queues a posted scene. On failure NULL, *http_status (400, 413, 422,
- * 500) and err's sentence say why. The returned job carries a reference for the caller. */
+/* Loads, checks and queues a posted scene; file references resolve inside cfg.assets_dir
+ * (none without it). On failure NULL, *http_status (400, 413, 422, 500, or 503 when the
+ * store already holds cfg.max_jobs jobs — checked before the document is parsed) and
+ * err's sentence say why. The returned job carries a reference for the caller. */
 srv_job *srv_store_submit(srv_store *st, const char *text, size_t len, int *http_status, ts_error *err);
 
 /* Restores a checkpointed job (persist.c): takes ownership of scene (may be NULL when
@@ -73,6 +83,9 @@ srv_job *srv_store_restore(srv_store *st, const srv_restore *r, ts_error *err);
 
 /* A new reference to the job with that id, or NULL. */
 srv_job *srv_store_get(srv_store *st, const char *id);
+/* Takes a finished job out of the store (DELETE of a done, cancelled or failed job):
+ * false if it was not listed. Holders of a reference keep it until they release it. */
+bool srv_store_remove(srv_store *st, srv_job *j);
 /* New references to all jobs, newest first; *n of them (caller frees the array). */
 srv_job **srv_store_list(srv_store *st, int *n);
 void srv_job_release(srv_job *j);
@@ -81,6 +94,11 @@ void srv_job_release(srv_job *j);
 cJSON *srv_job_status_json(srv_job *j);
 /* The progress event document. Caller deletes. */
 cJSON *srv_job_progress_json(srv_job *j, const ts_job_progress *p);
+/* The tile event document ({tx, ty, x, y, w, h, spp, png, exr}). Caller deletes. */
+cJSON *srv_job_tile_json(const srv_job *j, const ts_tile_event *ev);
 ts_job_state srv_job_state(srv_job *j);
+/* Records why the job's checkpoint failed (NULL: it was written); true when that changed
+ * the recorded state. Shown as `checkpoint_error` in the status. Thread-safe. */
+bool srv_job_set_checkpoint_error(srv_job *j, const char *message);
 
 #endif

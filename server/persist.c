@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "image.h"
 
@@ -41,7 +42,9 @@ static ts_status write_json(const char *path, cJSON *o, ts_error *err)
     return st;
 }
 
-ts_status srv_persist_save(const char *dir, srv_job *j, ts_error *err)
+/* Writes j's folder: scene.json once, film.bin when with_film and the job has rendered,
+ * and job.json. */
+static ts_status save_files(const char *dir, srv_job *j, bool with_film, ts_error *err)
 {
     char folder[4096], path[4200];
     snprintf(folder, sizeof folder, "%s/jobs/%s", dir, j->id);
@@ -50,7 +53,20 @@ ts_status srv_persist_save(const char *dir, srv_job *j, ts_error *err)
     snprintf(path, sizeof path, "%s/scene.json", folder);
     struct stat sb;
     if (stat(path, &sb) != 0 && (st = ts_image_write_file_atomic(path, j->scene_text, j->scene_len, err))) return st;
+    /* The state is taken before the film, so job.json is never ahead of film.bin (a job
+     * recorded as done has its whole film on disk); restoring takes the sample counts
+     * from the film. */
+    cJSON *o = srv_job_status_json(j);
+    if (!o) return ts_error_set(err, TS_ERR_NOMEM, "out of memory for a checkpoint");
     if (!j->sj) goto state; /* failed before rendering: no film */
+    if (!with_film) {
+        /* Just submitted: what is on disk is the job with no samples yet, however far it
+         * has rendered meanwhile (the first checkpoint writes its film). */
+        cJSON_ReplaceItemInObjectCaseSensitive(o, "state", cJSON_CreateString(ts_job_state_name(TS_JOB_QUEUED)));
+        cJSON_ReplaceItemInObjectCaseSensitive(o, "spp_done", cJSON_CreateNumber(0));
+        cJSON_ReplaceItemInObjectCaseSensitive(o, "samples", cJSON_CreateNumber(0));
+        goto state;
+    }
 
     /* The film, from the tile snapshots. */
     ts_job_progress p;
@@ -60,6 +76,7 @@ ts_status srv_persist_save(const char *dir, srv_job *j, ts_error *err)
     ts_film *f = tile_spp ? ts_sched_job_film(j->sj, tile_spp, err) : NULL;
     if (!f) {
         free(tile_spp);
+        cJSON_Delete(o);
         return err->status ? err->status : ts_error_set(err, TS_ERR_NOMEM, "out of memory for a checkpoint");
     }
     size_t n_px = (size_t)f->width * (size_t)f->height;
@@ -68,6 +85,7 @@ ts_status srv_persist_save(const char *dir, srv_job *j, ts_error *err)
     if (!buf) {
         ts_film_destroy(f);
         free(tile_spp);
+        cJSON_Delete(o);
         return ts_error_set(err, TS_ERR_NOMEM, "out of memory for a checkpoint of %zu bytes", bytes);
     }
     film_header h = {FILM_MAGIC, f->full_width, f->full_height, f->x0, f->y0, f->width, f->height, j->nx, j->ny};
@@ -80,15 +98,50 @@ ts_status srv_persist_save(const char *dir, srv_job *j, ts_error *err)
     snprintf(path, sizeof path, "%s/film.bin", folder);
     st = ts_image_write_file_atomic(path, buf, bytes, err);
     free(buf);
-    if (st) return st;
+    if (st) {
+        cJSON_Delete(o);
+        return st;
+    }
 
-state:;
-    cJSON *o = srv_job_status_json(j);
+state:
     /* The status document has all we need; the halt settings come from the scene. */
     snprintf(path, sizeof path, "%s/job.json", folder);
     st = write_json(path, o, err);
     cJSON_Delete(o);
     return st;
+}
+
+/* save_files under the job's disk lock; a deleted job is not written again. */
+static ts_status save_locked(const char *dir, srv_job *j, bool with_film, ts_error *err)
+{
+    pthread_mutex_lock(&j->disk_mu);
+    ts_status st = j->removed ? TS_OK : save_files(dir, j, with_film, err);
+    pthread_mutex_unlock(&j->disk_mu);
+    return st;
+}
+
+ts_status srv_persist_save(const char *dir, srv_job *j, ts_error *err) { return save_locked(dir, j, true, err); }
+
+ts_status srv_persist_save_submitted(const char *dir, srv_job *j, ts_error *err)
+{
+    return save_locked(dir, j, false, err);
+}
+
+void srv_persist_remove(const char *dir, srv_job *j)
+{
+    char folder[4096], path[4400];
+    snprintf(folder, sizeof folder, "%s/jobs/%s", dir, j->id);
+    pthread_mutex_lock(&j->disk_mu);
+    j->removed = true;
+    DIR *d = opendir(folder);
+    for (struct dirent *e = d ? readdir(d) : NULL; e; e = readdir(d)) {
+        if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
+        snprintf(path, sizeof path, "%s/%s", folder, e->d_name);
+        if (unlink(path) != 0) fprintf(stderr, "tessera: removing %s: %s\n", path, strerror(errno));
+    }
+    if (d) closedir(d);
+    if (rmdir(folder) != 0 && errno != ENOENT) fprintf(stderr, "tessera: removing %s: %s\n", folder, strerror(errno));
+    pthread_mutex_unlock(&j->disk_mu);
 }
 
 int srv_persist_save_changed(const char *dir, srv_store *st)
@@ -100,8 +153,15 @@ int srv_persist_save_changed(const char *dir, srv_store *st)
         uint64_t v = atomic_load(&j->version);
         if (v != j->saved_version) {
             ts_error err = {0};
-            if (srv_persist_save(dir, j, &err)) fprintf(stderr, "tessera: checkpoint of job %s: %s\n", j->id, err.message);
-            else {
+            if (srv_persist_save(dir, j, &err)) {
+                /* Rendering goes on; the previous checkpoint files stay as they were (each
+                 * is replaced only by an atomic rename). Logged when the reason changes. */
+                if (srv_job_set_checkpoint_error(j, err.message))
+                    fprintf(stderr, "tessera: checkpoint of job %s failed, the previous one is kept: %s\n", j->id,
+                            err.message);
+            } else {
+                if (srv_job_set_checkpoint_error(j, NULL))
+                    fprintf(stderr, "tessera: checkpoint of job %s written again\n", j->id);
                 j->saved_version = v;
                 count++;
             }
@@ -188,7 +248,8 @@ static double num(const cJSON *o, const char *k, double def)
     return cJSON_IsNumber(v) ? v->valuedouble : def;
 }
 
-static void restore_one(const char *dir, const char *id, srv_store *st, const ts_scene_limits *limits)
+static void restore_one(const char *dir, const char *id, srv_store *st, const ts_scene_limits *limits,
+                        const char *assets_dir)
 {
     char folder[4096], path[4200];
     snprintf(folder, sizeof folder, "%s/jobs/%s", dir, id);
@@ -230,7 +291,7 @@ static void restore_one(const char *dir, const char *id, srv_store *st, const ts
     if (r.state == TS_JOB_FAILED) {
         snprintf(failure, sizeof failure, "%s", cJSON_IsString(fail) ? fail->valuestring : "failed");
     }
-    if (ts_scene_load_text(stext, slen, NULL, "scene", limits, &scene, &err)) {
+    if (ts_scene_load_text(stext, slen, assets_dir, "scene", limits, &scene, &err)) {
         snprintf(failure, sizeof failure, "the checkpointed scene no longer loads: %s", err.message);
         goto add;
     }
@@ -266,7 +327,7 @@ add:
     free(stext);
 }
 
-int srv_persist_restore_all(const char *dir, srv_store *st, const ts_scene_limits *limits)
+int srv_persist_restore_all(const char *dir, srv_store *st, const ts_scene_limits *limits, const char *assets_dir)
 {
     char path[4096];
     snprintf(path, sizeof path, "%s/jobs", dir);
@@ -296,7 +357,7 @@ int srv_persist_restore_all(const char *dir, srv_store *st, const ts_scene_limit
     }
     closedir(d);
     if (n) qsort(e, (size_t)n, sizeof *e, cmp_entry); /* e may be NULL when the folder is empty */
-    for (int i = 0; i < n; i++) restore_one(dir, e[i].id, st, limits);
+    for (int i = 0; i < n; i++) restore_one(dir, e[i].id, st, limits, assets_dir);
     free(e);
     return n;
 }

@@ -15,11 +15,18 @@
 ts_status srv_persist_init(const char *dir, ts_error *err);
 /* Checkpoints one job (whatever its version). */
 ts_status srv_persist_save(const char *dir, srv_job *j, ts_error *err);
+/* Records a job just submitted (scene.json and job.json, no film yet), before its 201 is
+ * sent, so an accepted job survives a crash before its first checkpoint. */
+ts_status srv_persist_save_submitted(const char *dir, srv_job *j, ts_error *err);
 /* Checkpoints every job whose version changed since its last checkpoint; returns how
- * many were written. Errors go to stderr (the server keeps running). */
+ * many were written. A failure goes to stderr (when its reason changes) and into the
+ * job's checkpoint_error until a later checkpoint succeeds; the server keeps running. */
 int srv_persist_save_changed(const char *dir, srv_store *st);
-/* Restores every job found under DIR/jobs into the store (unfinished ones resume).
+/* Deletes a removed job's folder; nothing writes it again afterwards. */
+void srv_persist_remove(const char *dir, srv_job *j);
+/* Restores every job found under DIR/jobs into the store (unfinished ones resume); their
+ * scenes load with the same limits and asset folder (NULL: none) as posted ones.
  * Returns how many; unreadable ones are listed as failed. */
-int srv_persist_restore_all(const char *dir, srv_store *st, const ts_scene_limits *limits);
+int srv_persist_restore_all(const char *dir, srv_store *st, const ts_scene_limits *limits, const char *assets_dir);
 
 #endif

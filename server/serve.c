@@ -14,6 +14,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -30,9 +31,11 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: tessera serve [--bind 127.0.0.1] [--port 8080] [--threads N] [--data DIR] [--token TOKEN]\n"
+            "                     [--token-file FILE] [--assets DIR] [--max-asset-bytes BYTES] [--max-jobs N]\n"
             "                     [--max-running N] [--http-threads N] [--max-body BYTES] [--max-pixels N]\n"
             "                     [--max-resolution N] [--max-spp N] [--max-triangles N] [--max-shapes N]\n"
-            "                     [--checkpoint-interval SECONDS] [--cors-origin ORIGIN] [--queue-builtin]\n");
+            "                     [--checkpoint-interval SECONDS] [--cors-origin ORIGIN] [--queue-builtin]\n"
+            "                     [--client-timeout SECONDS] [--max-client-connections N]\n");
 }
 
 static int usage_error(const char *fmt, const char *arg)
@@ -42,6 +45,28 @@ static int usage_error(const char *fmt, const char *arg)
     fprintf(stderr, "\n");
     usage(stderr);
     return 2;
+}
+
+/* The first line of FILE, without its line end or trailing blanks (malloc'd), or NULL with
+ * a sentence in msg. The token itself is never echoed. */
+static char *read_token_file(const char *path, char *msg, size_t msg_len)
+{
+    FILE *f = fopen(path, "r");
+    if (!f) {
+        snprintf(msg, msg_len, "cannot open (%s)", strerror(errno));
+        return NULL;
+    }
+    char line[4096];
+    char *got = fgets(line, sizeof line, f);
+    fclose(f);
+    size_t n = got ? strcspn(line, "\r\n") : 0;
+    while (n > 0 && (line[n - 1] == ' ' || line[n - 1] == '\t'))
+        n--;
+    line[n] = '\0';
+    char *token = n ? strdup(line) : NULL;
+    if (!token) snprintf(msg, msg_len, n ? "out of memory" : "the first line holds no token");
+    explicit_bzero(line, sizeof line);
+    return token;
 }
 
 static bool parse_u64(const char *s, unsigned long long lo, unsigned long long hi, unsigned long long *out)
@@ -127,7 +152,8 @@ int srv_serve_main(int argc, char **argv)
 {
     enum {
         OPT_BIND = 256, OPT_PORT, OPT_THREADS, OPT_DATA, OPT_TOKEN, OPT_MAX_RUNNING, OPT_HTTP_THREADS, OPT_MAX_BODY,
-        OPT_MAX_PIXELS, OPT_MAX_RES, OPT_MAX_SPP, OPT_MAX_TRIS, OPT_MAX_SHAPES, OPT_CKPT, OPT_CORS, OPT_BUILTIN, OPT_HELP
+        OPT_MAX_PIXELS, OPT_MAX_RES, OPT_MAX_SPP, OPT_MAX_TRIS, OPT_MAX_SHAPES, OPT_CKPT, OPT_CORS, OPT_BUILTIN, OPT_HELP,
+        OPT_TOKEN_FILE, OPT_ASSETS, OPT_MAX_ASSET_BYTES, OPT_MAX_JOBS, OPT_CLIENT_TIMEOUT, OPT_MAX_CLIENT_CONNS
     };
     static const struct option opts[] = {
         {"bind", required_argument, NULL, OPT_BIND},
@@ -135,6 +161,12 @@ int srv_serve_main(int argc, char **argv)
         {"threads", required_argument, NULL, OPT_THREADS},
         {"data", required_argument, NULL, OPT_DATA},
         {"token", required_argument, NULL, OPT_TOKEN},
+        {"token-file", required_argument, NULL, OPT_TOKEN_FILE},
+        {"assets", required_argument, NULL, OPT_ASSETS},
+        {"max-asset-bytes", required_argument, NULL, OPT_MAX_ASSET_BYTES},
+        {"max-jobs", required_argument, NULL, OPT_MAX_JOBS},
+        {"client-timeout", required_argument, NULL, OPT_CLIENT_TIMEOUT},
+        {"max-client-connections", required_argument, NULL, OPT_MAX_CLIENT_CONNS},
         {"max-running", required_argument, NULL, OPT_MAX_RUNNING},
         {"http-threads", required_argument, NULL, OPT_HTTP_THREADS},
         {"max-body", required_argument, NULL, OPT_MAX_BODY},
@@ -157,6 +189,8 @@ int srv_serve_main(int argc, char **argv)
     cfg->threads = ncpu > 0 ? (int)ncpu : 1;
     cfg->max_running = 4;
     cfg->http_threads = 4;
+    cfg->client_timeout_s = 60;
+    cfg->max_client_conns = 1024;
     cfg->max_body = 16u << 20;
     cfg->checkpoint_interval_s = 30;
     ts_scene_limits_default(&cfg->limits);
@@ -165,7 +199,9 @@ int srv_serve_main(int argc, char **argv)
     cfg->limits.max_spp = 1u << 16;
     cfg->limits.max_triangles = 5ull << 20;
     cfg->limits.max_shapes = 1u << 16;
-    cfg->limits.max_file_bytes = 0; /* posted scenes reference no files */
+    cfg->limits.max_file_bytes = 256ull << 20; /* each asset file (only read with --assets) */
+    cfg->max_jobs = 1000;
+    const char *token_file = NULL, *assets = NULL;
     cfg->limits.max_memory = 2ull << 30;
     unsigned long long v;
     optind = 1;
@@ -194,6 +230,24 @@ int srv_serve_main(int argc, char **argv)
         case OPT_TOKEN:
             if (!optarg[0]) return usage_error("--token: expected a non-empty token%s", "");
             cfg->token = optarg;
+            break;
+        case OPT_TOKEN_FILE: token_file = optarg; break;
+        case OPT_ASSETS: assets = optarg; break;
+        case OPT_MAX_ASSET_BYTES:
+            if (!parse_u64(optarg, 1, 1ull << 40, &v)) return usage_error("--max-asset-bytes: expected 1 to 1099511627776 bytes, got '%s'", optarg);
+            cfg->limits.max_file_bytes = v;
+            break;
+        case OPT_MAX_JOBS:
+            if (!parse_u64(optarg, 1, 1000000, &v)) return usage_error("--max-jobs: expected 1 to 1000000, got '%s'", optarg);
+            cfg->max_jobs = (int)v;
+            break;
+        case OPT_CLIENT_TIMEOUT:
+            if (!parse_u64(optarg, 1, 86400, &v)) return usage_error("--client-timeout: expected 1 to 86400 seconds, got '%s'", optarg);
+            cfg->client_timeout_s = (unsigned)v;
+            break;
+        case OPT_MAX_CLIENT_CONNS:
+            if (!parse_u64(optarg, 1, 4000, &v)) return usage_error("--max-client-connections: expected 1 to 4000, got '%s'", optarg);
+            cfg->max_client_conns = (unsigned)v;
             break;
         case OPT_CORS: cfg->cors_origin = optarg; break;
         case OPT_MAX_BODY:
@@ -234,6 +288,27 @@ int srv_serve_main(int argc, char **argv)
         }
     }
     if (optind < argc) return usage_error("unexpected argument '%s'", argv[optind]);
+    if (token_file && cfg->token) return usage_error("--token and --token-file: give one of them%s", "");
+    /* Owned copies, freed at the end (cfg holds pointers into them). */
+    char *token_buf = NULL, *assets_real = NULL;
+    if (token_file) {
+        char msg[256];
+        if (!(token_buf = read_token_file(token_file, msg, sizeof msg))) {
+            fprintf(stderr, "tessera serve: --token-file %s: %s\n", token_file, msg);
+            return 2;
+        }
+        cfg->token = token_buf;
+    }
+    if (assets) {
+        struct stat sb;
+        if (!(assets_real = realpath(assets, NULL)) || stat(assets_real, &sb) != 0 || !S_ISDIR(sb.st_mode)) {
+            fprintf(stderr, "tessera serve: --assets %s: not a folder that can be opened\n", assets);
+            free(assets_real);
+            free(token_buf);
+            return 2;
+        }
+        cfg->assets_dir = assets_real;
+    }
 
     /* Signals are taken by sigwait below; every thread started from here inherits the mask. */
     sigset_t sigs;
@@ -262,9 +337,12 @@ int srv_serve_main(int argc, char **argv)
             fprintf(stderr, "tessera serve: --data: %s\n", err.message);
             goto fail;
         }
-        int n = srv_persist_restore_all(cfg->data_dir, srv->store, &cfg->limits);
+        int n = srv_persist_restore_all(cfg->data_dir, srv->store, &cfg->limits, cfg->assets_dir);
         if (n) fprintf(stderr, "tessera serve: %d job(s) restored from %s\n", n, cfg->data_dir);
     }
+    if (cfg->assets_dir)
+        fprintf(stderr, "tessera serve: posted scenes may read files under %s (each at most %llu bytes)\n",
+                cfg->assets_dir, (unsigned long long)cfg->limits.max_file_bytes);
     if (cfg->queue_builtin) {
         size_t len;
         const char *text = ts_scene_builtin_text(&len);
@@ -318,5 +396,7 @@ fail:
     srv_metrics_destroy(srv->metrics);
     pthread_cond_destroy(&srv->cv);
     pthread_mutex_destroy(&srv->mu);
+    free(assets_real);
+    free(token_buf);
     return rc;
 }

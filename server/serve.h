@@ -21,12 +21,16 @@ typedef struct srv_config {
     int threads;                 /* render threads */
     int max_running;             /* jobs rendering at once */
     int http_threads;            /* libmicrohttpd thread pool */
+    unsigned client_timeout_s;   /* a connection idle this long is closed */
+    unsigned max_client_conns;   /* connections from one IP address at once; more are refused */
     const char *data_dir;        /* NULL = no persistence */
-    const char *token;           /* NULL = no auth */
+    const char *token;           /* NULL = no auth; never printed or logged */
+    const char *assets_dir;      /* --assets: the only folder posted scenes may read; NULL = none */
+    int max_jobs;                /* jobs held in the store (any state); a POST beyond: 503 */
     const char *cors_origin;     /* NULL = no CORS headers */
     size_t max_body;             /* request body cap, bytes */
     double checkpoint_interval_s;
-    ts_scene_limits limits;      /* resolution, spp, scene size */
+    ts_scene_limits limits;      /* resolution, spp, scene size; max_file_bytes: --max-asset-bytes */
     bool queue_builtin;          /* queue the Cornell box at start (make run) */
 } srv_config;
 

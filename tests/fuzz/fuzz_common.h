@@ -59,7 +59,7 @@ static const char *fuzz_dir(void)
 }
 
 /* Writes bytes to <fuzz_dir>/name (replacing it); the full path goes to out. */
-static void fuzz_write_file(const char *name, const void *data, size_t len, char *out, size_t out_len)
+__attribute__((unused)) static void fuzz_write_file(const char *name, const void *data, size_t len, char *out, size_t out_len)
 {
     snprintf(out, out_len, "%s/%s", fuzz_dir(), name);
     FILE *f = fopen(out, "wb");
@@ -71,7 +71,7 @@ static void fuzz_write_file(const char *name, const void *data, size_t len, char
 
 /* FNV-1a of the input: a deterministic source of query points for evaluating what an
  * input loaded into (directions, texture coordinates). */
-static uint64_t fuzz_hash(const uint8_t *data, size_t size)
+__attribute__((unused)) static uint64_t fuzz_hash(const uint8_t *data, size_t size)
 {
     uint64_t h = 1469598103934665603ull;
     for (size_t i = 0; i < size; i++) h = (h ^ data[i]) * 1099511628211ull;
@@ -79,7 +79,7 @@ static uint64_t fuzz_hash(const uint8_t *data, size_t size)
 }
 
 /* A float in [0, 1) from the state, advancing it (splitmix64). */
-static float fuzz_unit(uint64_t *state)
+__attribute__((unused)) static float fuzz_unit(uint64_t *state)
 {
     uint64_t z = (*state += 0x9e3779b97f4a7c15ull);
     z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;

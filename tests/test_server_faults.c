@@ -1,0 +1,715 @@
+/* test_server_faults.c — `tessera serve` under faults (issue 11, "Faults"), one group per
+ * ctest entry (the first argument):
+ *
+ *   checkpoint  checkpoints into a full file system (a 1 MiB tmpfs) and into a read-only
+ *               folder (a read-only bind mount; chmod 555 when not root): the job status
+ *               and the log report it, rendering goes on to the end, the previous
+ *               checkpoint stays byte for byte, and checkpoints resume once the fault is
+ *               gone. Mounts happen in a private mount namespace of this process (the
+ *               server inherits it); where that is not allowed the group reports SKIPPED.
+ *   kill        SIGKILL at 100 moments (fixed seed) during renders with 50 ms checkpoints,
+ *               each followed by a restart that must load a consistent state; every job
+ *               finishes with exactly its sample count and pixels equal to `tessera render`.
+ *   clients     clients that disconnect mid-download and mid-event-stream, slow clients
+ *               (one byte per second, more of them than HTTP threads), an idle client past
+ *               --client-timeout, and --max-client-connections: the server stays healthy
+ *               and holds no socket afterwards (its open descriptors return to baseline). */
+#define _GNU_SOURCE /* unshare, mount namespaces */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <cmocka.h>
+
+#include <arpa/inet.h>
+#include <curl/curl.h>
+#include <dirent.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sched.h>
+#include <signal.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/mount.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "cli_support.h"
+#include "exr.h"
+#include "hash.h"
+#include "image.h"
+#include "server_harness.h"
+
+static double now_s(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+static char *scene(int w, int h, int spp)
+{
+    char *s = malloc(2048);
+    snprintf(s, 2048,
+             "{\"tessera\":1,\"name\":\"faults\",\"camera\":{\"from\":[0,1.5,5],\"to\":[0,0.6,0],\"fov\":35},"
+             "\"film\":{\"width\":%d,\"height\":%d,\"filter\":{\"type\":\"box\"}},"
+             "\"sampler\":{\"spp\":%d},\"integrator\":{\"type\":\"ao\"},"
+             "\"materials\":{\"w\":{\"type\":\"diffuse\"}},"
+             "\"shapes\":[{\"type\":\"sphere\",\"center\":[0,0.6,0],\"radius\":0.6,\"material\":\"w\"},"
+             "{\"type\":\"mesh\",\"positions\":[-5,0,-5, 5,0,-5, 5,0,5, -5,0,5],\"indices\":[0,2,1, 0,3,2],\"material\":\"w\"}]}",
+             w, h, spp);
+    return s;
+}
+
+static char *read_file(const char *path, size_t *len)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return NULL;
+    char *buf = NULL;
+    size_t n = 0, cap = 0;
+    for (;;) {
+        if (n + 65536 > cap) {
+            cap = cap ? cap * 2 : 65536 * 2;
+            buf = realloc(buf, cap);
+            assert_non_null(buf);
+        }
+        size_t r = fread(buf + n, 1, cap - n, f);
+        n += r;
+        if (!r) break;
+    }
+    fclose(f);
+    *len = n;
+    return buf;
+}
+
+static bool exists(const char *path)
+{
+    struct stat sb;
+    return stat(path, &sb) == 0;
+}
+
+static cJSON *job_status(const test_server *s, const char *id)
+{
+    char path[128];
+    snprintf(path, sizeof path, "/api/v1/jobs/%s", id);
+    return ts_http_json(s, path, 200);
+}
+
+static ts_image get_exr(const test_server *s, const char *id)
+{
+    char path[160];
+    snprintf(path, sizeof path, "/api/v1/jobs/%s/image.exr", id);
+    http_resp r;
+    ts_http(s, "GET", path, NULL, 0, NULL, &r);
+    if (r.status != 200) fail_msg("GET %s: %ld", path, r.status);
+    ts_image img;
+    ts_error err = {0};
+    if (ts_exr_read_memory((const unsigned char *)r.body, r.len, &img, &err)) fail_msg("%s", err.message);
+    ts_http_free(&r);
+    return img;
+}
+
+/* ================================================================ checkpoint faults */
+
+static char mount_dir[64], plain_dir[64];
+static bool have_mounts; /* a private mount namespace with a tmpfs at mount_dir */
+
+/* Waits until the job's status carries (want) or lacks (!want) a checkpoint_error; returns
+ * its text (static) or fails. */
+static const char *wait_checkpoint_error(const test_server *s, const char *id, bool want, double timeout_s)
+{
+    static char text[600];
+    double t0 = now_s();
+    while (now_s() - t0 < timeout_s) {
+        cJSON *o = job_status(s, id);
+        const cJSON *e = cJSON_GetObjectItemCaseSensitive(o, "checkpoint_error");
+        bool has = cJSON_IsString(e);
+        snprintf(text, sizeof text, "%s", has ? e->valuestring : "");
+        cJSON_Delete(o);
+        if (has == want) return text;
+        ts_sleep_ms(20);
+    }
+    fail_msg("job %s: checkpoint_error %s after %g s", id, want ? "never appeared" : "stayed", timeout_s);
+    return NULL;
+}
+
+static bool log_has(const test_server *s, const char *needle)
+{
+    size_t n = 0;
+    char *t = read_file(s->log, &n);
+    if (!t) return false;
+    t = realloc(t, n + 1);
+    t[n] = '\0';
+    bool found = strstr(t, needle) != NULL;
+    free(t);
+    return found;
+}
+
+/* No temporary file is left in the job's folder. */
+static void assert_no_temporaries(const char *folder)
+{
+    DIR *d = opendir(folder);
+    assert_non_null(d);
+    struct dirent *de;
+    while ((de = readdir(d)))
+        if (strstr(de->d_name, ".tmp.")) fail_msg("%s/%s: a temporary file was left behind", folder, de->d_name);
+    closedir(d);
+}
+
+typedef enum fault_kind { FAULT_FULL, FAULT_READONLY } fault_kind;
+
+/* Fills the file system holding dir (a tmpfs) to the last byte; returns the filler path. */
+static void fill_up(const char *dir, char *filler, size_t n)
+{
+    snprintf(filler, n, "%s/filler", dir);
+    int fd = open(filler, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    assert_true(fd >= 0);
+    static char block[65536];
+    memset(block, 0x5a, sizeof block);
+    for (size_t chunk = sizeof block; chunk >= 1;) {
+        ssize_t w = write(fd, block, chunk);
+        if (w < 0 && errno == ENOSPC) chunk /= 2;
+        else if (w < 0) fail_msg("filling %s: %s", filler, strerror(errno));
+    }
+    close(fd);
+}
+
+static void checkpoint_fault(fault_kind kind)
+{
+    const char *dir = kind == FAULT_FULL ? mount_dir : plain_dir;
+    test_server s;
+    const char *args[] = {"--threads", "2", "--data", dir, "--checkpoint-interval", "0.1", NULL};
+    ts_server_start(&s, args);
+    /* 64×64 at 1024 spp of ambient occlusion: a few seconds on two threads, long enough to
+     * fault it mid-render; its film checkpoint (64·64·72 bytes + a header) fits the tmpfs
+     * twice (the file and its temporary copy). */
+    char *doc = scene(64, 64, 1024), id[32], folder[160], film[200], filler[128] = "";
+    ts_submit(&s, doc, id, sizeof id);
+    snprintf(folder, sizeof folder, "%s/jobs/%s", dir, id);
+    snprintf(film, sizeof film, "%s/film.bin", folder);
+    ts_wait_field(&s, id, "spp_done", 8, 20);
+    for (int i = 0; i < 250 && !exists(film); i++) ts_sleep_ms(20);
+    assert_true(exists(film));
+
+    /* The fault. */
+    if (kind == FAULT_FULL) {
+        fill_up(dir, filler, sizeof filler);
+    } else if (geteuid() == 0) {
+        if (mount(folder, folder, NULL, MS_BIND, NULL) || mount(NULL, folder, NULL, MS_REMOUNT | MS_BIND | MS_RDONLY, NULL))
+            fail_msg("read-only bind mount of %s: %s", folder, strerror(errno));
+    } else {
+        assert_int_equal(chmod(folder, 0555), 0);
+    }
+    const char *why = wait_checkpoint_error(&s, id, true, 10);
+    const char *expect = kind == FAULT_FULL ? "No space left on device" : geteuid() == 0 ? "Read-only file system" : "Permission denied";
+    if (!strstr(why, expect)) fail_msg("checkpoint_error '%s' does not say '%s'", why, expect);
+    char line[128];
+    snprintf(line, sizeof line, "checkpoint of job %s failed", id);
+    assert_true(log_has(&s, line));
+    assert_true(log_has(&s, expect));
+    /* From now on no checkpoint can land: this is the previous one. */
+    size_t before_len = 0, after_len = 0;
+    char *before = read_file(film, &before_len);
+    assert_non_null(before);
+
+    /* Rendering goes on to the end. */
+    cJSON *o = ts_wait_done(&s, id, 60);
+    assert_string_equal(ts_json_str(o, "state"), "done");
+    assert_int_equal((int)ts_json_num(o, "spp_done"), 1024);
+    assert_non_null(cJSON_GetObjectItemCaseSensitive(o, "checkpoint_error"));
+    cJSON_Delete(o);
+    ts_sleep_ms(300); /* a few more failed attempts */
+    char *after = read_file(film, &after_len);
+    assert_non_null(after);
+    assert_int_equal(after_len, before_len);
+    assert_memory_equal(after, before, before_len);
+    assert_true(before_len > 8 && !memcmp(before, "TSFILM01", 8));
+    assert_no_temporaries(folder);
+
+    /* The fault goes away: the next checkpoint lands and the error clears. */
+    if (kind == FAULT_FULL) assert_int_equal(unlink(filler), 0);
+    else if (geteuid() == 0) assert_int_equal(umount2(folder, 0), 0);
+    else assert_int_equal(chmod(folder, 0755), 0);
+    wait_checkpoint_error(&s, id, false, 10);
+    snprintf(line, sizeof line, "checkpoint of job %s written again", id);
+    assert_true(log_has(&s, line));
+    free(after);
+    after = read_file(film, &after_len);
+    assert_int_equal(after_len, before_len);
+    assert_true(memcmp(after, before, before_len) != 0); /* the finished film now */
+    free(before);
+    free(after);
+    assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
+
+    /* And it restores as the finished job. */
+    ts_server_start(&s, args);
+    o = job_status(&s, id);
+    assert_string_equal(ts_json_str(o, "state"), "done");
+    assert_int_equal((int)ts_json_num(o, "spp_done"), 1024);
+    cJSON_Delete(o);
+    assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
+    free(doc);
+}
+
+static void test_checkpoint_full_disk(void **state)
+{
+    (void)state;
+    if (!have_mounts) skip();
+    checkpoint_fault(FAULT_FULL);
+}
+
+static void test_checkpoint_read_only(void **state)
+{
+    (void)state;
+    if (geteuid() == 0 && !have_mounts) skip();
+    checkpoint_fault(FAULT_READONLY);
+}
+
+/* A private mount namespace and a 1 MiB tmpfs at mount_dir; false (with the reason on
+ * stdout) where this process may not do that. */
+static bool setup_mounts(void)
+{
+    if (geteuid() != 0) {
+        printf("note: not root, so no tmpfs can be mounted: the full-disk case is skipped\n");
+        return false;
+    }
+    if (unshare(CLONE_NEWNS) != 0) {
+        printf("note: cannot make a private mount namespace (%s): the full-disk and read-only cases are skipped\n",
+               strerror(errno));
+        return false;
+    }
+    if (mount(NULL, "/", NULL, MS_REC | MS_PRIVATE, NULL) != 0 ||
+        mount("tessera-test", mount_dir, "tmpfs", MS_NOSUID | MS_NODEV, "size=1m,mode=0755") != 0) {
+        printf("note: cannot mount a tmpfs (%s): the full-disk and read-only cases are skipped\n", strerror(errno));
+        return false;
+    }
+    return true;
+}
+
+static int run_checkpoint(void)
+{
+    snprintf(mount_dir, sizeof mount_dir, "/tmp/tessera-fullfs-XXXXXX");
+    snprintf(plain_dir, sizeof plain_dir, "/tmp/tessera-rofs-XXXXXX");
+    if (!mkdtemp(mount_dir) || !mkdtemp(plain_dir)) return 1;
+    have_mounts = setup_mounts(); /* unshare(CLONE_NEWNS) needs a single-threaded process: before curl */
+    curl_global_init(CURL_GLOBAL_DEFAULT);
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_checkpoint_full_disk),
+        cmocka_unit_test(test_checkpoint_read_only),
+    };
+    int rc = cmocka_run_group_tests_name("checkpoint", tests, NULL, NULL);
+    if (have_mounts) umount2(mount_dir, MNT_DETACH);
+    char cmd[200];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s' '%s'", mount_dir, plain_dir);
+    if (system(cmd) != 0 && !rc) rc = 1;
+    if (!rc && !have_mounts && geteuid() == 0) {
+        printf("SKIPPED: mounting is not allowed here (no private mount namespace)\n");
+        return 77;
+    }
+    return rc;
+}
+
+/* ================================================================ kill -9 */
+
+static char kill_dir[64];
+
+/* The reference: `tessera render` of the same document (same pixels, DESIGN.md §1). */
+static ts_image reference(const char *doc)
+{
+    char scene_path[128], out[128], log[128];
+    snprintf(scene_path, sizeof scene_path, "%s/ref.json", kill_dir);
+    snprintf(out, sizeof out, "%s/ref.exr", kill_dir);
+    snprintf(log, sizeof log, "%s/ref.log", kill_dir);
+    cli_write_file(scene_path, doc);
+    const char *args[] = {"render", scene_path, "-o", out, "--threads", "2", "--quiet", NULL};
+    if (cli_run(log, args, NULL) != 0) fail_msg("tessera render: %s", cli_read_log(log));
+    size_t len = 0;
+    char *bytes = read_file(out, &len);
+    assert_non_null(bytes);
+    ts_image img;
+    ts_error err = {0};
+    if (ts_exr_read_memory((const unsigned char *)bytes, len, &img, &err)) fail_msg("%s", err.message);
+    free(bytes);
+    return img;
+}
+
+static void assert_same_pixels(const ts_image *a, const ts_image *ref, const char *id)
+{
+    assert_int_equal(a->width, ref->width);
+    assert_int_equal(a->height, ref->height);
+    static const char *const names[] = {"R", "G", "B", "count"};
+    for (int k = 0; k < 4; k++) {
+        int ca = ts_image_channel(a, names[k]), cr = ts_image_channel(ref, names[k]);
+        assert_true(ca >= 0 && cr >= 0);
+        for (int i = 0; i < a->width * a->height; i++)
+            if (a->data[i * a->n_channels + ca] != ref->data[i * ref->n_channels + cr])
+                fail_msg("job %s, pixel %d, %s: %.9g, uninterrupted render %.9g", id, i, names[k],
+                         a->data[i * a->n_channels + ca], ref->data[i * ref->n_channels + cr]);
+    }
+}
+
+/* A restarted server's state of the job: listed, not failed, and its image consistent with
+ * its status (every pixel of a tile has the tile's count; none beyond the target, none
+ * below spp_done). Returns spp_done. */
+static int check_consistent(const test_server *s, const char *id, int spp_target, int w, int h)
+{
+    cJSON *o = job_status(s, id);
+    const char *state = ts_json_str(o, "state");
+    if (!strcmp(state, "failed") || !strcmp(state, "cancelled"))
+        fail_msg("job %s restored as %s: %s", id, state, ts_json_str(o, "error"));
+    int spp = (int)ts_json_num(o, "spp_done");
+    assert_true(spp >= 0 && spp <= spp_target);
+    if (!strcmp(state, "done")) assert_int_equal(spp, spp_target);
+    cJSON_Delete(o);
+    ts_image img = get_exr(s, id);
+    int cc = ts_image_channel(&img, "count");
+    assert_true(cc >= 0);
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            float c = img.data[(y * w + x) * img.n_channels + cc];
+            float c0 = img.data[((y / 32 * 32) * w + x / 32 * 32) * img.n_channels + cc]; /* the tile's first pixel */
+            if (c != c0 || c < (float)spp || c > (float)spp_target)
+                fail_msg("job %s: pixel (%d, %d) has %g samples (its tile %g, spp_done %d, target %d)", id, x, y, c,
+                         c0, spp, spp_target);
+        }
+    ts_image_fini(&img);
+    return spp;
+}
+
+static void test_kill_at_random_moments(void **state)
+{
+    (void)state;
+    enum { KILLS = 100, W = 64, H = 32, SPP = 256 };
+    /* Two tiles, 256 spp of ambient occlusion: about 0.3 s uninterrupted, so kills land in
+     * every pass, in checkpoint writes, and after the end. */
+    char *doc = scene(W, H, SPP);
+    ts_image ref = reference(doc);
+    const char *args[] = {"--threads", "2", "--data", kill_dir, "--checkpoint-interval", "0.05", NULL};
+    ts_pcg32 rng;
+    ts_pcg32_seed(&rng, 11, 4);
+    char id[32] = "", job_file[160];
+    int jobs_done = 0, last_spp = 0, kills_mid_render = 0;
+    double t0 = now_s();
+    test_server s;
+    for (int k = 0; k <= KILLS; k++) {
+        ts_server_start(&s, args);
+        if (id[0]) {
+            /* What survives a kill is what was checkpointed: job.json's spp_done, which is
+             * written after (and taken before) the film it describes, so the film on disk
+             * holds at least that. It never goes back, and the restored job starts from at
+             * least it. (The live spp_done seen after the previous restart may be ahead of
+             * every checkpoint, so it is no bound.) */
+            size_t jl = 0;
+            char *jt = read_file(job_file, &jl);
+            cJSON *jj = jt ? cJSON_ParseWithLength(jt, jl) : NULL;
+            if (!jj) fail_msg("job %s: %s unreadable after kill %d", id, job_file, k);
+            int durable = (int)ts_json_num(jj, "spp_done");
+            cJSON_Delete(jj);
+            free(jt);
+            if (durable < last_spp)
+                fail_msg("job %s: the checkpoint went back from %d to %d spp after kill %d", id, last_spp, durable, k);
+            last_spp = durable;
+            int spp = check_consistent(&s, id, SPP, W, H);
+            if (spp < durable)
+                fail_msg("job %s restarted at %d spp below its checkpoint's %d after kill %d", id, spp, durable, k);
+            if (spp == SPP) { /* finished: compare, then a new job */
+                ts_image img = get_exr(&s, id);
+                assert_same_pixels(&img, &ref, id);
+                ts_image_fini(&img);
+                jobs_done++;
+                id[0] = '\0';
+            }
+        }
+        if (k == KILLS) break;
+        if (!id[0]) {
+            ts_submit(&s, doc, id, sizeof id);
+            last_spp = 0;
+            /* An accepted job is on disk before its 201 (it survives a kill at once). */
+            snprintf(job_file, sizeof job_file, "%s/jobs/%s/job.json", kill_dir, id);
+            assert_true(exists(job_file));
+        }
+        ts_sleep_ms((int)(ts_pcg32_next(&rng) % 200)); /* the moment: 0–199 ms after start */
+        cJSON *o = job_status(&s, id);
+        if (!strcmp(ts_json_str(o, "state"), "running")) kills_mid_render++;
+        cJSON_Delete(o);
+        assert_int_equal(ts_server_stop(&s, SIGKILL), 128 + SIGKILL);
+    }
+    /* The last one finishes uninterrupted. */
+    if (id[0]) {
+        cJSON *o = ts_wait_done(&s, id, 30);
+        assert_int_equal((int)ts_json_num(o, "spp_done"), SPP);
+        assert_int_equal((long)ts_json_num(o, "samples"), (long)W * H * SPP);
+        cJSON_Delete(o);
+        ts_image img = get_exr(&s, id);
+        assert_same_pixels(&img, &ref, id);
+        ts_image_fini(&img);
+        jobs_done++;
+    }
+    assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
+    printf("%d kills (%d of them while the job was running), %d jobs finished equal to the uninterrupted render, "
+           "%.1f s\n", KILLS, kills_mid_render, jobs_done, now_s() - t0);
+    assert_true(kills_mid_render >= KILLS / 4);
+    ts_image_fini(&ref);
+    free(doc);
+}
+
+static int run_kill(void)
+{
+    snprintf(kill_dir, sizeof kill_dir, "/tmp/tessera-kill-XXXXXX");
+    if (!mkdtemp(kill_dir)) return 1;
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_kill_at_random_moments)};
+    int rc = cmocka_run_group_tests_name("kill", tests, NULL, NULL);
+    char cmd[128];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", kill_dir);
+    if (system(cmd) != 0 && !rc) rc = 1;
+    return rc;
+}
+
+/* ================================================================ clients */
+
+static int open_fds(pid_t pid)
+{
+    char path[64];
+    snprintf(path, sizeof path, "/proc/%d/fd", (int)pid);
+    DIR *d = opendir(path);
+    if (!d) return -1;
+    int n = 0;
+    while (readdir(d)) n++;
+    closedir(d);
+    return n - 2;
+}
+
+/* Waits until the server holds at most `baseline` descriptors again. */
+static void wait_fds(const test_server *s, int baseline, double timeout_s, const char *what)
+{
+    double t0 = now_s();
+    int n = open_fds(s->pid);
+    while (n > baseline && now_s() - t0 < timeout_s) {
+        ts_sleep_ms(20);
+        n = open_fds(s->pid);
+    }
+    if (n > baseline) fail_msg("%s: the server still holds %d descriptors (baseline %d) after %g s", what, n, baseline, timeout_s);
+}
+
+static int connect_to(const test_server *s)
+{
+    int fd = socket(AF_INET, SOCK_STREAM, 0);
+    assert_true(fd >= 0);
+    int rcvbuf = 4096; /* a small window: big replies stay in the server's hands */
+    setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &rcvbuf, sizeof rcvbuf);
+    struct sockaddr_in a = {0};
+    a.sin_family = AF_INET;
+    a.sin_port = htons((uint16_t)s->port);
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    if (connect(fd, (struct sockaddr *)&a, sizeof a) != 0) fail_msg("connect: %s", strerror(errno));
+    return fd;
+}
+
+static void send_all(int fd, const char *text)
+{
+    size_t n = strlen(text);
+    while (n) {
+        ssize_t w = send(fd, text, n, MSG_NOSIGNAL);
+        if (w <= 0) fail_msg("send: %s", strerror(errno));
+        text += w, n -= (size_t)w;
+    }
+}
+
+/* Reads until `want` bytes came or timeout; returns how many. */
+static size_t recv_some(int fd, size_t want, double timeout_s)
+{
+    char buf[16384];
+    size_t got = 0;
+    double t0 = now_s();
+    while (got < want && now_s() - t0 < timeout_s) {
+        struct pollfd p = {fd, POLLIN, 0};
+        if (poll(&p, 1, 100) <= 0) continue;
+        ssize_t r = recv(fd, buf, sizeof buf < want - got ? sizeof buf : want - got, 0);
+        if (r <= 0) break;
+        got += (size_t)r;
+    }
+    return got;
+}
+
+/* True when the server closed fd (EOF or reset) within timeout_s. */
+static bool closed_by_server(int fd, double timeout_s)
+{
+    double t0 = now_s();
+    char buf[4096];
+    while (now_s() - t0 < timeout_s) {
+        struct pollfd p = {fd, POLLIN, 0};
+        if (poll(&p, 1, 50) <= 0) continue;
+        ssize_t r = recv(fd, buf, sizeof buf, 0);
+        if (r == 0 || (r < 0 && errno != EAGAIN && errno != EINTR)) return true;
+    }
+    return false;
+}
+
+static double healthz_ms(const test_server *s)
+{
+    double t0 = now_s();
+    http_resp r;
+    ts_http(s, "GET", "/healthz", NULL, 0, NULL, &r);
+    assert_int_equal(r.status, 200);
+    ts_http_free(&r);
+    return 1e3 * (now_s() - t0);
+}
+
+static size_t abort_after(char *data, size_t size, size_t nmemb, void *user)
+{
+    (void)data;
+    size_t *got = user;
+    *got += size * nmemb;
+    return *got > 8192 ? 0 : size * nmemb; /* 0: curl aborts the transfer */
+}
+
+static void test_disconnects(void **state)
+{
+    (void)state;
+    test_server s;
+    const char *args[] = {"--threads", "2", "--http-threads", "2", NULL};
+    ts_server_start(&s, args);
+    /* A big image: 1024×1024, one sample (its EXR is some 300 KB; the raw clients below
+     * shrink their receive window to 4 KiB, so the server is mid-send when they leave). */
+    char *big = scene(1024, 1024, 1), *slow = scene(256, 256, 1 << 14), id[32], sid[32], path[160];
+    ts_submit(&s, big, id, sizeof id);
+    cJSON_Delete(ts_wait_done(&s, id, 60));
+    healthz_ms(&s);
+    int baseline = open_fds(s.pid);
+    assert_true(baseline > 0);
+
+    /* Mid-download: raw sockets that read 8 KiB and close, and curl aborting. */
+    snprintf(path, sizeof path, "GET /api/v1/jobs/%s/image.exr HTTP/1.1\r\nHost: x\r\n\r\n", id);
+    for (int i = 0; i < 4; i++) {
+        int fd = connect_to(&s);
+        send_all(fd, path);
+        assert_true(recv_some(fd, 8192, 10) == 8192);
+        close(fd);
+    }
+    for (int i = 0; i < 2; i++) {
+        CURL *c = curl_easy_init();
+        char url[200];
+        size_t got = 0;
+        snprintf(url, sizeof url, "%s/api/v1/jobs/%s/image.exr", s.base, id);
+        curl_easy_setopt(c, CURLOPT_URL, url);
+        curl_easy_setopt(c, CURLOPT_WRITEFUNCTION, abort_after);
+        curl_easy_setopt(c, CURLOPT_WRITEDATA, &got);
+        assert_int_equal(curl_easy_perform(c), CURLE_WRITE_ERROR);
+        curl_easy_cleanup(c);
+    }
+    wait_fds(&s, baseline, 10, "after aborted downloads");
+    assert_true(healthz_ms(&s) < 1000);
+    ts_image img = get_exr(&s, id); /* a whole download still works */
+    assert_int_equal(img.width, 1024);
+    ts_image_fini(&img);
+
+    /* Mid-stream: event streams of a running job read a little and close. */
+    ts_submit(&s, slow, sid, sizeof sid);
+    ts_wait_field(&s, sid, "spp_done", 1, 20);
+    snprintf(path, sizeof path, "GET /api/v1/jobs/%s/events HTTP/1.1\r\nHost: x\r\n\r\n", sid);
+    for (int i = 0; i < 6; i++) {
+        int fd = connect_to(&s);
+        send_all(fd, path);
+        assert_true(recv_some(fd, 200, 10) == 200);
+        close(fd);
+    }
+    wait_fds(&s, baseline, 10, "after abandoned event streams");
+    assert_true(healthz_ms(&s) < 1000);
+    snprintf(path, sizeof path, "/api/v1/jobs/%s", sid);
+    http_resp r;
+    ts_http(&s, "DELETE", path, NULL, 0, NULL, &r);
+    assert_int_equal(r.status, 200);
+    ts_http_free(&r);
+    assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
+    free(big);
+    free(slow);
+}
+
+static void test_slow_clients(void **state)
+{
+    (void)state;
+    enum { SLOW = 6, LIMIT = 10 };
+    test_server s;
+    const char *args[] = {"--threads", "1", "--http-threads", "2", "--client-timeout", "2", "--max-client-connections",
+                          "10", NULL};
+    ts_server_start(&s, args);
+    healthz_ms(&s);
+    int baseline = open_fds(s.pid);
+
+    /* SLOW clients (three times --http-threads) send a request one byte per second, and an
+     * idle one sends half a request line and stops. */
+    static const char req[] = "GET /healthz HTTP/1.1\r\nHost: x\r\n\r\n";
+    int fds[SLOW], idle = connect_to(&s);
+    send_all(idle, "GET /hea");
+    for (int i = 0; i < SLOW; i++) fds[i] = connect_to(&s);
+    double worst_ms = 0, t0 = now_s();
+    bool idle_closed = false;
+    double idle_closed_at = 0;
+    for (size_t b = 0; b < 5; b++) { /* five seconds, one byte per client per second */
+        for (int i = 0; i < SLOW; i++) {
+            char one[2] = {req[b], 0};
+            send_all(fds[i], one);
+        }
+        /* Meanwhile a normal client is answered promptly, every 100 ms. */
+        for (int k = 0; k < 10; k++) {
+            double ms = healthz_ms(&s);
+            if (ms > worst_ms) worst_ms = ms;
+            if (!idle_closed && closed_by_server(idle, 0.09)) idle_closed = true, idle_closed_at = now_s() - t0;
+        }
+    }
+    /* Slow but not idle: the slow clients are still connected (1 s between bytes < 2 s). */
+    for (int i = 0; i < SLOW; i++) assert_false(closed_by_server(fds[i], 0.01));
+    printf("%d slow clients at one byte per second, 2 HTTP threads: worst /healthz %.1f ms over 50 requests; "
+           "an idle client was dropped after %.2f s (--client-timeout 2)\n",
+           SLOW, worst_ms, idle_closed_at);
+    /* A thread held by a slow client would delay /healthz by seconds (a byte per second,
+     * 34 bytes); 1.5 s leaves room for a loaded CI machine. */
+    assert_true(worst_ms < 1500);
+    assert_true(idle_closed);
+    assert_true(idle_closed_at >= 1.5 && idle_closed_at < 4.5);
+    close(idle);
+
+    /* --max-client-connections 10: SLOW are open; fill up to the limit, the next is refused. */
+    int extra[LIMIT], n_extra = 0;
+    for (int i = SLOW; i < LIMIT; i++) extra[n_extra++] = connect_to(&s);
+    ts_sleep_ms(100);
+    for (int i = 0; i < n_extra; i++) assert_false(closed_by_server(extra[i], 0.01));
+    int refused = connect_to(&s);
+    assert_true(closed_by_server(refused, 2));
+    close(refused);
+    for (int i = 0; i < n_extra; i++) close(extra[i]);
+    for (int i = 0; i < SLOW; i++) close(fds[i]);
+    wait_fds(&s, baseline, 5, "after the slow clients left");
+    assert_true(healthz_ms(&s) < 1000);
+    assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
+}
+
+static int run_clients(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_disconnects),
+        cmocka_unit_test(test_slow_clients),
+    };
+    return cmocka_run_group_tests_name("clients", tests, NULL, NULL);
+}
+
+int main(int argc, char **argv)
+{
+    if (argc != 2) {
+        fprintf(stderr, "usage: test_server_faults checkpoint|kill|clients\n");
+        return 2;
+    }
+    signal(SIGPIPE, SIG_IGN);
+    int rc = 2;
+    if (!strcmp(argv[1], "checkpoint")) rc = run_checkpoint(); /* calls curl_global_init after unshare */
+    else curl_global_init(CURL_GLOBAL_DEFAULT);
+    if (!strcmp(argv[1], "kill")) rc = run_kill();
+    else if (!strcmp(argv[1], "clients")) rc = run_clients();
+    curl_global_cleanup();
+    return rc;
+}
