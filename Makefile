@@ -28,17 +28,22 @@ SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
 all: build
 
-deps:
+# $(call install_missing,TARGET,PACKAGES): apt-get installs those of PACKAGES not installed.
+define install_missing
 	@missing=""; \
-	for p in $(DEB_PACKAGES); do \
+	for p in $(2); do \
 	  dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q '^install ok installed' || missing="$$missing $$p"; \
 	done; \
 	if [ -n "$$missing" ]; then \
-	  echo "deps: installing from Debian:$$missing"; \
+	  echo "$(1): installing from Debian:$$missing"; \
 	  $(SUDO) apt-get update -qq && \
 	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $$missing >/dev/null && \
-	  echo "deps: done"; \
+	  echo "$(1): done"; \
 	fi
+endef
+
+deps:
+	$(call install_missing,deps,$(DEB_PACKAGES))
 	@for p in $(OPTIONAL_PACKAGES); do \
 	  dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q '^install ok installed' && continue; \
 	  echo "deps: installing optional $$p"; \
@@ -100,16 +105,7 @@ fuzz: fuzz-build
 	tests/fuzz/run.sh --keep $(FUZZ_BUILD) $(FUZZ_SECONDS) $(FUZZERS)
 
 bench-deps:
-	@missing=""; \
-	for p in $(BENCH_PACKAGES); do \
-	  dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q '^install ok installed' || missing="$$missing $$p"; \
-	done; \
-	if [ -n "$$missing" ]; then \
-	  echo "bench-deps: installing from Debian:$$missing"; \
-	  $(SUDO) apt-get update -qq && \
-	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $$missing >/dev/null && \
-	  echo "bench-deps: done"; \
-	fi
+	$(call install_missing,bench-deps,$(BENCH_PACKAGES))
 
 bench: build bench-deps
 	@if [ -x bench/run ]; then bench/run $(BUILD); else echo "bench: no benchmarks yet"; fi

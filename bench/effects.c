@@ -100,6 +100,24 @@ static measure render_once(const ts_scene *s, ts_film *f, uint32_t spp, int thre
     return m;
 }
 
+/* Loads a scene and makes a film of it at most `width` pixels wide, of the same aspect (a
+ * smaller film keeps the run short); exits with a message on failure. */
+static ts_scene *load_scene(const char *path, int width, ts_film **f)
+{
+    ts_scene *s = NULL;
+    ts_error err = {0};
+    if (ts_scene_load_file(path, NULL, &s, &err)) {
+        fprintf(stderr, "bench_effects: %s: %s\n", path, err.message);
+        exit(1);
+    }
+    int w = width < s->width ? width : s->width, h = (int)((double)s->height * w / s->width + 0.5);
+    if (!(*f = ts_film_create(s->width, s->height, 0, 0, w, h, &err))) {
+        fprintf(stderr, "bench_effects: %s\n", err.message);
+        exit(1);
+    }
+    return s;
+}
+
 int main(int argc, char **argv)
 {
     int spp = 8, reps = 9, threads = (int)sysconf(_SC_NPROCESSORS_ONLN), width = 256;
@@ -136,18 +154,8 @@ int main(int argc, char **argv)
     }
     if (only >= 0) {
         for (; i < argc; i++) {
-            ts_scene *s = NULL;
-            ts_error err = {0};
-            if (ts_scene_load_file(argv[i], NULL, &s, &err)) {
-                fprintf(stderr, "bench_effects: %s: %s\n", argv[i], err.message);
-                return 1;
-            }
-            int w = width < s->width ? width : s->width, h = (int)((double)s->height * w / s->width + 0.5);
-            ts_film *f = ts_film_create(s->width, s->height, 0, 0, w, h, &err);
-            if (!f) {
-                fprintf(stderr, "bench_effects: %s\n", err.message);
-                return 1;
-            }
+            ts_film *f;
+            ts_scene *s = load_scene(argv[i], width, &f);
             measure m = render_once(s, f, (uint32_t)spp, threads, only == 1, -1);
             printf("%s %s %.3f s\n", s->name, only ? "generic" : "specialised", m.wall);
             ts_film_destroy(f);
@@ -162,16 +170,11 @@ int main(int argc, char **argv)
            "instructions |\n");
     printf("|---|---|---|--:|--:|--:|--:|--:|--:|\n");
     for (; i < argc; i++) {
-        ts_scene *s = NULL;
+        ts_film *a, *b;
+        ts_scene *s = load_scene(argv[i], width, &a);
         ts_error err = {0};
-        if (ts_scene_load_file(argv[i], NULL, &s, &err)) {
-            fprintf(stderr, "bench_effects: %s: %s\n", argv[i], err.message);
-            return 1;
-        }
-        /* A smaller film of the same aspect keeps the run short. */
-        int w = width < s->width ? width : s->width, h = (int)((double)s->height * w / s->width + 0.5);
-        ts_film *a = ts_film_create(s->width, s->height, 0, 0, w, h, &err);
-        ts_film *b = ts_film_create(s->width, s->height, 0, 0, w, h, &err);
+        int w = a->width, h = a->height;
+        b = ts_film_create(s->width, s->height, 0, 0, w, h, &err);
         double *tg = calloc((size_t)reps, sizeof *tg), *ts = calloc((size_t)reps, sizeof *ts),
                *ratio = calloc(3 * (size_t)reps, sizeof *ratio);
         if (!a || !b || !tg || !ts || !ratio) {

@@ -237,3 +237,19 @@ const char *ts_json_str(const cJSON *o, const char *key)
     const cJSON *v = cJSON_GetObjectItemCaseSensitive(o, key);
     return cJSON_IsString(v) ? v->valuestring : "";
 }
+
+char *ts_ao_scene(const char *name, int w, int h, int spp)
+{
+    char *s = malloc(2048);
+    if (!s) fail_msg("out of memory");
+    snprintf(s, 2048,
+             "{\"tessera\":1,\"name\":\"%s\",\"camera\":{\"from\":[0,1.5,5],\"to\":[0,0.6,0],\"fov\":35},"
+             "\"film\":{\"width\":%d,\"height\":%d,\"filter\":{\"type\":\"box\"}},"
+             "\"sampler\":{\"spp\":%d},\"integrator\":{\"type\":\"ao\"},"
+             "\"materials\":{\"w\":{\"type\":\"diffuse\"}},"
+             "\"shapes\":[{\"type\":\"sphere\",\"center\":[0,0.6,0],\"radius\":0.6,\"material\":\"w\"},"
+             "{\"type\":\"mesh\",\"positions\":[-5,0,-5, 5,0,-5, 5,0,5, -5,0,5],\"indices\":[0,2,1, 0,3,2],"
+             "\"material\":\"w\"}]}",
+             name, w, h, spp);
+    return s;
+}

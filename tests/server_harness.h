@@ -52,4 +52,8 @@ double ts_json_num(const cJSON *o, const char *key);
 const char *ts_json_str(const cJSON *o, const char *key);
 void ts_sleep_ms(int ms);
 
+/* A small scene document (malloc'd): ambient occlusion of a sphere on a square floor, w×h
+ * pixels, spp samples, box filter — quick to render, for tests of jobs and checkpoints. */
+char *ts_ao_scene(const char *name, int w, int h, int spp);
+
 #endif

@@ -52,19 +52,6 @@ static double now_s(void)
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
-static char *scene(int w, int h, int spp)
-{
-    char *s = malloc(2048);
-    snprintf(s, 2048,
-             "{\"tessera\":1,\"name\":\"faults\",\"camera\":{\"from\":[0,1.5,5],\"to\":[0,0.6,0],\"fov\":35},"
-             "\"film\":{\"width\":%d,\"height\":%d,\"filter\":{\"type\":\"box\"}},"
-             "\"sampler\":{\"spp\":%d},\"integrator\":{\"type\":\"ao\"},"
-             "\"materials\":{\"w\":{\"type\":\"diffuse\"}},"
-             "\"shapes\":[{\"type\":\"sphere\",\"center\":[0,0.6,0],\"radius\":0.6,\"material\":\"w\"},"
-             "{\"type\":\"mesh\",\"positions\":[-5,0,-5, 5,0,-5, 5,0,5, -5,0,5],\"indices\":[0,2,1, 0,3,2],\"material\":\"w\"}]}",
-             w, h, spp);
-    return s;
-}
 
 static char *read_file(const char *path, size_t *len)
 {
@@ -188,7 +175,7 @@ static void checkpoint_fault(fault_kind kind)
     /* 64×64 at 1024 spp of ambient occlusion: a few seconds on two threads, long enough to
      * fault it mid-render; its film checkpoint (64·64·72 bytes + a header) fits the tmpfs
      * twice (the file and its temporary copy). */
-    char *doc = scene(64, 64, 1024), id[32], folder[160], film[200], filler[128] = "";
+    char *doc = ts_ao_scene("faults", 64, 64, 1024), id[32], folder[160], film[200], filler[128] = "";
     ts_submit(&s, doc, id, sizeof id);
     snprintf(folder, sizeof folder, "%s/jobs/%s", dir, id);
     snprintf(film, sizeof film, "%s/film.bin", folder);
@@ -387,7 +374,7 @@ static void test_kill_at_random_moments(void **state)
     enum { KILLS = 100, W = 64, H = 32, SPP = 256 };
     /* Two tiles, 256 spp of ambient occlusion: about 0.3 s uninterrupted, so kills land in
      * every pass, in checkpoint writes, and after the end. */
-    char *doc = scene(W, H, SPP);
+    char *doc = ts_ao_scene("faults", W, H, SPP);
     ts_image ref = reference(doc);
     const char *args[] = {"--threads", "2", "--data", kill_dir, "--checkpoint-interval", "0.05", NULL};
     ts_pcg32 rng;
@@ -576,7 +563,8 @@ static void test_disconnects(void **state)
     ts_server_start(&s, args);
     /* A big image: 1024×1024, one sample (its EXR is some 300 KB; the raw clients below
      * shrink their receive window to 4 KiB, so the server is mid-send when they leave). */
-    char *big = scene(1024, 1024, 1), *slow = scene(256, 256, 1 << 14), id[32], sid[32], path[160];
+    char *big = ts_ao_scene("faults", 1024, 1024, 1), *slow = ts_ao_scene("faults", 256, 256, 1 << 14);
+    char id[32], sid[32], path[160];
     ts_submit(&s, big, id, sizeof id);
     cJSON_Delete(ts_wait_done(&s, id, 60));
     healthz_ms(&s);

@@ -22,19 +22,6 @@
 
 static char data_dir[64];
 
-static char *scene(int w, int h, int spp)
-{
-    char *s = malloc(2048);
-    snprintf(s, 2048,
-             "{\"tessera\":1,\"name\":\"persist\",\"camera\":{\"from\":[0,1.5,5],\"to\":[0,0.6,0],\"fov\":35},"
-             "\"film\":{\"width\":%d,\"height\":%d,\"filter\":{\"type\":\"box\"}},"
-             "\"sampler\":{\"spp\":%d},\"integrator\":{\"type\":\"ao\"},"
-             "\"materials\":{\"w\":{\"type\":\"diffuse\"}},"
-             "\"shapes\":[{\"type\":\"sphere\",\"center\":[0,0.6,0],\"radius\":0.6,\"material\":\"w\"},"
-             "{\"type\":\"mesh\",\"positions\":[-5,0,-5, 5,0,-5, 5,0,5, -5,0,5],\"indices\":[0,2,1, 0,3,2],\"material\":\"w\"}]}",
-             w, h, spp);
-    return s;
-}
 
 static void start(test_server *s)
 {
@@ -78,7 +65,7 @@ static void test_restart_and_resume(void **state)
     start(&s);
     /* A finished job, then one killed mid-render. */
     char a[32], b[32], path[160];
-    char *small = scene(40, 24, 16), *big = scene(64, 64, 1024);
+    char *small = ts_ao_scene("persist", 40, 24, 16), *big = ts_ao_scene("persist", 64, 64, 1024);
     ts_submit(&s, small, a, sizeof a);
     cJSON *o = ts_wait_done(&s, a, 20);
     cJSON_Delete(o);
