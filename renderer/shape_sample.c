@@ -19,6 +19,14 @@
 #define SPHERICAL_MIN_AUTO 3e-4
 #define SPHERICAL_MIN_FORCED 1e-8
 #define SPHERICAL_MAX 6.22
+/* AUTO samples a triangle by area, with no spherical set-up at all, where it is small as
+ * seen from the reference point: area A over the squared distance to its nearest vertex
+ * below this (sr; an estimate of the solid angle that errs high). There 1/r² and the
+ * emitter's cosine vary little across the triangle, so spherical sampling's lower variance
+ * does not pay for its trigonometry (TS_SPHERICAL_AUTO_MIN_ESTIMATE). */
+#ifndef TS_SPHERICAL_AUTO_MIN_ESTIMATE
+#define TS_SPHERICAL_AUTO_MIN_ESTIMATE 0.1
+#endif
 
 /* ---- small double helpers ---- */
 
@@ -358,6 +366,21 @@ double ts_spherical_triangle_area(ts_dvec3 a, ts_dvec3 b, ts_dvec3 c, ts_dvec3 p
     return 2 * atan2(num, den);
 }
 
+/* AUTO's cheap test: the triangle looks small from p (see TS_SPHERICAL_AUTO_MIN_ESTIMATE). */
+static bool auto_small(const ts_shape *s, uint32_t prim, const ts_shape_sample_info *info, ts_dvec3 p)
+{
+    if (info->triangle_mode != TS_TRIANGLE_SAMPLING_AUTO) return false;
+    ts_dvec3 v[3];
+    tri_vertices(s, prim, v);
+    double d2 = INFINITY;
+    for (int k = 0; k < 3; k++) {
+        ts_dvec3 w = ts_dvec3_sub(v[k], p);
+        d2 = fmin(d2, ts_dvec3_dot(w, w));
+    }
+    double area = 0.5 * ts_dvec3_length(ts_dvec3_cross(ts_dvec3_sub(v[1], v[0]), ts_dvec3_sub(v[2], v[0])));
+    return area < TS_SPHERICAL_AUTO_MIN_ESTIMATE * d2;
+}
+
 static bool use_spherical(const ts_shape_sample_info *info, double omega)
 {
     switch (info->triangle_mode) {
@@ -462,7 +485,7 @@ bool ts_shape_sample_solid_angle(const ts_shape *s, uint32_t prim, const ts_shap
         out->pdf = (float)(1 / (2 * TS_PI_D * omc));
         return isfinite(out->pdf) && ts_vec3_distance_sq(out->p, ref->p) > 0;
     }
-    if (s->type == TS_SHAPE_MESH) {
+    if (s->type == TS_SHAPE_MESH && !auto_small(s, prim, info, p_ref)) {
         ts_dvec3 v[3], w[3], dir;
         double omega;
         if (!spherical_setup(s, prim, p_ref, v, w, &omega)) return false;
@@ -503,7 +526,7 @@ float ts_shape_pdf_solid_angle_at(const ts_shape *s, uint32_t prim, const ts_sha
     if (!(info->area > 0) || edge_on(s, prim, ref)) return 0;
     ts_dvec3 p_ref = dv(ref->p);
     if (sphere_cone(s, info, ref)) return (float)(1 / (2 * TS_PI_D * sphere_one_minus_cos(info, p_ref)));
-    if (s->type == TS_SHAPE_MESH) {
+    if (s->type == TS_SHAPE_MESH && !auto_small(s, prim, info, p_ref)) {
         ts_dvec3 v[3], w[3];
         double omega;
         if (!spherical_setup(s, prim, p_ref, v, w, &omega)) return 0;
