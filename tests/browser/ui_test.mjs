@@ -5,7 +5,7 @@
 //
 // Scenarios: submit the Cornell box and see the canvas change as tiles arrive; the plot
 // gains points; reload mid-render and see the image at once; overlay two jobs; cancel a
-// job; a broken scene's message beside its field; layout at 1280×800 and phone width;
+// job and delete it; a broken scene's message beside its field; layout at 1280×800 and phone width;
 // labelled, keyboard-operable controls.
 import { spawn } from 'node:child_process';
 import fs from 'node:fs';
@@ -211,15 +211,21 @@ try {
     await shot('04-overlay');
   });
 
-  await check('cancel a job from the list', async () => {
+  await check('cancel a job from the list, then delete it', async () => {
     const long = await submit(page, { scene: small(), spp: 65536, name: 'to-cancel' });
     assert(long.id, 'POST answered ' + JSON.stringify(long));
     const row = jobRow(page, long.id);
     await row.waitFor({ timeout: 5000 });
     await row.getByRole('button', { name: 'cancel job ' + long.id }).click();
     await row.locator('.state-cancelled').waitFor({ timeout: 15000 });
-    assert(await row.getByRole('button', { name: 'cancel job ' + long.id }).isDisabled(), 'Cancel is disabled once cancelled');
+    assert(await row.getByRole('button', { name: 'cancel job ' + long.id }).count() === 0, 'no Cancel once cancelled');
     await shot('05-cancelled');
+    // A finished job can be deleted (after a confirmation): it leaves the list and the server.
+    page.once('dialog', (d) => d.accept());
+    await row.getByRole('button', { name: 'delete job ' + long.id }).click();
+    await row.waitFor({ state: 'detached', timeout: 5000 });
+    const gone = await page.request.get(url + 'api/v1/jobs/' + long.id);
+    assert(gone.status() === 404, 'the deleted job answers 404, got ' + gone.status());
   });
 
   await check('EXR and PNG downloads', async () => {

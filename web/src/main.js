@@ -99,8 +99,11 @@ function renderJobs() {
       el('td', { 'data-label': 'Elapsed', class: 'num' }, fmtTime(j.elapsed_s)),
       el('td', { 'data-label': 'Effects', class: 'effects small' }, (j.effects || []).join(', ')),
       el('td', { 'data-label': 'Actions', class: 'actions' },
-        el('button', { type: 'button', class: 'cancel', disabled: finished(j.state), 'aria-label': 'cancel job ' + j.id,
-          onclick: () => cancel(j.id) }, 'Cancel'),
+        finished(j.state)
+          ? el('button', { type: 'button', class: 'cancel', 'aria-label': 'delete job ' + j.id,
+            onclick: () => removeJob(j.id) }, 'Delete')
+          : el('button', { type: 'button', class: 'cancel', 'aria-label': 'cancel job ' + j.id,
+            onclick: () => cancel(j.id) }, 'Cancel'),
         el('a', { href: withToken(j.urls.exr), download: j.id + '.exr', 'aria-label': 'download EXR of job ' + j.id }, 'EXR'),
         el('a', { href: withToken(j.urls.png), download: j.id + '.png', 'aria-label': 'download PNG of job ' + j.id }, 'PNG')));
     return row;
@@ -157,6 +160,19 @@ async function poll() {
     $('conn').className = 'conn bad';
   }
   pollTimer = setTimeout(poll, 1000);
+}
+
+// DELETE of a finished job removes it, its image and its checkpoint on the server (and
+// frees its place under --max-jobs); the next poll drops it from the list.
+async function removeJob(id) {
+  if (!window.confirm('Delete job ' + id + ' and its image? This cannot be undone.')) return;
+  const r = await api('/api/v1/jobs/' + encodeURIComponent(id), { method: 'DELETE' });
+  if (r.status !== 204 && r.status !== 404) return;
+  if (id === selectedId) { closeStream(id); selectedId = null; }
+  if (id === compareId) setCompare('');
+  jobs.delete(id);
+  renderJobs();
+  poll();
 }
 
 async function cancel(id) {
