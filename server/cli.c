@@ -24,12 +24,12 @@
 #include "film_image.h"
 #include "image.h"
 #include "merge.h"
+#include "outputs.h"
 #include "png_encode.h"
 #include "render.h"
 #include "scene.h"
 #include "shard.h"
 
-#define MAX_OUTPUTS 8
 
 static void usage(FILE *f)
 {
@@ -71,13 +71,6 @@ static bool parse_positive(const char *s, double *out)
     return true;
 }
 
-static const char *extension(const char *path)
-{
-    const char *dot = strrchr(path, '.');
-    const char *slash = strrchr(path, '/');
-    return dot && (!slash || dot > slash) ? dot + 1 : "";
-}
-
 /* ---------------------------------------------------------------- progress */
 
 typedef struct progress {
@@ -110,7 +103,7 @@ static void on_tile(void *user, int x, int y, int w, int h)
 
 /* ---------------------------------------------------------------- output */
 
-static ts_status write_outputs(const ts_scene *scene, const ts_film *film, char **outputs, int n_outputs,
+static ts_status write_outputs(const ts_scene *scene, const ts_film *film, const ts_outputs *outputs,
                                const ts_render_stats *stats, uint32_t spp_done, double error, const char *integrator,
                                ts_error *err)
 {
@@ -127,10 +120,9 @@ static ts_status write_outputs(const ts_scene *scene, const ts_film *film, char 
     if (!st) st = ts_image_set_double(&img, "tessera_render_time_s", stats->seconds, err);
     if (!st) st = ts_image_set_double(&img, "tessera_error_estimate", error, err);
     if (!st) st = ts_image_set_double(&img, "tessera_nonfinite_samples", (double)stats->counters.nonfinite, err);
-    for (int i = 0; !st && i < n_outputs; i++) {
-        const char *ext = extension(outputs[i]);
-        if (strcasecmp(ext, "exr") == 0) st = ts_exr_write(outputs[i], &img, err);
-        else st = ts_png_write(outputs[i], &img, 0.0f, err);
+    for (int i = 0; !st && i < outputs->n; i++) {
+        if (ts_output_is_exr(outputs->path[i])) st = ts_exr_write(outputs->path[i], &img, err);
+        else st = ts_png_write(outputs->path[i], &img, 0.0f, err);
     }
     ts_image_fini(&img);
     return st;
@@ -161,24 +153,6 @@ static void catch_stop_signals(void)
     sigaction(SIGINT, &sa, NULL);
 }
 
-/* The shard's outputs: .exr in the mergeable SHARD layout, .png as the colour view. */
-static ts_status write_shard_outputs(const ts_film *film, const ts_shard_info *info, char **outputs, int n_outputs,
-                                     ts_error *err)
-{
-    ts_status st = TS_OK;
-    for (int i = 0; !st && i < n_outputs; i++) {
-        if (strcasecmp(extension(outputs[i]), "exr") == 0) {
-            st = ts_shard_write(outputs[i], film, info, err);
-        } else {
-            ts_image img;
-            st = ts_film_to_image(film, TS_FILM_IMAGE_RGB, &img, err);
-            if (!st) st = ts_png_write(outputs[i], &img, 0.0f, err);
-            ts_image_fini(&img);
-        }
-    }
-    return st;
-}
-
 /* ---------------------------------------------------------------- render */
 
 static int cmd_render(int argc, char **argv)
@@ -194,8 +168,7 @@ static int cmd_render(int argc, char **argv)
         {"checkpoint", required_argument, NULL, OPT_CHECKPOINT},
         {"checkpoint-interval", required_argument, NULL, OPT_CHECKPOINT_INTERVAL},
         {NULL, 0, NULL, 0}};
-    char *outputs[MAX_OUTPUTS];
-    int n_outputs = 0;
+    ts_outputs outputs = {0};
     unsigned long long spp = 0, threads = 0, seed = 0;
     bool have_seed = false, quiet = false;
     double time_limit = 0, target_error = 0;
@@ -208,8 +181,7 @@ static int cmd_render(int argc, char **argv)
     while ((c = getopt_long(argc, argv, ":o:", opts, NULL)) != -1) {
         switch (c) {
         case 'o':
-            if (n_outputs == MAX_OUTPUTS) return usage_error("at most %s outputs", "8");
-            outputs[n_outputs++] = optarg;
+            if (!ts_outputs_add(&outputs, optarg)) return usage_error("at most %s outputs", "8");
             break;
         case OPT_SPP:
             if (!parse_uint(optarg, 1u << 24, &spp) || spp == 0)
@@ -250,13 +222,10 @@ static int cmd_render(int argc, char **argv)
     }
     if (argc - optind > 1) return usage_error("render takes at most one scene file, got another: '%s'", argv[optind + 1]);
     const char *scene_path = optind < argc ? argv[optind] : NULL;
-    for (int i = 0; i < n_outputs; i++) {
-        const char *ext = extension(outputs[i]);
-        if (strcasecmp(ext, "exr") != 0 && strcasecmp(ext, "png") != 0)
-            return usage_error("-o %s: the extension must be .exr or .png", outputs[i]);
-    }
+    const char *unsupported = ts_outputs_unsupported(&outputs);
+    if (unsupported) return usage_error("-o %s: the extension must be .exr or .png", unsupported);
     if (shard_count && !shard_text) return usage_error("%s", "--shard-count goes with --shard auto");
-    if (checkpoint && strcasecmp(extension(checkpoint), "exr") != 0)
+    if (checkpoint && !ts_output_is_exr(checkpoint))
         return usage_error("--checkpoint %s: the checkpoint is an EXR file; give it the .exr extension", checkpoint);
 
     /* Which shard (DESIGN.md §7): I/N given, or from the scheduler's environment. */
@@ -439,9 +408,9 @@ static int cmd_render(int argc, char **argv)
             ts_sample_range held = {range.begin, range.begin + done};
             ts_shard_info_init(&info, scene, film, ts_integrator_name(integ), &held, done ? 1 : 0, target_spp,
                                stats.seconds);
-            st = write_shard_outputs(film, &info, outputs, n_outputs, &err);
+            st = ts_outputs_write_shard(&outputs, film, &info, &err);
         } else {
-            st = write_outputs(scene, film, outputs, n_outputs, &stats, done, error, ts_integrator_name(integ), &err);
+            st = write_outputs(scene, film, &outputs, &stats, done, error, ts_integrator_name(integ), &err);
         }
         if (st) {
             fprintf(stderr, "tessera: %s\n", err.message);
@@ -457,7 +426,7 @@ static int cmd_render(int argc, char **argv)
                 "error estimate %.3g%%, %llu non-finite samples dropped\n",
                 scene->name, film->width, film->height, done, stop_reason, ts_integrator_name(integ), n_threads,
                 stats.seconds, msps, 100 * error, (unsigned long long)stats.counters.nonfinite);
-        for (int i = 0; i < n_outputs; i++) fprintf(stderr, "tessera: wrote %s\n", outputs[i]);
+        for (int i = 0; i < outputs.n; i++) fprintf(stderr, "tessera: wrote %s\n", outputs.path[i]);
     }
     pthread_mutex_destroy(&prog.lock);
     ts_film_destroy(film);

@@ -9,26 +9,16 @@
 #include <string.h>
 #include <strings.h>
 
-#include "exr.h"
 #include "film_image.h"
-#include "png_encode.h"
+#include "outputs.h"
 #include "render.h"
 #include "shard.h"
-
-#define MAX_OUTPUTS 8
 
 static void usage(FILE *f)
 {
     fprintf(f, "usage: tessera merge SHARD.exr... [-o OUT.exr] [-o OUT.png] [--allow-partial] [--quiet]\n"
                "Adds the shards' samples exactly; refuses shards of different scenes, seeds or overlapping\n"
                "sample ranges; names missing ranges (and merges anyway with --allow-partial).\n");
-}
-
-static const char *extension(const char *path)
-{
-    const char *dot = strrchr(path, '.');
-    const char *slash = strrchr(path, '/');
-    return dot && (!slash || dot > slash) ? dot + 1 : "";
 }
 
 static int usage_error(const char *fmt, const char *arg)
@@ -40,16 +30,6 @@ static int usage_error(const char *fmt, const char *arg)
     return 2;
 }
 
-static ts_status write_png(const char *path, const ts_film *film, ts_error *err)
-{
-    ts_image img;
-    ts_status st = ts_film_to_image(film, TS_FILM_IMAGE_RGB, &img, err);
-    if (st) return st;
-    st = ts_png_write(path, &img, 0.0f, err);
-    ts_image_fini(&img);
-    return st;
-}
-
 int ts_cli_merge(int argc, char **argv)
 {
     enum { OPT_PARTIAL = 256, OPT_QUIET, OPT_HELP };
@@ -58,8 +38,7 @@ int ts_cli_merge(int argc, char **argv)
                                          {"quiet", no_argument, NULL, OPT_QUIET},
                                          {"help", no_argument, NULL, OPT_HELP},
                                          {NULL, 0, NULL, 0}};
-    char *outputs[MAX_OUTPUTS];
-    int n_outputs = 0;
+    ts_outputs outputs = {0};
     bool allow_partial = false, quiet = false;
     optind = 1;
     opterr = 0;
@@ -67,8 +46,7 @@ int ts_cli_merge(int argc, char **argv)
     while ((c = getopt_long(argc, argv, ":o:", opts, NULL)) != -1) {
         switch (c) {
         case 'o':
-            if (n_outputs == MAX_OUTPUTS) return usage_error("at most %s outputs", "8");
-            outputs[n_outputs++] = optarg;
+            if (!ts_outputs_add(&outputs, optarg)) return usage_error("at most %s outputs", "8");
             break;
         case OPT_PARTIAL: allow_partial = true; break;
         case OPT_QUIET: quiet = true; break;
@@ -78,11 +56,8 @@ int ts_cli_merge(int argc, char **argv)
         }
     }
     if (optind >= argc) return usage_error("%s", "no shard files given");
-    for (int i = 0; i < n_outputs; i++) {
-        const char *ext = extension(outputs[i]);
-        if (strcasecmp(ext, "exr") != 0 && strcasecmp(ext, "png") != 0)
-            return usage_error("-o %s: the extension must be .exr or .png", outputs[i]);
-    }
+    const char *unsupported = ts_outputs_unsupported(&outputs);
+    if (unsupported) return usage_error("-o %s: the extension must be .exr or .png", unsupported);
 
     ts_error err = {0};
     ts_merge *m = ts_merge_create(&err);
@@ -116,14 +91,10 @@ int ts_cli_merge(int argc, char **argv)
         fprintf(stderr, "tessera merge: out of memory\n");
         rc = 1;
     }
-    for (int i = 0; !rc && i < n_outputs; i++) {
-        ts_error_clear(&err);
-        ts_status st = strcasecmp(extension(outputs[i]), "exr") == 0 ? ts_shard_write(outputs[i], film, &info, &err)
-                                                                     : write_png(outputs[i], film, &err);
-        if (st) {
-            fprintf(stderr, "tessera merge: %s\n", err.message);
-            rc = 1;
-        }
+    ts_error_clear(&err);
+    if (!rc && ts_outputs_write_shard(&outputs, film, &info, &err)) {
+        fprintf(stderr, "tessera merge: %s\n", err.message);
+        rc = 1;
     }
     if (!rc && !quiet) {
         char ranges[256];
@@ -133,7 +104,7 @@ int ts_cli_merge(int argc, char **argv)
                 ts_shard_range_samples(info.ranges, info.n_ranges), info.spp_total, ranges,
                 info.uneven ? ", uneven over the image" : "", film->width, film->height,
                 100 * ts_film_relative_error(film));
-        for (int i = 0; i < n_outputs; i++) fprintf(stderr, "tessera merge: wrote %s\n", outputs[i]);
+        for (int i = 0; i < outputs.n; i++) fprintf(stderr, "tessera merge: wrote %s\n", outputs.path[i]);
     }
     ts_merge_destroy(m);
     return rc;

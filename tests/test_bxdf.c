@@ -8,7 +8,7 @@
 #include <stdio.h>
 
 #include "bxdf.h"
-#include "chi2.h"
+#include "chi2_bsdf.h"
 #include "hash.h"
 #include "sampling.h"
 
@@ -23,45 +23,18 @@ static ts_vec3 dir_cos(float cos_theta, float phi_deg)
     return (ts_vec3){s * cosf(p), s * sinf(p), cos_theta};
 }
 
-/* ---- χ² adapter ---- */
-typedef struct case_ctx {
-    ts_bxdf b;
-    ts_vec3 wo;
-} case_ctx;
-
-static ts_chi2_outcome bxdf_sample(void *ctx, ts_pcg32 *rng, ts_vec3 *w)
-{
-    const case_ctx *c = ctx;
-    ts_vec2 u;
-    u.x = ts_pcg32_float(rng);
-    u.y = ts_pcg32_float(rng);
-    ts_bxdf_sample s;
-    if (!ts_bxdf_sample_f(&c->b, c->wo, u, &s)) return TS_CHI2_NONE;
-    if (s.flags & TS_BXDF_SPECULAR) return TS_CHI2_DISCRETE;
-    *w = s.wi;
-    return TS_CHI2_DIRECTION;
-}
-static double bxdf_pdf(void *ctx, ts_vec3 w)
-{
-    const case_ctx *c = ctx;
-    return ts_bxdf_pdf(&c->b, c->wo, w);
-}
-
 static int chi2_failures;
 static double p_min = 1, p_max = 0;
 
 static void run_case(const char *name, ts_bxdf b, ts_vec3 wo)
 {
-    case_ctx c = {b, ts_vec3_normalize(wo)};
+    ts_chi2_bxdf c = {b, ts_vec3_normalize(wo)};
     ts_chi2_params p;
     ts_chi2_params_default(&p);
     ts_chi2_result r;
-    bool ok = ts_chi2_test(&p, bxdf_sample, bxdf_pdf, &c, &r);
-    /* ∫pdf must equal the fraction of continuous samples: tolerance 1e-3 (issue) plus 4σ
-     * of that binomial fraction (≤ 2e-3 at 10^6 samples). */
-    double frac = (double)r.binned / (double)p.sample_count;
-    double sigma = sqrt(frac * (1 - frac) / (double)p.sample_count);
-    bool norm_ok = fabs(r.pdf_integral - frac) <= 1e-3 + 4 * sigma;
+    bool ok = ts_chi2_test(&p, ts_chi2_bxdf_sample, ts_chi2_bxdf_pdf, &c, &r);
+    double frac;
+    bool norm_ok = ts_chi2_pdf_normalised(&p, &r, &frac);
     print_message("%-44s p=%.4f ∫pdf=%.6f frac=%.6f unconv=%d evals=%llu %s\n", name, r.p_value, r.pdf_integral, frac,
                   r.unconverged, (unsigned long long)r.pdf_evals, ok ? "" : r.message);
     if (r.dof >= 1) {

@@ -31,7 +31,7 @@
 #include <unistd.h>
 
 #include "bxdf.h"
-#include "chi2.h"
+#include "chi2_bsdf.h"
 #include "fourier_bsdf.h"
 #include "hash.h"
 
@@ -279,49 +279,19 @@ static void test_evaluation(void **state)
 
 /* ---------------------------------------------------------------- χ² ---- */
 
-typedef struct chi_ctx {
-    ts_bxdf b;
-    ts_vec3 wo;
-} chi_ctx;
-
-static ts_chi2_outcome chi_sample(void *ctx, ts_pcg32 *rng, ts_vec3 *w)
-{
-    const chi_ctx *c = ctx;
-    ts_vec2 u;
-    u.x = ts_pcg32_float(rng);
-    u.y = ts_pcg32_float(rng);
-    ts_bxdf_sample s;
-    if (!ts_bxdf_sample_f(&c->b, c->wo, u, &s)) return TS_CHI2_NONE;
-    /* Acceptance 2 for this lobe: sample's f and pdf equal f and pdf (relative 1e-4,
-     * float arithmetic on both paths with the same spline). */
-    float p = ts_bxdf_pdf(&c->b, c->wo, s.wi);
-    ts_rgb f = ts_bxdf_f(&c->b, c->wo, s.wi);
-    if (fabsf(p - s.pdf) > 1e-4f * p || fabsf(f.r - s.f.r) > 1e-4f * f.r + 1e-7f ||
-        fabsf(f.g - s.f.g) > 1e-4f * f.g + 1e-7f || fabsf(f.b - s.f.b) > 1e-4f * f.b + 1e-7f)
-        fail_msg("sample/eval mismatch: pdf %g vs %g, f.r %g vs %g", s.pdf, p, s.f.r, f.r);
-    *w = s.wi;
-    return TS_CHI2_DIRECTION;
-}
-static double chi_pdf(void *ctx, ts_vec3 w)
-{
-    const chi_ctx *c = ctx;
-    return ts_bxdf_pdf(&c->b, c->wo, w);
-}
-
 /* χ² with the harness defaults (10⁶ samples, significance 0.01 Šidák-corrected over
  * TS_CHI2_FAMILY_SIZE). Also ∫pdf must equal the fraction of samples produced: the
  * spline sampler of μi and the pdf use the same stored CDF, so the only slack is the
  * issue's 1e-3 plus 4σ of that binomial fraction. */
 static void run_chi2(const char *name, const ts_fourier_table *t, ts_vec3 wo)
 {
-    chi_ctx c = {ts_bxdf_fourier(t), ts_vec3_normalize(wo)};
+    ts_chi2_bxdf c = {ts_bxdf_fourier(t), ts_vec3_normalize(wo)};
     ts_chi2_params p;
     ts_chi2_params_default(&p);
     ts_chi2_result r;
-    bool ok = ts_chi2_test(&p, chi_sample, chi_pdf, &c, &r);
-    double frac = (double)r.binned / (double)p.sample_count;
-    double sigma = sqrt(frac * (1 - frac) / (double)p.sample_count);
-    bool norm_ok = fabs(r.pdf_integral - frac) <= 1e-3 + 4 * sigma;
+    bool ok = ts_chi2_test(&p, ts_chi2_bxdf_sample, ts_chi2_bxdf_pdf, &c, &r);
+    double frac;
+    bool norm_ok = ts_chi2_pdf_normalised(&p, &r, &frac);
     print_message("%-36s p=%.4f dof=%d ∫pdf=%.6f frac=%.6f unconv=%d %s\n", name, r.p_value, r.dof,
                   r.pdf_integral, frac, r.unconverged, ok ? "" : r.message);
     assert_true(ok);
