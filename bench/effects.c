@@ -26,8 +26,8 @@
 #include <sys/resource.h>
 #include <sys/syscall.h>
 
-#include "effects.h"
-#include "render.h"
+#include "integrators/effects.h"
+#include "render/render.h"
 
 static int cmp_double(const void *a, const void *b)
 {

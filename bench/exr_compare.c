@@ -11,7 +11,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "exr.h"
+#include "image/exr.h"
 
 int main(int argc, char **argv)
 {

@@ -48,10 +48,10 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include "accel.h"
-#include "integrator.h"
-#include "render.h"
-#include "scene.h"
+#include "geometry/accel.h"
+#include "integrators/integrator.h"
+#include "render/render.h"
+#include "scene/scene.h"
 
 #define MAX_REPS        15
 #define MAX_INTEGRATORS 8

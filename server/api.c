@@ -8,12 +8,9 @@
 #include <strings.h>
 
 #include "assets.h"
-#include "exr.h"
-#include "film_image.h"
 #include "job_store.h"
 #include "persist.h"
-#include "png_encode.h"
-#include "scheduler.h"
+#include "tessera.h"
 
 #define API_PREFIX "/api/v1/jobs"
 

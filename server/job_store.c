@@ -9,7 +9,7 @@
 #include <sys/random.h>
 #include <time.h>
 
-#include "effects.h"
+#include "tessera.h"
 
 struct srv_store {
     srv_server *srv;

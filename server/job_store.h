@@ -16,8 +16,8 @@
 #include <stdint.h>
 
 #include "events.h"
-#include "scheduler.h"
 #include "serve.h"
+#include "tessera.h"
 
 typedef struct srv_job {
     atomic_int refs;

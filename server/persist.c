@@ -9,7 +9,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "image.h"
+#include "tessera.h"
 
 #define FILM_MAGIC "TSFILM01"
 

@@ -23,7 +23,7 @@
 #include "metrics.h"
 #include "offload.h"
 #include "persist.h"
-#include "scheduler.h"
+#include "tessera.h"
 
 #define KEEPALIVE_S 15.0
 

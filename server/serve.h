@@ -13,7 +13,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "scene.h"
+#include "tessera.h"
 
 typedef struct srv_config {
     const char *bind;            /* "127.0.0.1" */

@@ -35,8 +35,8 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "hash.h"
-#include "vecmath.h"
+#include "core/hash.h"
+#include "core/vecmath.h"
 
 /* Upper bound on the number of χ² tests in the whole project's suite (BSDFs, lights,
  * shapes, warps), the default Šidák family size: with it, correct code fails some χ²

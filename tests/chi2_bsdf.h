@@ -12,9 +12,9 @@
 
 #include <stdbool.h>
 
-#include "bsdf.h"
-#include "bxdf.h"
 #include "chi2.h"
+#include "materials/bsdf.h"
+#include "materials/bxdf.h"
 
 typedef struct ts_chi2_bxdf {
     ts_bxdf b;

@@ -7,7 +7,7 @@
 #include <math.h>
 #include <stdio.h>
 
-#include "shard.h"
+#include "render/shard.h"
 
 int main(int argc, char **argv)
 {

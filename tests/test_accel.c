@@ -16,10 +16,10 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "accel.h"
-#include "hash.h"
-#include "shape.h"
-#include "transform.h"
+#include "core/hash.h"
+#include "core/transform.h"
+#include "geometry/accel.h"
+#include "geometry/shape.h"
 
 static double rnd(ts_pcg32 *g) { return ts_pcg32_double(g); }
 static double rnd_range(ts_pcg32 *g, double a, double b) { return a + (b - a) * rnd(g); }

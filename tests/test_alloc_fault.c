@@ -54,8 +54,8 @@ int main(void)
 #include <unistd.h>
 
 #include "job_store.h"
-#include "scene.h"
-#include "scheduler.h"
+#include "render/scheduler.h"
+#include "scene/scene.h"
 
 /* ---------------------------------------------------------------- the interposer */
 

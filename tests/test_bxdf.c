@@ -7,10 +7,10 @@
 
 #include <stdio.h>
 
-#include "bxdf.h"
 #include "chi2_bsdf.h"
-#include "hash.h"
-#include "sampling.h"
+#include "core/hash.h"
+#include "materials/bxdf.h"
+#include "sampling/sampling.h"
 
 static ts_vec3 dir_deg(float theta_deg, float phi_deg)
 {

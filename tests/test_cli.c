@@ -16,8 +16,8 @@
 #include <unistd.h>
 
 #include "cli_support.h"
-#include "exr.h"
-#include "image.h"
+#include "image/exr.h"
+#include "image/image.h"
 
 static char tmpdir[256];
 static char errlog[512];

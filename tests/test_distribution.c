@@ -8,7 +8,7 @@
 
 #include <stdio.h>
 
-#include "distribution.h"
+#include "sampling/distribution.h"
 
 static void assert_close(double a, double b, double tol, const char *what)
 {

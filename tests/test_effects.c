@@ -9,8 +9,8 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "effects.h"
-#include "render.h"
+#include "integrators/effects.h"
+#include "render/render.h"
 
 static ts_scene *load(const char *doc)
 {

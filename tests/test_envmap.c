@@ -14,10 +14,10 @@
 #include <unistd.h>
 
 #include "chi2.h"
-#include "envmap.h"
-#include "exr.h"
-#include "hash.h"
-#include "image.h"
+#include "core/hash.h"
+#include "image/exr.h"
+#include "image/image.h"
+#include "lights/envmap.h"
 
 static void assert_close(double a, double b, double tol, const char *what)
 {

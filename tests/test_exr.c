@@ -18,8 +18,8 @@
 
 #include <openexr.h>
 
-#include "exr.h"
-#include "image.h"
+#include "image/exr.h"
+#include "image/image.h"
 
 /* ---- helpers ---- */
 

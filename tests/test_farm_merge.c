@@ -29,11 +29,11 @@
 #include <unistd.h>
 
 #include "cli_support.h"
-#include "exr.h"
-#include "film_image.h"
-#include "hash.h"
-#include "scene_digest.h"
-#include "shard.h"
+#include "core/hash.h"
+#include "film/film_image.h"
+#include "image/exr.h"
+#include "render/shard.h"
+#include "scene/scene_digest.h"
 
 static char tmpdir[256];
 static char errlog[512];

@@ -10,9 +10,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "film.h"
-#include "filter.h"
-#include "hash.h"
+#include "core/hash.h"
+#include "film/film.h"
+#include "film/filter.h"
 
 static void assert_close(double a, double b, double tol)
 {

@@ -30,10 +30,10 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "bxdf.h"
 #include "chi2_bsdf.h"
-#include "fourier_bsdf.h"
-#include "hash.h"
+#include "core/hash.h"
+#include "materials/bxdf.h"
+#include "materials/fourier_bsdf.h"
 
 /* ------------------------------------------------------------- the writer ---- */
 

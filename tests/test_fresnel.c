@@ -4,7 +4,7 @@
 #include <stddef.h>
 #include <cmocka.h>
 
-#include "fresnel.h"
+#include "materials/fresnel.h"
 
 static void assert_close(double a, double b, double tol)
 {

@@ -20,7 +20,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "render.h"
+#include "render/render.h"
 
 typedef struct result { double mean, se; uint64_t nonfinite; } result;
 

@@ -14,10 +14,10 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "arena.h"
-#include "envmap.h"
-#include "hash.h"
-#include "light.h"
+#include "core/arena.h"
+#include "core/hash.h"
+#include "lights/envmap.h"
+#include "lights/light.h"
 
 static void assert_rel(double a, double b, double rel, const char *what)
 {

@@ -13,11 +13,11 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "bsdf.h"
 #include "chi2_bsdf.h"
-#include "fresnel.h"
-#include "hash.h"
-#include "material.h"
+#include "core/hash.h"
+#include "materials/bsdf.h"
+#include "materials/fresnel.h"
+#include "materials/material.h"
 
 static const ts_rgb silver_eta = {0.155f, 0.117f, 0.138f}, silver_k = {4.83f, 3.12f, 2.15f};
 static const ts_rgb gold_eta = {0.143f, 0.374f, 1.442f}, gold_k = {3.983f, 2.385f, 1.603f};

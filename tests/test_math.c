@@ -4,9 +4,9 @@
 #include <stddef.h>
 #include <cmocka.h>
 
-#include "hash.h"
-#include "transform.h"
-#include "vecmath.h"
+#include "core/hash.h"
+#include "core/transform.h"
+#include "core/vecmath.h"
 
 static void assert_close(double a, double b, double tol)
 {

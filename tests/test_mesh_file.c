@@ -22,8 +22,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "hash.h"
-#include "mesh_file.h"
+#include "core/hash.h"
+#include "scene/mesh_file.h"
 
 static char g_dir[64], g_outside[64];
 

@@ -6,9 +6,9 @@
 #include <cmocka.h>
 
 #include "chi2.h"
-#include "hash.h"
-#include "microfacet.h"
-#include "sampling.h"
+#include "core/hash.h"
+#include "materials/microfacet.h"
+#include "sampling/sampling.h"
 
 static void assert_close(double a, double b, double tol)
 {

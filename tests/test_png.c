@@ -17,8 +17,8 @@
 /* libpng by its versioned path: renderer/ (on the include path) has its own png.h. */
 #include <png.h>
 
-#include "image.h"
-#include "png_encode.h"
+#include "image/image.h"
+#include "image/png_encode.h"
 
 /* ---- a minimal PNG decoder on libpng: RGB8 rows as stored ---- */
 

@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "render.h"
+#include "render/render.h"
 
 static ts_film *render(const ts_scene *s, int threads, const uint32_t *passes, int n_passes)
 {

@@ -9,8 +9,8 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "hash.h"
-#include "sampler.h"
+#include "core/hash.h"
+#include "sampling/sampler.h"
 
 #define MAX_M 12
 

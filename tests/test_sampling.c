@@ -9,8 +9,8 @@
 #include <string.h>
 
 #include "chi2.h"
-#include "hash.h"
-#include "sampling.h"
+#include "core/hash.h"
+#include "sampling/sampling.h"
 
 static void assert_close(double a, double b, double tol)
 {

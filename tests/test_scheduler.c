@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "scheduler.h"
+#include "render/scheduler.h"
 
 static ts_scene *load(int x0, int x1, int y0, int y1)
 {

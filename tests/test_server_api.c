@@ -17,9 +17,9 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "exr.h"
-#include "image.h"
-#include "render.h"
+#include "image/exr.h"
+#include "image/image.h"
+#include "render/render.h"
 #include "server_harness.h"
 
 static test_server srv; /* the default server: 2 render threads */

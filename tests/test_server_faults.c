@@ -40,9 +40,9 @@
 #include <unistd.h>
 
 #include "cli_support.h"
-#include "exr.h"
-#include "hash.h"
-#include "image.h"
+#include "core/hash.h"
+#include "image/exr.h"
+#include "image/image.h"
 #include "server_harness.h"
 
 static double now_s(void)

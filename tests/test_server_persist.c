@@ -16,8 +16,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "exr.h"
-#include "image.h"
+#include "image/exr.h"
+#include "image/image.h"
 #include "server_harness.h"
 
 static char data_dir[64];

@@ -27,8 +27,8 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "exr.h"
-#include "image.h"
+#include "image/exr.h"
+#include "image/image.h"
 #include "server_harness.h"
 
 static char g_root[PATH_MAX];    /* temporary folder holding the two below */

@@ -20,9 +20,9 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "hash.h"
-#include "shape.h"
-#include "transform.h"
+#include "core/hash.h"
+#include "core/transform.h"
+#include "geometry/shape.h"
 
 /* Relative closeness to a boundary below which the exact decision is "ambiguous": 1e-10 is
  * ~10^6 double roundoffs (the implementation decides correctly well inside it) and ~10^-3

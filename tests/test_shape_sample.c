@@ -16,8 +16,8 @@
 #include <string.h>
 
 #include "chi2.h"
-#include "hash.h"
-#include "shape_sample.h"
+#include "core/hash.h"
+#include "geometry/shape_sample.h"
 
 static void assert_close(double a, double b, double tol, const char *what)
 {

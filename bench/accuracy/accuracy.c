@@ -67,10 +67,10 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "film.h"
-#include "light.h"
-#include "render.h"
-#include "scene.h"
+#include "film/film.h"
+#include "lights/light.h"
+#include "render/render.h"
+#include "scene/scene.h"
 
 #define MAX_LEVELS  24
 #define MAX_CONFIGS 16

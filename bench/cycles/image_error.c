@@ -24,7 +24,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-#include "exr.h"
+#include "image/exr.h"
 
 static const char *const k_rgb[3] = {"R", "G", "B"};
 

@@ -6,7 +6,7 @@
 
 #include <math.h>
 
-#include "fourier_bsdf.h"
+#include "materials/fourier_bsdf.h"
 
 static ts_vec3 direction(uint64_t *state)
 {

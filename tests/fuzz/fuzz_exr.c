@@ -7,11 +7,11 @@
 
 #include <math.h>
 
-#include "envmap.h"
-#include "exr.h"
-#include "film.h"
-#include "image.h"
-#include "shard.h"
+#include "film/film.h"
+#include "image/exr.h"
+#include "image/image.h"
+#include "lights/envmap.h"
+#include "render/shard.h"
 
 static void check_image(const ts_image *img)
 {

@@ -52,7 +52,7 @@
 #include "job_store.h"
 #include "metrics.h"
 #include "offload.h"
-#include "scheduler.h"
+#include "render/scheduler.h"
 #include "serve.h"
 
 #define FUZZ_TOKEN       "fz-7Qk2-token"

@@ -11,10 +11,10 @@
 #include <math.h>
 #include <stdbool.h>
 
-#include "json_check.h"
-#include "scene_digest.h"
-#include "scene_path.h"
-#include "shard.h"
+#include "render/shard.h"
+#include "scene/json_check.h"
+#include "scene/scene_digest.h"
+#include "scene/scene_path.h"
 
 static int g_calls;
 

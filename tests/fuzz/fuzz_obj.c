@@ -5,7 +5,7 @@
 
 #include <math.h>
 
-#include "mesh_file.h"
+#include "scene/mesh_file.h"
 
 #ifndef FUZZ_MESH_NAME
 #define FUZZ_MESH_NAME "fuzz.obj"

@@ -7,12 +7,12 @@
  * whatever the loader accepts is exercised by the code that trusts it. */
 #include "fuzz_common.h"
 
-#include "exr.h"
-#include "film.h"
-#include "image.h"
-#include "integrator.h"
-#include "render.h"
-#include "scene.h"
+#include "film/film.h"
+#include "image/exr.h"
+#include "image/image.h"
+#include "integrators/integrator.h"
+#include "render/render.h"
+#include "scene/scene.h"
 
 static const char cube_obj[] = "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\n"
                                "v -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\nvt 0 0\nvt 1 1\n"

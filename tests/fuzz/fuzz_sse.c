@@ -17,8 +17,8 @@
 #include <math.h>
 #include <stdbool.h>
 
-#include "effects.h"
 #include "events.h"
+#include "integrators/effects.h"
 #include "job_store.h"
 
 typedef struct reader {

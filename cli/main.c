@@ -1,0 +1,10 @@
+/* main.c — entry point of the tessera binary: dispatches sub-commands (DESIGN.md §5b). */
+#include <stdio.h>
+#include <string.h>
+
+#include "cli.h"
+
+int main(int argc, char **argv)
+{
+    return cli_main(argc, argv);
+}

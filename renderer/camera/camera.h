@@ -1,0 +1,41 @@
+/* camera.h — perspective (with thin lens) and orthographic cameras of scene format v1.
+ *
+ * Design note: the camera is defined by from/to/up as DESIGN.md §4: forward = to − from,
+ * right = normalize(forward × up), and the true up = right × forward. Raster (0,0) is the
+ * top-left corner of the top-left pixel and y grows downwards. `fov` is the full angle
+ * along the shorter image axis (as pbrt); an orthographic camera's `height` is the screen
+ * window height in scene units. Thin lens: a lens sample on the disk of lens_radius is
+ * focused at focus_distance along forward. Immutable after init; thread-safe. */
+#ifndef TS_CAMERA_H
+#define TS_CAMERA_H
+
+#include "core/error.h"
+#include "core/vecmath.h"
+#include "geometry/interaction.h"
+
+typedef enum ts_camera_type { TS_CAMERA_PERSPECTIVE, TS_CAMERA_ORTHOGRAPHIC } ts_camera_type;
+
+typedef struct ts_camera {
+    ts_camera_type type;
+    ts_vec3 origin, forward, right, up; /* unit, orthonormal */
+    float fov_deg;                      /* perspective */
+    float ortho_height;                 /* orthographic */
+    float lens_radius, focus_distance;
+    int width, height;
+    float half_w, half_h; /* screen window half extents: at distance 1 (perspective) or in scene units */
+} ts_camera;
+
+typedef struct ts_camera_desc {
+    ts_camera_type type;
+    ts_vec3 from, to, up;
+    float fov_deg, ortho_height, lens_radius, focus_distance;
+} ts_camera_desc;
+
+/* Fails (TS_ERR_INVALID, sentence) if from == to, up is parallel to the view direction,
+ * or a parameter is out of range. */
+ts_status ts_camera_init(ts_camera *cam, const ts_camera_desc *desc, int width, int height, ts_error *err);
+
+/* The primary ray through raster point p_raster (pixels), with lens sample u_lens in [0,1)². */
+ts_ray ts_camera_ray(const ts_camera *cam, ts_vec2 p_raster, ts_vec2 u_lens);
+
+#endif

@@ -1,0 +1,97 @@
+/* shape.h — the shapes of scene format v1 and their exact intersection.
+ *
+ * Design note: triangle meshes go to Embree as native triangles (vertices pre-transformed
+ * to world space); spheres, disks and cylinders are Embree user geometry whose intersect
+ * callbacks run the analytic test here. Analytic tests work in object space in double
+ * precision: the float ray is transformed with the double inverse transform, the root is
+ * found in double and the hit reprojected onto the surface, so the world-space point,
+ * rounded once to float, is within about one ulp of the exact hit and p_error bounds it
+ * conservatively. The same routine rebuilds the full interaction after traversal.
+ *
+ * Object spaces: sphere centred at the origin; disk in the plane z = 0 facing +z with
+ * inner_radius ≤ r ≤ radius; cylinder an open tube around the z axis from z = 0 to
+ * z = height facing outwards. to_world maps object to world (the scene's transform list
+ * composed with the placement from center/normal/p0,p1). Triangles face along
+ * (p1 − p0) × (p2 − p0) in world space.
+ *
+ * Shapes are immutable after scene build and read by all threads. */
+#ifndef TS_SHAPE_H
+#define TS_SHAPE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "core/transform.h"
+#include "core/vecmath.h"
+#include "geometry/interaction.h"
+
+typedef enum ts_shape_type {
+    TS_SHAPE_SPHERE,
+    TS_SHAPE_DISK,
+    TS_SHAPE_CYLINDER,
+    TS_SHAPE_MESH,
+} ts_shape_type;
+
+typedef struct ts_mesh {
+    uint32_t n_vertices, n_triangles;
+    const float *p;        /* 3·n_vertices, world space */
+    const float *n;        /* 3·n_vertices world-space unit shading normals, or NULL */
+    const float *uv;       /* 2·n_vertices, or NULL */
+    const uint32_t *index; /* 3·n_triangles, validated < n_vertices */
+} ts_mesh;
+
+typedef struct ts_shape {
+    ts_shape_type type;
+    uint32_t material;    /* index into the scene's materials */
+    bool emissive;        /* emission set and non-black: a diffuse area light */
+    bool two_sided;       /* emits on both sides */
+    ts_rgb emission;      /* radiance leaving the front side (both sides if two_sided) */
+    uint32_t first_light; /* index of this shape's first area light (meshes: + triangle) */
+    ts_xform to_world;    /* object → world (identity for meshes) */
+    bool flip_normal;     /* to_world mirrors handedness: analytic normals flipped back out */
+    union {
+        struct { double radius; } sphere;
+        struct { double radius, inner_radius; } disk;
+        struct { double radius, height; } cylinder;
+        ts_mesh mesh;
+    };
+} ts_shape;
+
+/* World-space bounds of the whole shape (meshes: all triangles). */
+ts_bounds3 ts_shape_bounds(const ts_shape *s);
+/* World-space bounds of one triangle of a mesh. */
+ts_bounds3 ts_shape_triangle_bounds(const ts_shape *s, uint32_t prim);
+
+/* Analytic shapes: nearest hit with t in (0, tmax) of the world ray, in double precision
+ * and conservative (a ray leaving the surface from a spawned origin does not report the
+ * point it left). Returns false on a miss. */
+bool ts_shape_intersect(const ts_shape *s, const ts_ray *ray, float tmax, float *t_hit);
+
+/* The full interaction of a hit found by traversal: shape s, primitive prim, parameter t
+ * along ray (triangles: recomputed in double from the ray, not from Embree's barycentrics).
+ * Fills p, p_error, n, ns, dpdu, dpdv, uv, wo, t, shape index (shape_index), prim. */
+void ts_shape_interaction(const ts_shape *s, uint32_t shape_index, uint32_t prim, const ts_ray *ray, float t,
+                          ts_interaction *si);
+
+/* Surface area in world space (meshes: of one triangle prim; other shapes ignore prim). */
+double ts_shape_area(const ts_shape *s, uint32_t prim);
+
+/* Ray leaving si in direction d (skips si's own triangle when si is on a mesh). */
+ts_ray ts_spawn_ray(const ts_interaction *si, const ts_shape *shapes, ts_vec3 d);
+/* Shadow ray from si towards the point p_to (with its own error p_to_error and normal n_to,
+ * both offset), stopping TS_SHADOW_EPSILON short of it. */
+ts_ray ts_spawn_ray_to(const ts_interaction *si, const ts_shape *shapes, ts_vec3 p_to, ts_vec3 p_to_error,
+                       ts_vec3 n_to);
+
+/* One triangle prim of a mesh: nearest hit with t in (0, tmax), computed in double
+ * precision (Möller–Trumbore on the float vertices) and conservative like
+ * ts_shape_intersect: a ray whose origin lies on the triangle's plane within double
+ * round-off does not hit it. The ray's skip ids are not consulted. */
+bool ts_shape_triangle_intersect(const ts_shape *s, uint32_t prim, const ts_ray *ray, float tmax, float *t_hit);
+/* True if the ray crosses the plane of triangle prim at a t > 0 that double precision can
+ * tell from 0 (false for a ray leaving that plane, lying in it or moving away from it).
+ * The accelerator's check, for rays leaving a mesh, that a hit of Embree's float test is
+ * not the surface the ray leaves (e.g. the coplanar neighbour of its triangle). */
+bool ts_shape_triangle_ahead(const ts_shape *s, uint32_t prim, const ts_ray *ray);
+
+#endif

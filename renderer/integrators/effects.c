@@ -1,0 +1,115 @@
+/* effects.c — scene analysis into effects; see effects.h. */
+#include "integrators/effects.h"
+
+#include <stdio.h>
+#include <string.h>
+
+#include "materials/bsdf.h"
+#include "scene/scene.h"
+
+static const struct { uint32_t bit; const char *key, *text; } table[] = {
+#define TS_EFFECT_ROW(name, bit, key, text) {name, key, text},
+    TS_EFFECT_LIST(TS_EFFECT_ROW)
+#undef TS_EFFECT_ROW
+};
+
+const char *ts_effect_key(uint32_t bit)
+{
+    for (size_t i = 0; i < sizeof table / sizeof *table; i++)
+        if (table[i].bit == bit) return table[i].key;
+    return NULL;
+}
+
+const char *ts_effect_description(uint32_t bit)
+{
+    for (size_t i = 0; i < sizeof table / sizeof *table; i++)
+        if (table[i].bit == bit) return table[i].text;
+    return NULL;
+}
+
+uint32_t ts_effect_from_key(const char *key)
+{
+    for (size_t i = 0; i < sizeof table / sizeof *table; i++)
+        if (strcmp(table[i].key, key) == 0) return table[i].bit;
+    return 0;
+}
+
+void ts_effects_format(uint32_t effects, char *buf, size_t n)
+{
+    size_t used = 0;
+    buf[0] = '\0';
+    for (size_t i = 0; i < sizeof table / sizeof *table && used < n; i++)
+        if (effects & table[i].bit)
+            used += (size_t)snprintf(buf + used, n - used, "%s%s", used ? ", " : "", table[i].key);
+    if (!used) snprintf(buf, n, "none");
+}
+
+/* The lobes a material has, found by building its BSDF at a canonical shading point, so
+ * the classification follows the BSDF code (e.g. its roughness-to-specular threshold). */
+static uint32_t material_effects(const ts_material *m)
+{
+    switch (m->type) {
+    case TS_MATERIAL_DIFFUSE:
+    case TS_MATERIAL_MIRROR:
+        if (ts_rgb_is_black(m->reflectance)) return 0;
+        break;
+    case TS_MATERIAL_DIELECTRIC:
+        if (ts_rgb_is_black(m->reflectance) && ts_rgb_is_black(m->transmittance)) return 0;
+        break;
+    case TS_MATERIAL_PLASTIC:
+    case TS_MATERIAL_SUBSTRATE:
+        if (ts_rgb_is_black(m->diffuse) && ts_rgb_is_black(m->specular)) return 0;
+        break;
+    case TS_MATERIAL_CONDUCTOR: break;
+    case TS_MATERIAL_FOURIER: return TS_EFFECT_FOURIER;
+    }
+    ts_interaction si = {0};
+    si.n = si.ns = (ts_vec3){0, 0, 1};
+    si.dpdu = (ts_vec3){1, 0, 0};
+    si.dpdv = (ts_vec3){0, 1, 0};
+    si.wo = (ts_vec3){0, 0, 1};
+    ts_bsdf b;
+    ts_material_bsdf(m, &si, &b);
+    uint32_t flags = ts_bsdf_flags(&b), fx = b.n_bxdfs > 1 ? TS_EFFECT_LOBE_CHOICE : 0;
+    if (flags & TS_BXDF_DIFFUSE) fx |= TS_EFFECT_DIFFUSE;
+    if (flags & TS_BXDF_GLOSSY) fx |= TS_EFFECT_GLOSSY;
+    if ((flags & TS_BXDF_SPECULAR) && (flags & TS_BXDF_REFLECTION)) fx |= TS_EFFECT_SPECULAR_REFLECTION;
+    if ((flags & TS_BXDF_SPECULAR) && (flags & TS_BXDF_TRANSMISSION)) fx |= TS_EFFECT_SPECULAR_TRANSMISSION;
+    return fx;
+}
+
+uint32_t ts_effects_analyse(const ts_scene *s)
+{
+    uint32_t fx = 0;
+    for (uint32_t i = 0; i < s->n_lights; i++) {
+        const ts_light *l = &s->lights[i];
+        if (ts_rgb_is_black(l->color)) continue;
+        switch (l->type) {
+        case TS_LIGHT_POINT:
+        case TS_LIGHT_SPOT:
+        case TS_LIGHT_DISTANT: fx |= TS_EFFECT_DELTA_LIGHTS; break;
+        case TS_LIGHT_AREA: fx |= TS_EFFECT_AREA_LIGHTS; break;
+        case TS_LIGHT_INFINITE: fx |= TS_EFFECT_ENVIRONMENT; break;
+        }
+    }
+    /* Only materials some shape uses count; each distinct material is classified once. */
+    uint32_t last = TS_NONE;
+    for (uint32_t i = 0; i < s->n_shapes; i++) {
+        uint32_t m = s->shapes[i].material;
+        if (m == last) continue;
+        last = m;
+        fx |= material_effects(&s->materials[m]);
+    }
+    if (s->camera.lens_radius > 0) fx |= TS_EFFECT_DEPTH_OF_FIELD;
+    /* Light after more than one bounce needs light, something that scatters, and depth. */
+    bool lit = (fx & TS_EFFECTS_LIGHTS) != 0;
+    bool scatters = (fx & TS_EFFECTS_SCATTERING) != 0;
+    if (lit && scatters) {
+        const ts_integrator_desc *in = &s->integrator;
+        if (in->type == TS_INTEGRATOR_PATH && in->max_depth >= 2) fx |= TS_EFFECT_INDIRECT;
+        if (in->type == TS_INTEGRATOR_DIRECT && in->max_depth >= 2 &&
+            (fx & (TS_EFFECT_SPECULAR_REFLECTION | TS_EFFECT_SPECULAR_TRANSMISSION)))
+            fx |= TS_EFFECT_INDIRECT;
+    }
+    return fx;
+}

@@ -1,0 +1,379 @@
+/* integrator.c — integrator dispatch and the debugging views; see integrator.h. */
+#include "integrators/integrator.h"
+
+#include "integrators/effects.h"
+#include "lights/light.h"
+#include "materials/bsdf.h"
+#include "materials/material.h"
+#include "sampling/sampling.h"
+
+const char *ts_integrator_name(ts_integrator_type type)
+{
+    switch (type) {
+    case TS_INTEGRATOR_PATH: return "path";
+    case TS_INTEGRATOR_DIRECT: return "direct";
+    case TS_INTEGRATOR_AO: return "ao";
+    case TS_INTEGRATOR_NORMALS: return "normals";
+    }
+    return "unknown";
+}
+
+bool ts_integrator_available(ts_integrator_type type)
+{
+    (void)type;
+    return true;
+}
+
+/* Ambient occlusion: the cosine-weighted fraction of the hemisphere around the shading
+ * normal (turned to face the viewer) that is open within ao_distance. One shadow ray per
+ * sample, so the estimate is 0 or 1 and its mean is the occlusion integral ∫V cosθ/π. */
+static ts_rgb li_ao(const ts_scene *s, const ts_ray *ray, ts_sample_stream *st, ts_counters *c)
+{
+    ts_interaction si;
+    if (!ts_accel_intersect(s->accel, ray, &si)) return ts_rgb_gray(0);
+    ts_vec3 n = ts_vec3_faceforward(si.n, si.wo);
+    ts_vec3 ns = ts_vec3_faceforward(si.ns, n);
+    ts_vec3 a, b;
+    ts_coordinate_system(ns, &a, &b);
+    ts_vec3 w_local = ts_sample_cosine_hemisphere(ts_sample_2d(st));
+    ts_vec3 w = ts_vec3_add(ts_vec3_add(ts_vec3_scale(a, w_local.x), ts_vec3_scale(b, w_local.y)),
+                            ts_vec3_scale(ns, w_local.z));
+    if (ts_vec3_dot(w, n) <= 0) return ts_rgb_gray(0); /* below the geometric surface */
+    ts_ray shadow = ts_spawn_ray(&si, s->shapes, w);
+    shadow.tmax = s->integrator.ao_distance;
+    c->other_rays++;
+    return ts_accel_occluded(s->accel, &shadow) ? ts_rgb_gray(0) : ts_rgb_gray(1);
+}
+
+static ts_rgb li_normals(const ts_scene *s, const ts_ray *ray)
+{
+    ts_interaction si;
+    if (!ts_accel_intersect(s->accel, ray, &si)) return ts_rgb_gray(0);
+    return (ts_rgb){0.5f * (si.ns.x + 1), 0.5f * (si.ns.y + 1), 0.5f * (si.ns.z + 1)};
+}
+
+/* ---------------------------------------------------------------- shared light transport */
+
+/* Emitted radiance leaving hit si towards w, if its shape emits. */
+static ts_rgb emitted(const ts_scene *s, const ts_interaction *si, ts_vec3 w)
+{
+    const ts_shape *sh = &s->shapes[si->shape];
+    if (!sh->emissive) return ts_rgb_gray(0);
+    const ts_light *l = &s->lights[sh->first_light + (sh->type == TS_SHAPE_MESH ? si->prim : 0)];
+    return ts_area_light_l(l, si, w);
+}
+
+/* Radiance of every infinite light along an escaping ray. */
+static ts_rgb escaped(const ts_scene *s, const ts_ray *ray)
+{
+    ts_rgb L = ts_rgb_gray(0);
+    for (uint32_t i = 0; i < s->n_infinite_lights; i++)
+        L = ts_rgb_add(L, ts_light_le(&s->lights[s->infinite_lights[i]], ray));
+    return L;
+}
+
+static float power_heuristic(float f_pdf, float g_pdf) { return ts_power_heuristic(1, f_pdf, 1, g_pdf); }
+
+/* pbrt's EstimateDirect: light `li` sampled with u_light, the BSDF with (u_lobe, u_bsdf),
+ * combined by the power heuristic; delta lights get light sampling only. The BSDF here
+ * samples all its lobes; a specular pick adds nothing (specular transport is handled by
+ * the caller), which stays unbiased because the returned pdf includes the lobe choice. */
+static ts_rgb estimate_direct(const ts_scene *s, const ts_interaction *si, const ts_bsdf *bsdf, uint32_t li,
+                              ts_vec2 u_light, float u_lobe, ts_vec2 u_bsdf, ts_counters *c)
+{
+    const ts_light *light = &s->lights[li];
+    const ts_direct_sampling sampling = s->integrator.sampling;
+    bool delta = light->type == TS_LIGHT_POINT || light->type == TS_LIGHT_SPOT || light->type == TS_LIGHT_DISTANT;
+    ts_rgb Ld = ts_rgb_gray(0);
+    ts_light_sample ls = {0};
+    if ((delta || sampling != TS_SAMPLING_BSDF) && ts_light_sample_li(light, s->shapes, si, u_light, &ls)) {
+        ts_rgb f = ts_rgb_scale(ts_bsdf_f(bsdf, si->wo, ls.wi), ts_vec3_absdot(ls.wi, si->ns));
+        if (!ts_rgb_is_black(f)) {
+            ts_ray shadow = ts_spawn_ray_to(si, s->shapes, ls.p_light, ls.p_light_error, ls.n_light);
+            c->other_rays++;
+            if (!ts_accel_occluded(s->accel, &shadow)) {
+                if (ls.is_delta || sampling == TS_SAMPLING_LIGHT) Ld = ts_rgb_scale(ts_rgb_mul(f, ls.L), 1.0f / ls.pdf);
+                else {
+                    float w = power_heuristic(ls.pdf, ts_bsdf_pdf(bsdf, si->wo, ls.wi));
+                    Ld = ts_rgb_scale(ts_rgb_mul(f, ls.L), w / ls.pdf);
+                }
+            }
+        }
+    }
+    if (delta || sampling == TS_SAMPLING_LIGHT) return Ld;
+    ts_bsdf_sample bs;
+    if (!ts_bsdf_sample_f(bsdf, si->wo, u_lobe, u_bsdf, &bs) || (bs.flags & TS_BXDF_SPECULAR) || !(bs.pdf > 0))
+        return Ld;
+    ts_rgb f = ts_rgb_scale(bs.f, ts_vec3_absdot(bs.wi, si->ns));
+    if (ts_rgb_is_black(f)) return Ld;
+    ts_ray ray = ts_spawn_ray(si, s->shapes, bs.wi);
+    ts_interaction hit;
+    c->other_rays++;
+    ts_rgb Li = ts_rgb_gray(0);
+    float light_pdf = 0;
+    if (ts_accel_intersect(s->accel, &ray, &hit)) {
+        const ts_shape *sh = &s->shapes[hit.shape];
+        if (light->type == TS_LIGHT_AREA && sh->emissive &&
+            sh->first_light + (sh->type == TS_SHAPE_MESH ? hit.prim : 0) == li) {
+            light_pdf = ts_light_pdf_li_hit(light, s->shapes, si, hit.p);
+            Li = ts_area_light_l(light, &hit, ts_vec3_neg(bs.wi));
+        }
+    } else if (light->type == TS_LIGHT_INFINITE) {
+        light_pdf = ts_light_pdf_li(light, s->shapes, si, bs.wi);
+        Li = ts_light_le(light, &ray);
+    }
+    if (ts_rgb_is_black(Li) || !(light_pdf > 0)) return Ld;
+    float w = sampling == TS_SAMPLING_BSDF ? 1.0f : power_heuristic(bs.pdf, light_pdf);
+    return ts_rgb_add(Ld, ts_rgb_scale(ts_rgb_mul(f, Li), w / bs.pdf));
+}
+
+/* The random numbers of what the effects rule out are not computed; their dimensions are
+ * still consumed, so every later value is the same as without the specialisation. */
+
+/* Lobe choice: ts_bsdf_sample_f never reads it from a BSDF of one lobe. */
+static float lobe_u(uint32_t fx, ts_sample_stream *st)
+{
+    if (fx & TS_EFFECT_LOBE_CHOICE) return ts_sample_1d(st);
+    st->dim++;
+    return 0;
+}
+
+/* Whether next-event estimation samples the BSDF too: only towards lights that are not
+ * delta lights (estimate_direct). */
+static bool nee_samples_bsdf(uint32_t fx) { return (fx & (TS_EFFECT_AREA_LIGHTS | TS_EFFECT_ENVIRONMENT)) != 0; }
+
+/* pbrt's UniformSampleOneLight: one light from the distribution, divided by its pmf. */
+static ts_rgb sample_one_light(const ts_scene *s, uint32_t fx, const ts_interaction *si, const ts_bsdf *bsdf,
+                               ts_sample_stream *st, ts_counters *c)
+{
+    float u_select = ts_sample_1d(st);
+    ts_vec2 u_light = ts_sample_2d(st);
+    float u_lobe = 0;
+    ts_vec2 u_bsdf = {0, 0};
+    if (nee_samples_bsdf(fx)) {
+        u_lobe = lobe_u(fx, st);
+        u_bsdf = ts_sample_2d(st);
+    } else {
+        st->dim += 2;
+    }
+    float pmf;
+    uint32_t li = ts_light_distribution_sample(&s->light_distribution, u_select, &pmf);
+    if (li == TS_NONE || !(pmf > 0)) return ts_rgb_gray(0);
+    return ts_rgb_scale(estimate_direct(s, si, bsdf, li, u_light, u_lobe, u_bsdf, c), 1.0f / pmf);
+}
+
+/* pbrt's UniformSampleAllLights: samples_per_light samples of every light, drawn as arrays
+ * (consecutive sequence indices of one dimension) so that they are stratified together. */
+static ts_rgb sample_all_lights(const ts_scene *s, uint32_t fx, const ts_interaction *si, const ts_bsdf *bsdf,
+                                ts_sample_stream *st, ts_counters *c)
+{
+    ts_rgb L = ts_rgb_gray(0);
+    uint32_t n = (uint32_t)s->integrator.samples_per_light;
+    ts_sampler sampler = {st->type, st->seed};
+    for (uint32_t li = 0; li < s->n_lights; li++) {
+        uint32_t dim = st->dim;
+        st->dim += 3;
+        ts_rgb Ll = ts_rgb_gray(0);
+        for (uint32_t j = 0; j < n; j++) {
+            uint32_t index = st->index * n + j;
+            ts_vec2 u_light = ts_sampler_value_2d(&sampler, st->px, st->py, index, dim);
+            float u_lobe = 0;
+            ts_vec2 u_bsdf = {0, 0};
+            if (nee_samples_bsdf(fx)) {
+                if (fx & TS_EFFECT_LOBE_CHOICE) u_lobe = ts_sampler_value_1d(&sampler, st->px, st->py, index, dim + 1);
+                u_bsdf = ts_sampler_value_2d(&sampler, st->px, st->py, index, dim + 2);
+            }
+            Ll = ts_rgb_add(Ll, estimate_direct(s, si, bsdf, li, u_light, u_lobe, u_bsdf, c));
+        }
+        L = ts_rgb_add(L, ts_rgb_scale(Ll, 1.0f / (float)n));
+    }
+    return L;
+}
+
+/* ---------------------------------------------------------------- path */
+
+/* Next-event estimation of the path integrator (pbrt-v4's SampleLd): one light from the
+ * distribution, one light sample. Its MIS partner is the path's own next BSDF sample,
+ * whose hit adds the emission it finds weighted by the power heuristic (li_path), so no
+ * extra BSDF ray is traced here. Both pdfs include the light's selection pmf. */
+static ts_rgb path_nee(const ts_scene *s, const ts_interaction *si, const ts_bsdf *bsdf, float u_select,
+                       ts_vec2 u_light, ts_counters *c)
+{
+    float pmf;
+    uint32_t li = ts_light_distribution_sample(&s->light_distribution, u_select, &pmf);
+    if (li == TS_NONE || !(pmf > 0)) return ts_rgb_gray(0);
+    ts_light_sample ls = {0};
+    if (!ts_light_sample_li(&s->lights[li], s->shapes, si, u_light, &ls) || !(ls.pdf > 0)) return ts_rgb_gray(0);
+    /* BSDF-only sampling still light-samples delta lights, which no BSDF ray can hit. */
+    if (!ls.is_delta && s->integrator.sampling == TS_SAMPLING_BSDF) return ts_rgb_gray(0);
+    ts_rgb f = ts_rgb_scale(ts_bsdf_f(bsdf, si->wo, ls.wi), ts_vec3_absdot(ls.wi, si->ns));
+    if (ts_rgb_is_black(f) || ts_rgb_is_black(ls.L)) return ts_rgb_gray(0);
+    ts_ray shadow = ts_spawn_ray_to(si, s->shapes, ls.p_light, ls.p_light_error, ls.n_light);
+    c->other_rays++;
+    if (ts_accel_occluded(s->accel, &shadow)) return ts_rgb_gray(0);
+    float light_pdf = ls.pdf * pmf;
+    float w = 1;
+    if (!ls.is_delta && s->integrator.sampling == TS_SAMPLING_MIS)
+        w = power_heuristic(light_pdf, ts_bsdf_pdf(bsdf, si->wo, ls.wi));
+    return ts_rgb_scale(ts_rgb_mul(f, ls.L), w / light_pdf);
+}
+
+/* Emission a path ray finds: at the camera and after specular bounces (and for BSDF-only
+ * sampling) in full; after a non-specular bounce weighted against next-event estimation
+ * at the vertex it left (prev, whose BSDF sampled the ray with pdf prev_pdf). */
+static ts_rgb path_emission(const ts_scene *s, uint32_t fx, const ts_ray *ray, bool found, const ts_interaction *si,
+                            bool full, const ts_interaction *prev, float prev_pdf)
+{
+    const ts_light_distribution *d = &s->light_distribution;
+    ts_rgb L = ts_rgb_gray(0);
+    if (found) {
+        const ts_shape *sh = &s->shapes[si->shape];
+        if (!(fx & TS_EFFECT_AREA_LIGHTS) || !sh->emissive) return L;
+        uint32_t li = sh->first_light + (sh->type == TS_SHAPE_MESH ? si->prim : 0);
+        const ts_light *l = &s->lights[li];
+        L = ts_area_light_l(l, si, si->wo);
+        if (full || ts_rgb_is_black(L)) return L;
+        float light_pdf = ts_light_distribution_pmf(d, li) * ts_light_pdf_li_hit(l, s->shapes, prev, si->p);
+        return ts_rgb_scale(L, power_heuristic(prev_pdf, light_pdf));
+    }
+    if (!(fx & TS_EFFECT_ENVIRONMENT)) return L;
+    for (uint32_t i = 0; i < s->n_infinite_lights; i++) {
+        uint32_t li = s->infinite_lights[i];
+        const ts_light *l = &s->lights[li];
+        ts_rgb Le = ts_light_le(l, ray);
+        if (!full && !ts_rgb_is_black(Le)) {
+            float light_pdf = ts_light_distribution_pmf(d, li) * ts_light_pdf_li(l, s->shapes, prev, ray->d);
+            Le = ts_rgb_scale(Le, power_heuristic(prev_pdf, light_pdf));
+        }
+        L = ts_rgb_add(L, Le);
+    }
+    return L;
+}
+
+/* The path integrator: incremental path construction from the camera (pbrt's
+ * PathIntegrator), next-event estimation with MIS at every vertex with a non-specular
+ * lobe, the BSDF-sampled continuation ray doubling as MIS's BSDF sample (as pbrt-v4: two
+ * rays a vertex, not pbrt-v3's three), Russian roulette after rr_depth on β·η-scale.
+ * max_depth counts scattering events as pbrt: the emission found by the BSDF ray leaving
+ * the last vertex is light after max_depth bounces and counts. */
+static ts_rgb li_path(const ts_scene *s, uint32_t fx, ts_ray ray, ts_sample_stream *st, ts_counters *c)
+{
+    ts_rgb L = ts_rgb_gray(0), beta = ts_rgb_gray(1);
+    bool specular_bounce = false;
+    float eta_scale = 1;
+    const int rr_depth = s->integrator.rr_depth;
+    const ts_direct_sampling sampling = s->integrator.sampling;
+    /* Depth cap where further bounces cannot carry light: nothing emits → nothing to see;
+     * nothing scatters → only emission seen directly; no indirect → direct light only. */
+    if (!(fx & TS_EFFECTS_LIGHTS)) return L;
+    int max_depth = s->integrator.max_depth;
+    if (!(fx & TS_EFFECTS_SCATTERING)) max_depth = 0;
+    else if (!(fx & TS_EFFECT_INDIRECT) && max_depth > 1) max_depth = 1;
+    const bool emitters = (fx & (TS_EFFECT_AREA_LIGHTS | TS_EFFECT_ENVIRONMENT)) != 0;
+    ts_interaction prev = {0};
+    float prev_pdf = 0;
+    for (int bounces = 0;; bounces++) {
+        /* Emission found by this ray counts at the camera, after a specular bounce, and
+         * (MIS-weighted, or in full for BSDF-only sampling) unless light sampling alone
+         * is asked for. A ray whose hit can add nothing — the last one, when nothing
+         * emits or its emission does not count — is not traced; it draws no sample
+         * dimensions, so nothing else changes. */
+        bool counts = emitters && (bounces == 0 || specular_bounce || sampling != TS_SAMPLING_LIGHT);
+        if (bounces > 0 && bounces >= max_depth && !counts) break;
+        ts_interaction si;
+        bool found = ts_accel_intersect(s->accel, &ray, &si);
+        if (bounces > 0) c->other_rays++;
+        if (counts) {
+            bool full = bounces == 0 || specular_bounce || sampling == TS_SAMPLING_BSDF;
+            L = ts_rgb_add(L, ts_rgb_mul(beta, path_emission(s, fx, &ray, found, &si, full, &prev, prev_pdf)));
+        }
+        if (!found || bounces >= max_depth) break;
+        ts_bsdf bsdf;
+        ts_material_bsdf(&s->materials[s->shapes[si.shape].material], &si, &bsdf);
+        uint32_t flags = ts_bsdf_flags(&bsdf);
+        if (flags & ~TS_BXDF_SPECULAR & (TS_BXDF_DIFFUSE | TS_BXDF_GLOSSY)) {
+            float u_select = ts_sample_1d(st);
+            ts_vec2 u_light = ts_sample_2d(st);
+            L = ts_rgb_add(L, ts_rgb_mul(beta, path_nee(s, &si, &bsdf, u_select, u_light, c)));
+        } else {
+            st->dim += 2; /* keep later dimensions where they would be */
+        }
+        float u_lobe = lobe_u(fx, st);
+        ts_vec2 u = ts_sample_2d(st);
+        /* Roulette's value is computed only where roulette can happen. */
+        float u_rr = 0;
+        if (bounces > rr_depth) u_rr = ts_sample_1d(st);
+        else st->dim++;
+        ts_bsdf_sample bs;
+        if (!ts_bsdf_sample_f(&bsdf, si.wo, u_lobe, u, &bs) || !(bs.pdf > 0) || ts_rgb_is_black(bs.f)) break;
+        beta = ts_rgb_mul(beta, ts_rgb_scale(bs.f, ts_vec3_absdot(bs.wi, si.ns) / bs.pdf));
+        specular_bounce = (bs.flags & TS_BXDF_SPECULAR) != 0;
+        /* bs.eta is η(wi side)/η(wo side): entering glass it is 1.5 and the BTDF scaled
+         * radiance by 1/1.5², which this undoes for roulette (pbrt's etaScale). */
+        if ((fx & TS_EFFECT_SPECULAR_TRANSMISSION) && specular_bounce && (bs.flags & TS_BXDF_TRANSMISSION))
+            eta_scale *= bs.eta * bs.eta;
+        if (emitters) {
+            prev = si;
+            prev_pdf = bs.pdf;
+        }
+        ray = ts_spawn_ray(&si, s->shapes, bs.wi);
+        ts_rgb rr_beta = ts_rgb_scale(beta, eta_scale);
+        float m = ts_rgb_max(rr_beta);
+        if (m < 1 && bounces > rr_depth) {
+            float q = ts_maxf(0.05f, 1 - m);
+            if (u_rr < q) break;
+            beta = ts_rgb_scale(beta, 1.0f / (1 - q));
+        }
+        if (!ts_rgb_is_finite(beta)) break;
+    }
+    return L;
+}
+
+/* ---------------------------------------------------------------- direct */
+
+/* pbrt-v3's DirectLightingIntegrator: emission at the hit, direct light from all lights
+ * or one, and specular reflection/transmission followed up to max_depth. */
+static ts_rgb li_direct(const ts_scene *s, uint32_t fx, ts_ray ray, ts_sample_stream *st, ts_counters *c, int depth)
+{
+    ts_interaction si;
+    if (!(fx & TS_EFFECTS_LIGHTS)) return ts_rgb_gray(0); /* nothing emits: nothing to see */
+    if (depth > 0) c->other_rays++;
+    if (!ts_accel_intersect(s->accel, &ray, &si))
+        return (fx & TS_EFFECT_ENVIRONMENT) ? escaped(s, &ray) : ts_rgb_gray(0);
+    ts_rgb L = (fx & TS_EFFECT_AREA_LIGHTS) ? emitted(s, &si, si.wo) : ts_rgb_gray(0);
+    if (!(fx & TS_EFFECTS_SCATTERING)) return L;
+    ts_bsdf bsdf;
+    ts_material_bsdf(&s->materials[s->shapes[si.shape].material], &si, &bsdf);
+    uint32_t flags = ts_bsdf_flags(&bsdf);
+    if (s->n_lights > 0 && (flags & (TS_BXDF_DIFFUSE | TS_BXDF_GLOSSY))) {
+        if (s->integrator.strategy == TS_LIGHTS_ALL) L = ts_rgb_add(L, sample_all_lights(s, fx, &si, &bsdf, st, c));
+        else L = ts_rgb_add(L, sample_one_light(s, fx, &si, &bsdf, st, c));
+    }
+    if ((fx & TS_EFFECT_INDIRECT) && depth + 1 < s->integrator.max_depth && (flags & TS_BXDF_SPECULAR)) {
+        float u_lobe = lobe_u(fx, st);
+        ts_vec2 u = ts_sample_2d(st);
+        ts_bsdf_sample bs;
+        if (ts_bsdf_sample_f(&bsdf, si.wo, u_lobe, u, &bs) && (bs.flags & TS_BXDF_SPECULAR) && bs.pdf > 0 &&
+            !ts_rgb_is_black(bs.f)) {
+            float cos = ts_vec3_absdot(bs.wi, si.ns);
+            ts_rgb Li = li_direct(s, fx, ts_spawn_ray(&si, s->shapes, bs.wi), st, c, depth + 1);
+            L = ts_rgb_add(L, ts_rgb_scale(ts_rgb_mul(bs.f, Li), cos / bs.pdf));
+        }
+    }
+    return L;
+}
+
+/* ---------------------------------------------------------------- dispatch */
+
+ts_rgb ts_integrator_li(const ts_scene *s, ts_integrator_type type, uint32_t fx, const ts_ray *ray,
+                        ts_sample_stream *st, ts_counters *c)
+{
+    c->camera_rays++;
+    switch (type) {
+    case TS_INTEGRATOR_AO: return li_ao(s, ray, st, c);
+    case TS_INTEGRATOR_NORMALS: return li_normals(s, ray);
+    case TS_INTEGRATOR_PATH: return li_path(s, fx, *ray, st, c);
+    case TS_INTEGRATOR_DIRECT: return li_direct(s, fx, *ray, st, c, 0);
+    }
+    return ts_rgb_gray(0);
+}

@@ -1,0 +1,281 @@
+/* light.c — lights, their sampling and the light-selection distributions (see light.h).
+ *
+ * Infinite lights with a transform: a light-space direction w maps to the world direction
+ * A w / |A w| (A the linear part of to_world). For a rotation this is the identity on
+ * densities; for any other linear map the solid-angle Jacobian |det A| / |A w|³ is applied,
+ * so Sample_Li and Pdf_Li stay consistent whatever transform the scene gives. */
+#include "lights/light.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "lights/envmap.h"
+#include "sampling/sampling.h"
+
+static bool rgb_valid(ts_rgb c) { return ts_rgb_is_finite(c) && c.r >= 0 && c.g >= 0 && c.b >= 0; }
+
+static double linear_det(const ts_xform *t)
+{
+    const double(*m)[4] = t->m.m;
+    return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+           m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+}
+
+ts_status ts_lights_prepare(ts_light *lights, uint32_t n, const ts_shape *shapes, ts_bounds3 scene_bounds,
+                            ts_error *err)
+{
+    ts_vec3 center = {0, 0, 0};
+    float radius = 1;
+    if (!ts_bounds3_is_empty(scene_bounds) && ts_vec3_is_finite(scene_bounds.lo) && ts_vec3_is_finite(scene_bounds.hi)) {
+        center = ts_vec3_scale(ts_vec3_add(scene_bounds.lo, scene_bounds.hi), 0.5f);
+        float r = ts_vec3_distance(center, scene_bounds.hi);
+        if (r > 0 && isfinite(r)) radius = r;
+    }
+    for (uint32_t i = 0; i < n; i++) {
+        ts_light *l = &lights[i];
+        if (!rgb_valid(l->color))
+            return ts_error_set(err, TS_ERR_INVALID, "lights[%u]: color (%g, %g, %g) must be finite and ≥ 0", i,
+                                l->color.r, l->color.g, l->color.b);
+        switch (l->type) {
+        case TS_LIGHT_POINT:
+            if (!ts_vec3_is_finite(l->position))
+                return ts_error_set(err, TS_ERR_INVALID, "lights[%u]: position is not finite", i);
+            break;
+        case TS_LIGHT_SPOT:
+            if (!ts_vec3_is_finite(l->position))
+                return ts_error_set(err, TS_ERR_INVALID, "lights[%u]: position is not finite", i);
+            __attribute__((fallthrough)); /* spots have a direction too */
+        case TS_LIGHT_DISTANT: {
+            float len = ts_vec3_length(l->direction);
+            if (!(len > 0) || !isfinite(len))
+                return ts_error_set(err, TS_ERR_INVALID, "lights[%u]: direction must be a non-zero vector", i);
+            l->direction = ts_vec3_scale(l->direction, 1 / len);
+            if (l->type == TS_LIGHT_SPOT &&
+                !(l->cos_total >= -1 && l->cos_total <= l->cos_falloff_start && l->cos_falloff_start <= 1))
+                return ts_error_set(err, TS_ERR_INVALID,
+                                    "lights[%u]: spot cosines must satisfy -1 ≤ cos_total (%g) ≤ cos_falloff_start (%g) ≤ 1",
+                                    i, l->cos_total, l->cos_falloff_start);
+            break;
+        }
+        case TS_LIGHT_AREA: {
+            if (!shapes) return ts_error_set(err, TS_ERR_INVALID, "lights[%u]: area light without shapes", i);
+            ts_status st = ts_shape_sample_info_init(&shapes[l->shape], l->prim, l->triangle_sampling, &l->geom, err);
+            if (st) {
+                ts_error_prefix(err, "lights[%u] (shape %u)", i, l->shape);
+                return st;
+            }
+            break;
+        }
+        case TS_LIGHT_INFINITE:
+            if (!(fabs(linear_det(&l->to_world)) > 0))
+                return ts_error_set(err, TS_ERR_INVALID, "lights[%u]: transform is singular", i);
+            break;
+        default: return ts_error_set(err, TS_ERR_INVALID, "lights[%u]: unknown type %d", i, (int)l->type);
+        }
+        l->scene_center = center;
+        l->scene_radius = radius;
+    }
+    return TS_OK;
+}
+
+/* pbrt-v3's smooth spot falloff: 1 inside the inner cone, 0 outside the outer, quartic
+ * in cosθ between. */
+static float spot_falloff(const ts_light *l, float cos_theta)
+{
+    if (cos_theta < l->cos_total) return 0;
+    if (cos_theta >= l->cos_falloff_start) return 1;
+    float delta = (cos_theta - l->cos_total) / (l->cos_falloff_start - l->cos_total);
+    return (delta * delta) * (delta * delta);
+}
+
+/* A point standing in for "at infinity" along wi from p: outside the scene's sphere. */
+static ts_vec3 far_point(const ts_light *l, ts_vec3 p, ts_vec3 wi)
+{
+    float dist = 2 * l->scene_radius + ts_vec3_distance(p, l->scene_center);
+    return ts_vec3_add(p, ts_vec3_scale(wi, dist));
+}
+
+/* Map-space direction of a world direction, and the solid-angle density factor
+ * dω_map/dω_world = |A w_map|³ / |det A| (1 for rotations). */
+static ts_vec3 world_to_map(const ts_light *l, ts_vec3 w_world, double *jac)
+{
+    ts_dvec3 wm = ts_xform_vector_inv(&l->to_world, ts_dvec3_normalize(ts_dvec3_from(w_world)));
+    double len = ts_dvec3_length(wm);
+    if (jac) *jac = 1 / (len * len * len * fabs(linear_det(&l->to_world)));
+    return ts_dvec3_to_vec3(ts_dvec3_scale(wm, 1 / len));
+}
+
+ts_rgb ts_area_light_l(const ts_light *l, const ts_interaction *si, ts_vec3 w)
+{
+    if (l->type != TS_LIGHT_AREA) return ts_rgb_gray(0);
+    return l->two_sided || ts_vec3_dot(si->n, w) > 0 ? l->color : ts_rgb_gray(0);
+}
+
+bool ts_light_sample_li(const ts_light *l, const ts_shape *shapes, const ts_interaction *ref, ts_vec2 u,
+                        ts_light_sample *out)
+{
+    memset(out, 0, sizeof *out);
+    switch (l->type) {
+    case TS_LIGHT_POINT:
+    case TS_LIGHT_SPOT: {
+        ts_vec3 d = ts_vec3_sub(l->position, ref->p);
+        float d2 = ts_vec3_length_sq(d);
+        if (!(d2 > 0)) return false;
+        out->wi = ts_vec3_scale(d, 1 / sqrtf(d2));
+        float scale = 1 / d2;
+        if (l->type == TS_LIGHT_SPOT) scale *= spot_falloff(l, -ts_vec3_dot(out->wi, l->direction));
+        out->L = ts_rgb_scale(l->color, scale);
+        out->pdf = 1;
+        out->p_light = l->position;
+        out->is_delta = true;
+        break;
+    }
+    case TS_LIGHT_DISTANT:
+        out->wi = ts_vec3_neg(l->direction);
+        out->L = l->color;
+        out->pdf = 1;
+        out->p_light = far_point(l, ref->p, out->wi);
+        out->is_delta = true;
+        out->is_infinite = true;
+        break;
+    case TS_LIGHT_AREA: {
+        ts_shape_point pt;
+        if (!ts_shape_sample_solid_angle(&shapes[l->shape], l->prim, &l->geom, ref, u, &pt)) return false;
+        ts_vec3 d = ts_vec3_sub(pt.p, ref->p);
+        float len = ts_vec3_length(d);
+        if (!(len > 0)) return false;
+        out->wi = ts_vec3_scale(d, 1 / len);
+        if (l->two_sided || ts_vec3_dot(pt.n, out->wi) < 0) out->L = l->color;
+        out->pdf = pt.pdf;
+        out->p_light = pt.p;
+        out->p_light_error = pt.p_error;
+        out->n_light = pt.n;
+        break;
+    }
+    case TS_LIGHT_INFINITE: {
+        if (l->map) {
+            ts_vec3 wm;
+            float pdf_map;
+            if (!ts_envmap_sample(l->map, u, &wm, &pdf_map)) return false;
+            ts_dvec3 ww = ts_xform_vector(&l->to_world, ts_dvec3_from(wm));
+            double len = ts_dvec3_length(ww);
+            double pdf = pdf_map * len * len * len / fabs(linear_det(&l->to_world));
+            if (!(pdf > 0) || !(pdf < FLT_MAX)) return false;
+            out->wi = ts_dvec3_to_vec3(ts_dvec3_scale(ww, 1 / len));
+            out->pdf = (float)pdf;
+            out->L = ts_rgb_mul(l->color, ts_envmap_lookup(l->map, wm));
+        } else {
+            out->wi = ts_sample_uniform_sphere(u);
+            out->pdf = ts_uniform_sphere_pdf();
+            out->L = l->color;
+        }
+        out->p_light = far_point(l, ref->p, out->wi);
+        out->is_infinite = true;
+        break;
+    }
+    }
+    if (ts_rgb_is_black(out->L) || !(out->pdf > 0) || !ts_rgb_is_finite(out->L) || !ts_vec3_is_finite(out->wi) ||
+        !ts_vec3_is_finite(out->p_light)) {
+        memset(out, 0, sizeof *out);
+        return false;
+    }
+    return true;
+}
+
+float ts_light_pdf_li(const ts_light *l, const ts_shape *shapes, const ts_interaction *ref, ts_vec3 wi)
+{
+    switch (l->type) {
+    case TS_LIGHT_AREA: return ts_shape_pdf_solid_angle(&shapes[l->shape], l->prim, &l->geom, ref, wi);
+    case TS_LIGHT_INFINITE: {
+        if (!l->map) return ts_uniform_sphere_pdf();
+        double jac;
+        ts_vec3 wm = world_to_map(l, wi, &jac);
+        double pdf = ts_envmap_pdf(l->map, wm) * jac;
+        return pdf < FLT_MAX ? (float)pdf : 0.0f;
+    }
+    default: return 0;
+    }
+}
+
+float ts_light_pdf_li_hit(const ts_light *l, const ts_shape *shapes, const ts_interaction *ref, ts_vec3 p_hit)
+{
+    if (l->type != TS_LIGHT_AREA) return 0;
+    return ts_shape_pdf_solid_angle_at(&shapes[l->shape], l->prim, &l->geom, ref, p_hit);
+}
+
+ts_rgb ts_light_le(const ts_light *l, const ts_ray *ray)
+{
+    if (l->type != TS_LIGHT_INFINITE) return ts_rgb_gray(0);
+    if (!l->map) return l->color;
+    return ts_rgb_mul(l->color, ts_envmap_lookup(l->map, world_to_map(l, ray->d, NULL)));
+}
+
+ts_rgb ts_light_power(const ts_light *l, const ts_shape *shapes)
+{
+    (void)shapes;
+    switch (l->type) {
+    case TS_LIGHT_POINT: return ts_rgb_scale(l->color, 4 * TS_PI);
+    case TS_LIGHT_SPOT: {
+        /* 2π ∫ falloff d(cosθ): 1 − cos_start inside, (cos_start − cos_total)/5 in the band. */
+        float band = (l->cos_falloff_start - l->cos_total) / 5;
+        return ts_rgb_scale(l->color, 2 * TS_PI * ((1 - l->cos_falloff_start) + band));
+    }
+    case TS_LIGHT_DISTANT: return ts_rgb_scale(l->color, TS_PI * l->scene_radius * l->scene_radius);
+    case TS_LIGHT_AREA: return ts_rgb_scale(l->color, (float)(TS_PI_D * l->geom.area * (l->two_sided ? 2 : 1)));
+    case TS_LIGHT_INFINITE: {
+        ts_rgb mean = l->map ? ts_rgb_mul(l->color, l->map->mean_radiance) : l->color;
+        return ts_rgb_scale(mean, 4 * TS_PI * TS_PI * l->scene_radius * l->scene_radius);
+    }
+    }
+    return ts_rgb_gray(0);
+}
+
+ts_status ts_light_distribution_init(ts_light_distribution *d, const ts_light *lights, uint32_t n,
+                                     const ts_shape *shapes, ts_light_sampling mode, ts_arena *arena,
+                                     ts_error *err)
+{
+    memset(d, 0, sizeof *d);
+    if (n == 0) return TS_OK;
+    double *w = malloc((size_t)n * sizeof *w);
+    if (!w) return ts_error_set(err, TS_ERR_NOMEM, "light distribution: out of memory for %u lights", n);
+    for (uint32_t i = 0; i < n; i++) {
+        ts_rgb phi = ts_light_power(&lights[i], shapes);
+        bool emits = ts_rgb_is_finite(phi) && ts_rgb_max(phi) > 0;
+        double lum = ts_rgb_luminance(phi);
+        if (mode == TS_LIGHT_SAMPLING_POWER) w[i] = emits && lum > 0 ? lum : 0;
+        else w[i] = emits ? 1 : 0;
+    }
+    ts_status st = ts_alias_table_init(&d->table, w, n, arena, err);
+    free(w);
+    if (st) return st;
+    d->n = n;
+    return TS_OK;
+}
+
+uint32_t ts_light_distribution_sample(const ts_light_distribution *d, float u, float *pmf)
+{
+    if (d->n == 0) {
+        if (pmf) *pmf = 0;
+        return TS_NONE;
+    }
+    return ts_alias_table_sample(&d->table, u, pmf);
+}
+
+float ts_light_distribution_pmf(const ts_light_distribution *d, uint32_t i)
+{
+    return d->n == 0 ? 0.0f : ts_alias_table_pmf(&d->table, i);
+}
+
+uint32_t ts_lights_set_triangle_sampling(ts_light *lights, uint32_t n, const ts_shape *shapes,
+                                         ts_triangle_sampling mode)
+{
+    uint32_t changed = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        ts_light *l = &lights[i];
+        if (l->type != TS_LIGHT_AREA || shapes[l->shape].type != TS_SHAPE_MESH) continue;
+        l->triangle_sampling = mode;
+        l->geom.triangle_mode = mode;
+        changed++;
+    }
+    return changed;
+}

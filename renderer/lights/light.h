@@ -1,0 +1,131 @@
+/* light.h — the lights of scene format v1 and their sampling (pbrt-v3 ch. 12, §14.2).
+ *
+ * Design note: a light is plain data tagged by type; every operation is a switch on the
+ * tag (no function pointers on the hot path). The scene loader fills the public fields,
+ * then calls ts_lights_prepare once, which validates them, normalises directions, sets
+ * the scene's bounding sphere for distant and infinite lights and precomputes what
+ * sampling needs (shape areas etc., in the fields marked "prepare"). After that lights
+ * are immutable and shared read-only by all threads; every query below is pure,
+ * allocation-free and thread-safe.
+ *
+ * Conventions (DESIGN.md §4): a mesh's emitting triangles are one TS_LIGHT_AREA each
+ * (zero-area ones get power 0 and are never selected by the power distribution, and
+ * sample nothing). Area lights emit `color` on the shape's front side unless two_sided.
+ * Infinite lights: radiance `color` (constant), or color × map (color holds the scale),
+ * the map's own space taken to world by to_world (see envmap.h for the lat-long axes).
+ *
+ * Sampling returns radiance and a pdf; it does no visibility test: the integrator traces
+ * a shadow ray to p_light (ts_spawn_ray_to(ref, shapes, p_light, p_light_error, n_light)).
+ * For distant and infinite lights p_light is a proxy outside the scene's bounding sphere.
+ * n_light and p_light_error are 0 for every light but area lights. */
+#ifndef TS_LIGHT_H
+#define TS_LIGHT_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "core/arena.h"
+#include "core/error.h"
+#include "core/transform.h"
+#include "core/vecmath.h"
+#include "geometry/interaction.h"
+#include "geometry/shape.h"
+#include "geometry/shape_sample.h"
+#include "sampling/distribution.h"
+
+struct ts_envmap; /* envmap.h */
+
+typedef enum ts_light_type {
+    TS_LIGHT_POINT,
+    TS_LIGHT_SPOT,
+    TS_LIGHT_DISTANT,
+    TS_LIGHT_AREA,
+    TS_LIGHT_INFINITE,
+} ts_light_type;
+
+typedef struct ts_light {
+    ts_light_type type;
+    ts_rgb color;          /* point/spot: intensity I; distant: irradiance E; area: emitted radiance L;
+                              infinite: radiance (or scale×map) */
+    ts_vec3 position;      /* point, spot */
+    ts_vec3 direction;     /* spot: unit axis from→to; distant: unit direction the light travels (from→to) */
+    float cos_total, cos_falloff_start; /* spot: cos(cone_angle), cos(cone_angle − cone_delta) (pbrt-v3) */
+    uint32_t shape, prim;  /* area: the emitting shape and triangle (prim 0 for analytic shapes) */
+    bool two_sided;        /* area */
+    const struct ts_envmap *map; /* infinite: map or NULL for constant */
+    ts_xform to_world;     /* infinite: map space → world */
+    ts_vec3 scene_center;  /* distant/infinite: filled by ts_lights_prepare */
+    float scene_radius;
+    /* area: how triangles are sampled (loader leaves 0 = AUTO; ts_lights_set_triangle_sampling forces one) */
+    ts_triangle_sampling triangle_sampling;
+    /* prepare: area sampling data (area, sphere centre/radius, …) */
+    ts_shape_sample_info geom;
+} ts_light;
+
+/* After loading: validates (TS_ERR_INVALID, sentence starting "lights[i]: "), normalises
+ * direction, sets scene_center/scene_radius for distant/infinite lights from scene_bounds
+ * (empty or degenerate bounds give radius 1), and precomputes area-light data. shapes is
+ * the scene's shape array (indexed by ts_light.shape). Not thread-safe; call once. */
+ts_status ts_lights_prepare(ts_light *lights, uint32_t n, const ts_shape *shapes, ts_bounds3 scene_bounds,
+                            ts_error *err);
+
+/* Forces how the area lights on mesh triangles are sampled, after ts_lights_prepare (sets
+ * triangle_sampling and the prepared geom's mode; AUTO restores the loader's default).
+ * Returns how many lights it changed. The accuracy benchmark's switch (bench/accuracy/);
+ * scene files have no key for it. Not thread-safe: call before rendering. */
+uint32_t ts_lights_set_triangle_sampling(ts_light *lights, uint32_t n, const ts_shape *shapes,
+                                         ts_triangle_sampling mode);
+
+typedef struct ts_light_sample {
+    ts_rgb L;            /* radiance arriving at ref along −wi (before visibility) */
+    ts_vec3 wi;          /* unit, from ref towards the light */
+    float pdf;           /* per solid angle, or 1 for delta lights */
+    ts_vec3 p_light, p_light_error, n_light;
+    bool is_delta;       /* point, spot, distant */
+    bool is_infinite;    /* distant, infinite: p_light is a far proxy */
+} ts_light_sample;
+
+/* Samples incident light at ref with the 2D sample u. Returns false — and out->L black,
+ * out->pdf 0 — when the sample carries no light (ref behind a one-sided emitter, ref on
+ * or coplanar with the emitter, outside a spot's cone, a zero-area triangle, …); the
+ * caller then adds nothing. On true, L is non-black, pdf > 0 and everything is finite. */
+bool ts_light_sample_li(const ts_light *l, const ts_shape *shapes, const ts_interaction *ref, ts_vec2 u,
+                        ts_light_sample *out);
+
+/* Density per solid angle with which ts_light_sample_li picks direction wi from ref: 0 for
+ * delta lights and for directions that miss the light. For area lights the point is the
+ * first hit of the ray (ref->p, wi) on the light's shape (triangle). */
+float ts_light_pdf_li(const ts_light *l, const ts_shape *shapes, const ts_interaction *ref, ts_vec3 wi);
+/* Area lights, when the caller already found the light's point p_hit along the ray (the
+ * path tracer's BSDF-sampled ray hit the emitter): the same density, no re-intersection. */
+float ts_light_pdf_li_hit(const ts_light *l, const ts_shape *shapes, const ts_interaction *ref, ts_vec3 p_hit);
+
+/* Infinite lights: radiance along an escaping ray (black for every other type). */
+ts_rgb ts_light_le(const ts_light *l, const ts_ray *ray);
+/* Area lights: emitted radiance from a hit si on its shape towards w (black behind a
+ * one-sided emitter). */
+ts_rgb ts_area_light_l(const ts_light *l, const ts_interaction *si, ts_vec3 w);
+/* Total emitted power Φ (needs ts_lights_prepare for area, distant, infinite lights). */
+ts_rgb ts_light_power(const ts_light *l, const ts_shape *shapes);
+
+/* Light selection for the integrators (DESIGN.md §4 `light_sampling`). */
+typedef enum ts_light_sampling {
+    TS_LIGHT_SAMPLING_UNIFORM,
+    TS_LIGHT_SAMPLING_POWER, /* ∝ luminance of ts_light_power; uniform if all powers are 0 */
+} ts_light_sampling;
+
+typedef struct ts_light_distribution {
+    uint32_t n;            /* number of lights (0: nothing to sample) */
+    ts_alias_table table;  /* table.pmf[i] is the exact probability of light i */
+} ts_light_distribution;
+
+/* Builds over lights[0..n) (prepared), memory from arena. n = 0 is allowed. */
+ts_status ts_light_distribution_init(ts_light_distribution *d, const ts_light *lights, uint32_t n,
+                                     const ts_shape *shapes, ts_light_sampling mode, ts_arena *arena,
+                                     ts_error *err);
+/* Index of a light with probability *pmf; TS_NONE (pmf 0) when there are no lights. */
+uint32_t ts_light_distribution_sample(const ts_light_distribution *d, float u, float *pmf);
+/* Probability of selecting light i (0 if out of range). */
+float ts_light_distribution_pmf(const ts_light_distribution *d, uint32_t i);
+
+#endif

@@ -1,0 +1,151 @@
+/* render.c — the tile loop and its thread pool; see render.h. */
+#include "render/render.h"
+
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "camera/camera.h"
+#include "integrators/effects.h"
+
+double ts_now_seconds(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+typedef struct tile { int x, y, w, h; float key; } tile; /* key: distance² of its centre from the image centre */
+
+typedef struct job {
+    const ts_render_request *req;
+    tile *tiles;
+    int n_tiles;
+    atomic_int next;        /* next tile to take */
+    pthread_mutex_t lock;   /* guards stats while workers add their counters */
+    ts_render_stats *stats;
+} job;
+
+void ts_render_tile(const ts_render_request *req, int x0, int y0, int w, int h, ts_counters *c)
+{
+    const ts_scene *s = req->scene;
+    uint32_t fx = req->generic ? TS_EFFECTS_ALL & ~s->job.effects_off : s->effects;
+    ts_camera cam = s->camera;
+    if (!(fx & TS_EFFECT_DEPTH_OF_FIELD)) cam.lens_radius = 0; /* the lens sample is still drawn */
+    for (int y = y0; y < y0 + h; y++)
+        for (int x = x0; x < x0 + w; x++)
+            for (uint32_t i = req->sample_begin; i < req->sample_end; i++) {
+                ts_sample_stream st;
+                ts_sampler_begin(&s->sampler, (uint32_t)x, (uint32_t)y, i, &st);
+                ts_vec2 u_film = ts_sample_2d(&st);
+                /* The lens dimension is reserved either way, so later dimensions keep their
+                 * values; a pinhole camera just does not compute it. */
+                ts_vec2 u_lens = {0, 0};
+                if (cam.lens_radius > 0) u_lens = ts_sample_2d(&st);
+                else st.dim++;
+                float weight;
+                ts_vec2 off = ts_filter_sample(&s->filter, u_film, &weight);
+                ts_vec2 p_raster = {(float)x + 0.5f + off.x, (float)y + 0.5f + off.y};
+                ts_ray ray = ts_camera_ray(&cam, p_raster, u_lens);
+                ts_rgb L = ts_integrator_li(s, req->integrator, fx, &ray, &st, c);
+                c->samples++;
+                if (!ts_rgb_is_finite(L) || L.r < 0 || L.g < 0 || L.b < 0) {
+                    c->nonfinite++;
+                    continue;
+                }
+                ts_film_add_sample(req->film, x, y, L, weight);
+            }
+}
+
+static void *worker(void *arg)
+{
+    job *j = arg;
+    const ts_render_request *req = j->req;
+    ts_counters c = {0};
+    for (;;) {
+        if (req->cancel && atomic_load(req->cancel)) break;
+        int k = atomic_fetch_add(&j->next, 1);
+        if (k >= j->n_tiles) break;
+        const tile *t = &j->tiles[k];
+        ts_render_tile(req, t->x, t->y, t->w, t->h, &c);
+        if (req->on_tile) req->on_tile(req->user, t->x, t->y, t->w, t->h);
+    }
+    pthread_mutex_lock(&j->lock);
+    ts_counters *sc = &j->stats->counters;
+    sc->camera_rays += c.camera_rays;
+    sc->other_rays += c.other_rays;
+    sc->samples += c.samples;
+    sc->nonfinite += c.nonfinite;
+    pthread_mutex_unlock(&j->lock);
+    return NULL;
+}
+
+static int cmp_tiles(const void *a, const void *b)
+{
+    const tile *ta = a, *tb = b;
+    if (ta->key != tb->key) return ta->key < tb->key ? -1 : 1;
+    if (ta->y != tb->y) return ta->y < tb->y ? -1 : 1;
+    return ta->x < tb->x ? -1 : (ta->x > tb->x);
+}
+
+ts_status ts_render(const ts_render_request *req, ts_render_stats *stats, ts_error *err)
+{
+    const ts_film *f = req->film;
+    int nx = (f->width + TS_TILE_SIZE - 1) / TS_TILE_SIZE, ny = (f->height + TS_TILE_SIZE - 1) / TS_TILE_SIZE;
+    job j = {0};
+    j.req = req;
+    j.n_tiles = nx * ny;
+    j.stats = stats;
+    j.tiles = malloc(sizeof *j.tiles * (size_t)j.n_tiles);
+    if (!j.tiles) return ts_error_set(err, TS_ERR_NOMEM, "out of memory for %d tiles", j.n_tiles);
+    for (int ty = 0; ty < ny; ty++)
+        for (int tx = 0; tx < nx; tx++) {
+            tile *t = &j.tiles[ty * nx + tx];
+            t->x = f->x0 + tx * TS_TILE_SIZE;
+            t->y = f->y0 + ty * TS_TILE_SIZE;
+            t->w = (tx + 1) * TS_TILE_SIZE <= f->width ? TS_TILE_SIZE : f->width - tx * TS_TILE_SIZE;
+            t->h = (ty + 1) * TS_TILE_SIZE <= f->height ? TS_TILE_SIZE : f->height - ty * TS_TILE_SIZE;
+            float dx = t->x + t->w * 0.5f - f->full_width * 0.5f, dy = t->y + t->h * 0.5f - f->full_height * 0.5f;
+            t->key = dx * dx + dy * dy;
+        }
+    qsort(j.tiles, (size_t)j.n_tiles, sizeof *j.tiles, cmp_tiles);
+    atomic_init(&j.next, 0);
+    pthread_mutex_init(&j.lock, NULL);
+
+    double t0 = ts_now_seconds();
+    int n = req->threads < 1 ? 1 : req->threads;
+    pthread_t *th = calloc((size_t)n, sizeof *th);
+    int started = 0;
+    if (th)
+        while (started < n && pthread_create(&th[started], NULL, worker, &j) == 0) started++;
+    /* Fewer threads than asked (or none) still render everything: the workers share
+     * the tiles, and with no worker at all this thread does the work. */
+    if (started == 0) worker(&j);
+    for (int i = 0; i < started; i++) pthread_join(th[i], NULL);
+    stats->seconds += ts_now_seconds() - t0;
+    stats->cancelled = req->cancel && atomic_load(req->cancel);
+    pthread_mutex_destroy(&j.lock);
+    free(th);
+    free(j.tiles);
+    (void)err;
+    return TS_OK;
+}
+
+double ts_film_relative_error(const ts_film *f)
+{
+    double sum = 0;
+    uint64_t n = 0;
+    for (int y = f->y0; y < f->y0 + f->height; y++)
+        for (int x = f->x0; x < f->x0 + f->width; x++) {
+            ts_rgb m = ts_film_pixel_rgb(f, x, y);
+            ts_rgb v = ts_film_pixel_variance(f, x, y);
+            double lum = ts_rgb_luminance(m);
+            /* Var[Y] of a linear combination, ignoring channel covariance (an upper bound for
+             * positively correlated channels is within a factor of 3 of it). */
+            double var = 0.2126 * 0.2126 * v.r + 0.7152 * 0.7152 * v.g + 0.0722 * 0.0722 * v.b;
+            sum += var / (lum * lum + 1e-3);
+            n++;
+        }
+    return n ? sqrt(sum / (double)n) : 0;
+}

@@ -1,0 +1,64 @@
+/* render.h — rendering a range of samples of a scene into a film with a pool of threads.
+ *
+ * Design note: the image is cut into square tiles, ordered from the centre outwards (so a
+ * preview fills in where people look first). Worker threads take tiles from an atomic
+ * counter; each pixel's samples are added in sample-index order by the one thread that
+ * owns its tile, and every sample value depends only on (seed, pixel, index, dimension),
+ * so the film is bit-identical whatever the thread count, tile order or the split of the
+ * sample range into passes. Radiance that is NaN, infinite or negative is dropped and
+ * counted, never added. The scene is only read. */
+#ifndef TS_RENDER_H
+#define TS_RENDER_H
+
+#include <stdatomic.h>
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "film/film.h"
+#include "integrators/integrator.h"
+#include "scene/scene.h"
+
+#define TS_TILE_SIZE 32
+
+typedef struct ts_render_request {
+    const ts_scene *scene;
+    ts_integrator_type integrator; /* usually scene->integrator.type */
+    ts_film *film;                 /* covers the scene's crop window */
+    uint32_t sample_begin, sample_end; /* sample indices [begin, end) of every pixel */
+    int threads;                   /* ≥ 1 */
+    atomic_bool *cancel;           /* optional: set to stop early (tiles already started finish) */
+    /* Optional, called by a worker after each finished tile (x, y, w, h in full-image
+     * pixels); must be thread-safe and quick. */
+    void (*on_tile)(void *user, int x, int y, int w, int h);
+    void *user;
+    /* true: simulate every effect whatever the scene calls for (the specialisation off;
+     * same estimate, for tests and benchmarks). Job switches (job.effects) still apply. */
+    bool generic;
+} ts_render_request;
+
+typedef struct ts_render_stats {
+    ts_counters counters;
+    double seconds;
+    bool cancelled;
+} ts_render_stats;
+
+/* Renders the request; adds its counters to *stats (which the caller zeroes once). Fails
+ * only when threads cannot be started. */
+ts_status ts_render(const ts_render_request *req, ts_render_stats *stats, ts_error *err);
+
+/* Renders sample indices [req->sample_begin, req->sample_end) of every pixel of the
+ * rectangle (x0, y0, w, h) (full-image pixels, inside the film's window) into req->film,
+ * adding its counters to *c. The one tile loop: ts_render and the scheduler (scheduler.h)
+ * both use it. Only req's scene, integrator, film and sample range are read. The caller
+ * must be the only writer of those pixels meanwhile. */
+void ts_render_tile(const ts_render_request *req, int x0, int y0, int w, int h, ts_counters *c);
+
+/* Relative RMS error estimate of the film's image: sqrt(mean over pixels of
+ * Var[Y] / (Y² + 1e-3)) on luminance Y, from the per-pixel sample variance (see
+ * proto/ for the definition). */
+double ts_film_relative_error(const ts_film *f);
+
+/* Seconds on a monotonic clock. */
+double ts_now_seconds(void);
+
+#endif

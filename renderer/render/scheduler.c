@@ -1,0 +1,638 @@
+/* scheduler.c — the shared render pool; see scheduler.h for the design.
+ *
+ * Locking: s->mu guards every field marked "guarded" below, in the scheduler and in every
+ * job. Workers hold it only to pick work and to publish results. A job's working film is
+ * written without the lock by the one worker that holds a tile (tile.busy), and read
+ * without the lock only while the job is "closing" a pass (no tile in flight, none handed
+ * out until closing is cleared). */
+#include "render/scheduler.h"
+
+#include <math.h>
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct tile_state {
+    int tx, ty, x, y, w, h; /* immutable */
+    float key;              /* immutable: distance² of the centre from the image centre */
+    uint32_t spp;           /* guarded: samples in the published snapshot (and the film) */
+    ts_tile_snapshot *snap; /* guarded: latest snapshot, or NULL */
+} tile_state;
+
+struct ts_sched_job {
+    atomic_int refs;
+    ts_scheduler *s;            /* immutable; the job holds a reference on its memory */
+    /* immutable after submit */
+    ts_scene *scene;
+    ts_integrator_type integrator;
+    uint32_t spp_target;
+    int priority;
+    uint64_t seq;
+    double time_limit_s, target_error;
+    ts_job_callbacks cb;
+    int full_w, full_h, x0, y0, w, h, nx, ny, n_tiles;
+    tile_state *tiles;
+    int *order;                 /* tile indices, centre outwards */
+    ts_film *film;              /* working film: see the locking note */
+    double t_submit;
+    /* guarded by s->mu */
+    ts_job_state state;
+    ts_halt_reason halt;
+    bool cancel, closing, in_list;
+    uint32_t pass_end;
+    int cursor, outstanding;
+    uint64_t last_dispatch;
+    double t_start, t_end, elapsed_before;
+    uint64_t samples, nonfinite, camera_rays, other_rays;
+    double error;
+    struct ts_sched_job *next;  /* s->jobs list (unfinished jobs, in priority order) */
+};
+
+struct ts_scheduler {
+    atomic_int refs;            /* the owner's + one per job */
+    pthread_mutex_t mu;
+    pthread_cond_t work;        /* signalled when there may be work or on stop */
+    int n_threads, max_running;
+    pthread_t *threads;         /* immutable after create */
+    int started;
+    /* guarded by mu */
+    bool stopping, joined;
+    ts_sched_job *jobs;
+    uint64_t next_seq, dispatch_clock;
+    uint64_t samples_total;
+};
+
+const char *ts_job_state_name(ts_job_state s)
+{
+    switch (s) {
+    case TS_JOB_QUEUED: return "queued";
+    case TS_JOB_RUNNING: return "running";
+    case TS_JOB_DONE: return "done";
+    case TS_JOB_CANCELLED: return "cancelled";
+    case TS_JOB_FAILED: return "failed";
+    }
+    return "unknown";
+}
+
+const char *ts_halt_reason_name(ts_halt_reason r)
+{
+    switch (r) {
+    case TS_HALT_NONE: return "none";
+    case TS_HALT_SPP: return "spp";
+    case TS_HALT_TIME: return "time_limit";
+    case TS_HALT_ERROR: return "target_error";
+    case TS_HALT_CANCELLED: return "cancelled";
+    case TS_HALT_RESTORED: return "restored";
+    }
+    return "unknown";
+}
+
+/* ---------------------------------------------------------------- references */
+
+static void scheduler_unref(ts_scheduler *s)
+{
+    if (atomic_fetch_sub(&s->refs, 1) != 1) return;
+    pthread_mutex_destroy(&s->mu);
+    pthread_cond_destroy(&s->work);
+    free(s->threads);
+    free(s);
+}
+
+void ts_tile_snapshot_release(ts_tile_snapshot *t)
+{
+    if (t && atomic_fetch_sub(&t->refs, 1) == 1) free(t);
+}
+
+void ts_sched_job_retain(ts_sched_job *j) { atomic_fetch_add(&j->refs, 1); }
+
+static void job_free(ts_sched_job *j)
+{
+    for (int i = 0; j->tiles && i < j->n_tiles; i++) ts_tile_snapshot_release(j->tiles[i].snap);
+    free(j->tiles);
+    free(j->order);
+    ts_film_destroy(j->film);
+    ts_scene_destroy(j->scene);
+    if (j->s) scheduler_unref(j->s);
+    free(j);
+}
+
+void ts_sched_job_release(ts_sched_job *j)
+{
+    if (j && atomic_fetch_sub(&j->refs, 1) == 1) job_free(j);
+}
+
+/* ---------------------------------------------------------------- helpers (s->mu held) */
+
+static double job_elapsed(const ts_sched_job *j, double now)
+{
+    if (j->t_start <= 0) return j->elapsed_before;
+    return j->elapsed_before + ((j->t_end > 0 ? j->t_end : now) - j->t_start);
+}
+
+static uint32_t job_spp_done(const ts_sched_job *j)
+{
+    uint32_t m = UINT32_MAX;
+    for (int i = 0; i < j->n_tiles; i++)
+        if (j->tiles[i].spp < m) m = j->tiles[i].spp;
+    return j->n_tiles ? m : 0;
+}
+
+static void fill_progress(const ts_sched_job *j, ts_job_progress *p)
+{
+    double now = ts_now_seconds();
+    memset(p, 0, sizeof *p);
+    p->state = j->state;
+    p->halt = j->halt;
+    p->spp_done = job_spp_done(j);
+    p->spp_target = j->spp_target;
+    p->pass_end = j->pass_end;
+    p->tiles = j->n_tiles;
+    for (int i = 0; i < j->n_tiles; i++)
+        if (j->tiles[i].spp >= j->pass_end) p->tiles_at_pass_end++;
+    p->elapsed_s = job_elapsed(j, now);
+    p->queued_s = j->t_start > 0 ? j->t_start - j->t_submit : 0;
+    p->samples = j->samples;
+    p->nonfinite = j->nonfinite;
+    p->camera_rays = j->camera_rays;
+    p->other_rays = j->other_rays;
+    p->samples_per_s = p->elapsed_s > 0 ? (double)j->samples / p->elapsed_s : 0;
+    p->error_estimate = j->error;
+}
+
+/* Index (into tiles) of the job's next tile needing the current pass, advancing the cursor
+ * past tiles already there; -1 when none is left. */
+static int next_tile(ts_sched_job *j)
+{
+    while (j->cursor < j->n_tiles && j->tiles[j->order[j->cursor]].spp >= j->pass_end) j->cursor++;
+    return j->cursor < j->n_tiles ? j->order[j->cursor] : -1;
+}
+
+static bool needs_close(ts_sched_job *j)
+{
+    return !j->closing && j->outstanding == 0 && !ts_job_state_finished(j->state) &&
+           (j->cancel || next_tile(j) < 0);
+}
+
+static void list_remove(ts_scheduler *s, ts_sched_job *j)
+{
+    for (ts_sched_job **pp = &s->jobs; *pp; pp = &(*pp)->next)
+        if (*pp == j) {
+            *pp = j->next;
+            j->next = NULL;
+            j->in_list = false;
+            return;
+        }
+}
+
+/* The pass after `done` spp: 1, 2, 4, 8, … (passes of 1, 1, 2, 4, …), capped at the target,
+ * and shrunk to what fits in the time left. */
+static uint32_t next_pass_end(const ts_sched_job *j, uint32_t done, double elapsed)
+{
+    uint64_t end = done == 0 ? 1 : 2ull * done;
+    if (end > j->spp_target) end = j->spp_target;
+    if (j->time_limit_s > 0 && done > 0 && elapsed > 0) {
+        double per_spp = elapsed / done;
+        double fit = (j->time_limit_s - elapsed) / per_spp;
+        if (fit < (double)(end - done)) end = done + (fit >= 1 ? (uint64_t)fit : 1);
+    }
+    return (uint32_t)end;
+}
+
+/* ---------------------------------------------------------------- workers */
+
+static ts_tile_snapshot *snapshot_from_film(const ts_film *f, const tile_state *t, uint32_t spp)
+{
+    ts_tile_snapshot *snap = malloc(sizeof *snap + sizeof(ts_film_pixel) * (size_t)t->w * (size_t)t->h);
+    if (!snap) return NULL;
+    atomic_init(&snap->refs, 1);
+    snap->tx = t->tx, snap->ty = t->ty, snap->x = t->x, snap->y = t->y, snap->w = t->w, snap->h = t->h;
+    snap->spp = spp;
+    for (int y = 0; y < t->h; y++)
+        memcpy(&snap->pixels[(size_t)y * t->w], ts_film_pixel_at(f, t->x, t->y + y), sizeof(ts_film_pixel) * (size_t)t->w);
+    return snap;
+}
+
+
+/* Ends the job's current pass: estimate the error, then halt or start the next pass.
+ * Called with s->mu held and j->closing set; drops and retakes the lock. */
+static void close_pass(ts_scheduler *s, ts_sched_job *j)
+{
+    uint32_t done = job_spp_done(j);
+    pthread_mutex_unlock(&s->mu);
+    double error = done > 0 && j->film ? ts_film_relative_error(j->film) : -1;
+    pthread_mutex_lock(&s->mu);
+    if (done > 0) j->error = error;
+    double now = ts_now_seconds(), elapsed = job_elapsed(j, now);
+    ts_halt_reason halt = TS_HALT_NONE;
+    if (j->cancel) halt = TS_HALT_CANCELLED;
+    else if (done >= j->spp_target) halt = TS_HALT_SPP;
+    else if (j->target_error > 0 && done >= 4 && error >= 0 && error <= j->target_error) halt = TS_HALT_ERROR;
+    else if (j->time_limit_s > 0 && done > 0 && elapsed >= j->time_limit_s) halt = TS_HALT_TIME;
+    bool finished = halt != TS_HALT_NONE;
+    if (finished) {
+        j->halt = halt;
+        j->state = halt == TS_HALT_CANCELLED ? TS_JOB_CANCELLED : TS_JOB_DONE;
+        if (j->t_start > 0) j->t_end = now;
+        list_remove(s, j);
+    } else {
+        /* After a restore tiles may differ: the first pass brings all to the furthest. */
+        uint32_t max = 0;
+        for (int i = 0; i < j->n_tiles; i++)
+            if (j->tiles[i].spp > max) max = j->tiles[i].spp;
+        j->pass_end = max > done ? (max < j->spp_target ? max : j->spp_target) : next_pass_end(j, done, elapsed);
+        j->cursor = 0;
+    }
+    j->closing = false;
+    ts_job_progress p;
+    fill_progress(j, &p);
+    pthread_cond_broadcast(&s->work);
+    pthread_mutex_unlock(&s->mu);
+    if (finished) {
+        if (j->cb.on_done) j->cb.on_done(j->cb.user, j, &p);
+        ts_sched_job_release(j); /* the list's reference */
+    } else if (done > 0 && j->cb.on_pass) {
+        j->cb.on_pass(j->cb.user, j, &p);
+    }
+    pthread_mutex_lock(&s->mu);
+}
+
+/* Picks work under s->mu: a job to close (*tile = -1) or a tile of an active job. */
+static ts_sched_job *pick(ts_scheduler *s, int *tile)
+{
+    for (ts_sched_job *j = s->jobs; j; j = j->next)
+        if (needs_close(j) && (j->cancel || j->state == TS_JOB_RUNNING || j->pass_end == 0)) {
+            *tile = -1;
+            return j;
+        }
+    ts_sched_job *best = NULL;
+    int active = 0;
+    for (ts_sched_job *j = s->jobs; j && active < s->max_running; j = j->next) {
+        active++;
+        if (j->closing || j->cancel || next_tile(j) < 0) continue;
+        if (!best || j->outstanding < best->outstanding ||
+            (j->outstanding == best->outstanding && j->last_dispatch < best->last_dispatch))
+            best = j;
+    }
+    if (!best) return NULL;
+    *tile = next_tile(best);
+    best->cursor++;
+    best->outstanding++;
+    best->last_dispatch = ++s->dispatch_clock;
+    if (best->state == TS_JOB_QUEUED) {
+        best->state = TS_JOB_RUNNING;
+        best->t_start = ts_now_seconds();
+    }
+    return best;
+}
+
+static void *worker(void *arg)
+{
+    ts_scheduler *s = arg;
+    pthread_mutex_lock(&s->mu);
+    while (!s->stopping) {
+        int ti;
+        ts_sched_job *j = pick(s, &ti);
+        if (!j) {
+            pthread_cond_wait(&s->work, &s->mu);
+            continue;
+        }
+        if (ti < 0) {
+            j->closing = true;
+            close_pass(s, j);
+            continue;
+        }
+        tile_state *t = &j->tiles[ti];
+        ts_render_request req = {j->scene, j->integrator, j->film, t->spp, j->pass_end, 1, NULL, NULL, NULL};
+        ts_sched_job_retain(j);
+        pthread_mutex_unlock(&s->mu);
+
+        ts_counters c = {0};
+        ts_render_tile(&req, t->x, t->y, t->w, t->h, &c);
+        ts_tile_snapshot *snap = snapshot_from_film(j->film, t, req.sample_end);
+        ts_tile_event ev = {t->tx, t->ty, t->x, t->y, t->w, t->h, req.sample_end};
+
+        pthread_mutex_lock(&s->mu);
+        ts_tile_snapshot *old = NULL;
+        if (snap) { /* out of memory: the film has the samples; the old snapshot stays */
+            old = t->snap;
+            t->snap = snap;
+        }
+        t->spp = req.sample_end;
+        j->samples += c.samples;
+        j->nonfinite += c.nonfinite;
+        j->camera_rays += c.camera_rays;
+        j->other_rays += c.other_rays;
+        s->samples_total += c.samples;
+        pthread_mutex_unlock(&s->mu);
+        ts_tile_snapshot_release(old);
+        if (j->cb.on_tile) j->cb.on_tile(j->cb.user, j, &ev);
+        pthread_mutex_lock(&s->mu);
+        j->outstanding--;
+        if (needs_close(j)) {
+            j->closing = true;
+            close_pass(s, j);
+        } else if (j->outstanding == 0 || j->cancel) {
+            pthread_cond_broadcast(&s->work);
+        }
+        pthread_mutex_unlock(&s->mu);
+        ts_sched_job_release(j);
+        pthread_mutex_lock(&s->mu);
+    }
+    pthread_mutex_unlock(&s->mu);
+    return NULL;
+}
+
+/* ---------------------------------------------------------------- scheduler */
+
+ts_scheduler *ts_scheduler_create(int threads, int max_running, ts_error *err)
+{
+    if (threads < 1) threads = 1;
+    if (max_running < 1) max_running = 1;
+    ts_scheduler *s = calloc(1, sizeof *s);
+    if (!s) {
+        ts_error_set(err, TS_ERR_NOMEM, "out of memory for the scheduler");
+        return NULL;
+    }
+    atomic_init(&s->refs, 1);
+    s->n_threads = threads;
+    s->max_running = max_running;
+    pthread_mutex_init(&s->mu, NULL);
+    pthread_cond_init(&s->work, NULL);
+    s->threads = calloc((size_t)threads, sizeof *s->threads);
+    if (!s->threads) {
+        scheduler_unref(s);
+        ts_error_set(err, TS_ERR_NOMEM, "out of memory for %d threads", threads);
+        return NULL;
+    }
+    while (s->started < threads && pthread_create(&s->threads[s->started], NULL, worker, s) == 0) s->started++;
+    if (s->started == 0) {
+        scheduler_unref(s);
+        ts_error_set(err, TS_ERR_INTERNAL, "could not start any render thread");
+        return NULL;
+    }
+    s->n_threads = s->started;
+    return s;
+}
+
+int ts_scheduler_threads(const ts_scheduler *s) { return s->n_threads; }
+
+uint64_t ts_scheduler_samples(ts_scheduler *s)
+{
+    pthread_mutex_lock(&s->mu);
+    uint64_t n = s->samples_total;
+    pthread_mutex_unlock(&s->mu);
+    return n;
+}
+
+void ts_scheduler_stop(ts_scheduler *s)
+{
+    pthread_mutex_lock(&s->mu);
+    bool join = !s->joined;
+    s->stopping = true;
+    s->joined = true;
+    pthread_cond_broadcast(&s->work);
+    pthread_mutex_unlock(&s->mu);
+    if (join)
+        for (int i = 0; i < s->started; i++) pthread_join(s->threads[i], NULL);
+}
+
+void ts_scheduler_destroy(ts_scheduler *s)
+{
+    if (!s) return;
+    ts_scheduler_stop(s);
+    pthread_mutex_lock(&s->mu);
+    ts_sched_job *list = s->jobs;
+    s->jobs = NULL;
+    for (ts_sched_job *j = list; j; j = j->next) j->in_list = false;
+    pthread_mutex_unlock(&s->mu);
+    while (list) {
+        ts_sched_job *next = list->next;
+        list->next = NULL;
+        ts_sched_job_release(list);
+        list = next;
+    }
+    scheduler_unref(s);
+}
+
+static int cmp_key(const void *a, const void *b, const tile_state *tiles)
+{
+    const tile_state *ta = &tiles[*(const int *)a], *tb = &tiles[*(const int *)b];
+    if (ta->key != tb->key) return ta->key < tb->key ? -1 : 1;
+    if (ta->y != tb->y) return ta->y < tb->y ? -1 : 1;
+    return ta->x < tb->x ? -1 : (ta->x > tb->x);
+}
+
+/* Insertion sort of the order by key (qsort has no context argument in C11). */
+static void sort_order(int *order, int n, const tile_state *tiles)
+{
+    for (int i = 1; i < n; i++) {
+        int v = order[i], k = i;
+        while (k > 0 && cmp_key(&order[k - 1], &v, tiles) > 0) {
+            order[k] = order[k - 1];
+            k--;
+        }
+        order[k] = v;
+    }
+}
+
+ts_sched_job *ts_scheduler_submit(ts_scheduler *s, const ts_sched_job_desc *d, ts_error *err)
+{
+    bool finished = ts_job_state_finished(d->finished);
+    if (!d->scene && !(finished && d->film)) {
+        ts_error_set(err, TS_ERR_INVALID, "a job needs a scene (or a film when restored finished)");
+        return NULL;
+    }
+    if (d->spp < 1 && !finished) {
+        ts_error_set(err, TS_ERR_INVALID, "a job needs at least 1 sample per pixel");
+        return NULL;
+    }
+    ts_sched_job *j = calloc(1, sizeof *j);
+    if (!j) {
+        ts_error_set(err, TS_ERR_NOMEM, "out of memory for a job");
+        return NULL;
+    }
+    atomic_init(&j->refs, 1);
+    j->integrator = d->integrator;
+    j->spp_target = d->spp;
+    j->priority = d->priority;
+    j->time_limit_s = d->time_limit_s;
+    j->target_error = d->target_error;
+    j->cb = d->callbacks;
+    j->error = -1;
+    if (d->scene) {
+        const ts_scene *sc = d->scene;
+        j->full_w = sc->width, j->full_h = sc->height;
+        j->x0 = sc->crop_x0, j->y0 = sc->crop_y0, j->w = sc->crop_x1 - sc->crop_x0, j->h = sc->crop_y1 - sc->crop_y0;
+    } else {
+        j->full_w = d->full_width, j->full_h = d->full_height;
+        j->x0 = d->film->x0, j->y0 = d->film->y0, j->w = d->film->width, j->h = d->film->height;
+    }
+    if (d->film && (d->film->x0 != j->x0 || d->film->y0 != j->y0 || d->film->width != j->w ||
+                    d->film->height != j->h || d->film->full_width != j->full_w || d->film->full_height != j->full_h)) {
+        ts_error_set(err, TS_ERR_INVALID, "the film to resume does not match the scene's film window");
+        free(j);
+        return NULL;
+    }
+    j->nx = (j->w + TS_TILE_SIZE - 1) / TS_TILE_SIZE;
+    j->ny = (j->h + TS_TILE_SIZE - 1) / TS_TILE_SIZE;
+    j->n_tiles = j->nx * j->ny;
+    j->tiles = calloc((size_t)j->n_tiles, sizeof *j->tiles);
+    j->order = malloc(sizeof *j->order * (size_t)j->n_tiles);
+    ts_film *film = d->film ? d->film : ts_film_create(j->full_w, j->full_h, j->x0, j->y0, j->w, j->h, err);
+    if (!j->tiles || !j->order || !film) {
+        if (film && film != d->film) ts_film_destroy(film);
+        free(j->tiles);
+        free(j->order);
+        free(j);
+        if (film) ts_error_set(err, TS_ERR_NOMEM, "out of memory for a job's tiles");
+        return NULL;
+    }
+    for (int ty = 0; ty < j->ny; ty++)
+        for (int tx = 0; tx < j->nx; tx++) {
+            int i = ty * j->nx + tx;
+            tile_state *t = &j->tiles[i];
+            t->tx = tx, t->ty = ty;
+            t->x = j->x0 + tx * TS_TILE_SIZE;
+            t->y = j->y0 + ty * TS_TILE_SIZE;
+            t->w = (tx + 1) * TS_TILE_SIZE <= j->w ? TS_TILE_SIZE : j->w - tx * TS_TILE_SIZE;
+            t->h = (ty + 1) * TS_TILE_SIZE <= j->h ? TS_TILE_SIZE : j->h - ty * TS_TILE_SIZE;
+            float dx = t->x + t->w * 0.5f - j->full_w * 0.5f, dy = t->y + t->h * 0.5f - j->full_h * 0.5f;
+            t->key = dx * dx + dy * dy;
+            t->spp = d->tile_spp ? d->tile_spp[i] : 0;
+            if (d->film && t->spp > 0) t->snap = snapshot_from_film(film, t, t->spp);
+            j->order[i] = i;
+        }
+    sort_order(j->order, j->n_tiles, j->tiles);
+    j->film = film;
+    j->scene = d->scene;
+    j->elapsed_before = d->elapsed_s;
+    j->samples = d->samples;
+    j->nonfinite = d->nonfinite;
+    j->t_submit = ts_now_seconds();
+    j->cursor = j->n_tiles; /* pass_end 0: the first close starts pass 1 */
+    if (d->film && !finished) j->error = ts_film_relative_error(film);
+
+    atomic_fetch_add(&s->refs, 1);
+    j->s = s;
+    pthread_mutex_lock(&s->mu);
+    j->seq = s->next_seq++;
+    if (finished) {
+        j->state = d->finished;
+        j->halt = TS_HALT_RESTORED;
+        j->pass_end = job_spp_done(j);
+        pthread_mutex_unlock(&s->mu);
+        if (j->film) j->error = ts_film_relative_error(j->film);
+        return j;
+    }
+    j->state = TS_JOB_QUEUED;
+    ts_sched_job **pp = &s->jobs;
+    while (*pp && ((*pp)->priority > j->priority || ((*pp)->priority == j->priority && (*pp)->seq < j->seq)))
+        pp = &(*pp)->next;
+    j->next = *pp;
+    *pp = j;
+    j->in_list = true;
+    ts_sched_job_retain(j); /* the list's reference */
+    pthread_cond_broadcast(&s->work);
+    pthread_mutex_unlock(&s->mu);
+    return j;
+}
+
+bool ts_sched_job_cancel(ts_sched_job *j)
+{
+    ts_scheduler *s = j->s;
+    if (!s) return false;
+    pthread_mutex_lock(&s->mu);
+    if (ts_job_state_finished(j->state) || j->cancel) {
+        bool was = !ts_job_state_finished(j->state);
+        pthread_mutex_unlock(&s->mu);
+        return was;
+    }
+    j->cancel = true;
+    if (s->stopping && j->outstanding == 0 && !j->closing) {
+        /* No workers left to close it: finish here (no new error estimate). */
+        j->state = TS_JOB_CANCELLED;
+        j->halt = TS_HALT_CANCELLED;
+        if (j->t_start > 0) j->t_end = ts_now_seconds();
+        bool listed = j->in_list;
+        list_remove(s, j);
+        ts_job_progress p;
+        fill_progress(j, &p);
+        pthread_mutex_unlock(&s->mu);
+        if (j->cb.on_done) j->cb.on_done(j->cb.user, j, &p);
+        if (listed) ts_sched_job_release(j);
+        return true;
+    }
+    pthread_cond_broadcast(&s->work); /* a worker closes it once its tiles are in */
+    pthread_mutex_unlock(&s->mu);
+    return true;
+}
+
+void ts_sched_job_progress(ts_sched_job *j, ts_job_progress *out)
+{
+    pthread_mutex_lock(&j->s->mu);
+    fill_progress(j, out);
+    pthread_mutex_unlock(&j->s->mu);
+}
+
+const ts_scene *ts_sched_job_scene(const ts_sched_job *j) { return j->scene; }
+
+void ts_sched_job_window(const ts_sched_job *j, int *full_w, int *full_h, int *x0, int *y0, int *w, int *h)
+{
+    if (full_w) *full_w = j->full_w;
+    if (full_h) *full_h = j->full_h;
+    if (x0) *x0 = j->x0;
+    if (y0) *y0 = j->y0;
+    if (w) *w = j->w;
+    if (h) *h = j->h;
+}
+
+void ts_sched_job_grid(const ts_sched_job *j, int *nx, int *ny)
+{
+    *nx = j->nx;
+    *ny = j->ny;
+}
+
+ts_tile_snapshot *ts_sched_job_tile(ts_sched_job *j, int tx, int ty)
+{
+    if (tx < 0 || ty < 0 || tx >= j->nx || ty >= j->ny) return NULL;
+    pthread_mutex_lock(&j->s->mu);
+    ts_tile_snapshot *t = j->tiles[ty * j->nx + tx].snap;
+    if (t) atomic_fetch_add(&t->refs, 1);
+    pthread_mutex_unlock(&j->s->mu);
+    return t;
+}
+
+ts_film *ts_sched_job_film(ts_sched_job *j, uint32_t *tile_spp, ts_error *err)
+{
+    ts_tile_snapshot **snaps = calloc((size_t)j->n_tiles, sizeof *snaps);
+    ts_film *f = ts_film_create(j->full_w, j->full_h, j->x0, j->y0, j->w, j->h, err);
+    if (!snaps || !f) {
+        free(snaps);
+        ts_film_destroy(f);
+        if (f) ts_error_set(err, TS_ERR_NOMEM, "out of memory for a film snapshot");
+        return NULL;
+    }
+    pthread_mutex_lock(&j->s->mu);
+    for (int i = 0; i < j->n_tiles; i++) {
+        snaps[i] = j->tiles[i].snap;
+        if (snaps[i]) atomic_fetch_add(&snaps[i]->refs, 1);
+    }
+    pthread_mutex_unlock(&j->s->mu);
+    for (int i = 0; i < j->n_tiles; i++) {
+        const ts_tile_snapshot *t = snaps[i];
+        if (tile_spp) tile_spp[i] = t ? t->spp : 0;
+        if (!t) continue;
+        for (int y = 0; y < t->h; y++)
+            memcpy(ts_film_pixel_at(f, t->x, t->y + y), &t->pixels[(size_t)y * t->w], sizeof(ts_film_pixel) * (size_t)t->w);
+        ts_tile_snapshot_release(snaps[i]);
+    }
+    free(snaps);
+    return f;
+}
+
+ts_film *ts_tile_snapshot_film(const ts_tile_snapshot *t, int full_w, int full_h, ts_error *err)
+{
+    ts_film *f = ts_film_create(full_w, full_h, t->x, t->y, t->w, t->h, err);
+    if (f) memcpy(f->pixels, t->pixels, sizeof(ts_film_pixel) * (size_t)t->w * (size_t)t->h);
+    return f;
+}

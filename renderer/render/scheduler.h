@@ -1,0 +1,183 @@
+/* scheduler.h — one persistent render pool shared by every job, with progressive passes.
+ *
+ * Design note: a scheduler owns N worker threads, created once. Jobs are submitted with a
+ * scene (whose ownership passes to the job) and halt conditions. The film of a job is cut
+ * into TS_TILE_SIZE tiles (the grid of render.h), ordered from the image centre outwards.
+ * A job renders in passes: the pass ends are 1, 2, 4, 8, … spp (passes of 1, 1, 2, 4, …
+ * samples), capped at the target; every tile of a job reaches the end of pass k before any
+ * tile starts pass k+1 (a barrier per job, never across jobs). The unit of work is one
+ * tile of one pass, so jobs share the pool at tile granularity.
+ *
+ * Which jobs run: unfinished jobs are ordered by priority (higher first), then arrival.
+ * The first `max_running` of them are active; a worker takes the next tile of the active
+ * job that has had the fewest tiles so far (round robin, so active jobs share the pool
+ * fairly). A job is "queued" until its first tile is taken.
+ *
+ * Snapshots: each tile's pixels are written only by the worker rendering it, in the job's
+ * working film. After each tile pass the worker copies the tile into a new immutable,
+ * reference-counted ts_tile_snapshot and publishes it; readers (HTTP, checkpoints) take
+ * references to snapshots and never touch the working film, so they never stop workers.
+ *
+ * Halting: the spp target; time_limit_s (rendering wall time; the last pass is shrunk to
+ * what the measured speed says still fits); target_error (ts_film_relative_error, checked
+ * at pass ends from 4 spp on; proto/error-estimate.md); cancellation (tiles being rendered
+ * finish, nothing new starts, pixels stay). Samples of a pixel are added in index order by
+ * one thread, so a job's film is bit-identical to ts_render of the same sample count.
+ *
+ * Threads: every function here is thread-safe. One mutex guards all scheduling state;
+ * it is held only for bookkeeping, never while rendering, copying a film or calling back.
+ * Workers wait on a condition variable when there is no work. Callbacks run on worker
+ * threads (or the thread calling ts_sched_job_cancel) with no lock held; they must be
+ * quick and must not call ts_scheduler_destroy. For one job, every on_tile call of a pass
+ * returns before the pass's on_pass and the final on_done. */
+#ifndef TS_SCHEDULER_H
+#define TS_SCHEDULER_H
+
+#include <stdatomic.h>
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "core/error.h"
+#include "film/film.h"
+#include "integrators/integrator.h"
+#include "render/render.h"
+#include "scene/scene.h"
+
+typedef struct ts_scheduler ts_scheduler;
+typedef struct ts_sched_job ts_sched_job;
+
+typedef enum ts_job_state {
+    TS_JOB_QUEUED,
+    TS_JOB_RUNNING,
+    TS_JOB_DONE,
+    TS_JOB_CANCELLED,
+    TS_JOB_FAILED,
+} ts_job_state;
+
+/* "queued", "running", "done", "cancelled", "failed". */
+const char *ts_job_state_name(ts_job_state s);
+static inline bool ts_job_state_finished(ts_job_state s) { return s >= TS_JOB_DONE; }
+
+/* Why a finished job stopped. */
+typedef enum ts_halt_reason {
+    TS_HALT_NONE,       /* not finished */
+    TS_HALT_SPP,        /* sample target reached */
+    TS_HALT_TIME,       /* time limit reached */
+    TS_HALT_ERROR,      /* target error reached */
+    TS_HALT_CANCELLED,  /* ts_sched_job_cancel */
+    TS_HALT_RESTORED,   /* submitted already finished (restored from a checkpoint) */
+} ts_halt_reason;
+const char *ts_halt_reason_name(ts_halt_reason r);
+
+/* One tile as it stood after a tile pass: immutable once published. Pixels are the
+ * film's accumulators for the tile rectangle, row-major, w·h of them. */
+typedef struct ts_tile_snapshot {
+    atomic_int refs;   /* private: reference count */
+    int tx, ty;        /* grid position (tiles of the film window) */
+    int x, y, w, h;    /* full-image pixels */
+    uint32_t spp;      /* samples per pixel in it */
+    ts_film_pixel pixels[]; /* w·h */
+} ts_tile_snapshot;
+
+/* Callbacks (all optional). `info` is only valid during the call. */
+typedef struct ts_tile_event { int tx, ty, x, y, w, h; uint32_t spp; } ts_tile_event;
+
+typedef struct ts_job_progress {
+    ts_job_state state;
+    ts_halt_reason halt;
+    uint32_t spp_done;      /* every tile has at least this many samples per pixel */
+    uint32_t spp_target;
+    uint32_t pass_end;      /* the pass under way renders up to this spp */
+    int tiles, tiles_at_pass_end; /* tiles in the film; of them, at pass_end */
+    double elapsed_s;       /* rendering wall time (including time before a restore) */
+    double queued_s;        /* time from submission to the first tile (0 while queued) */
+    uint64_t samples;       /* camera samples taken (this process + before a restore) */
+    uint64_t nonfinite;     /* of them, dropped for NaN/∞/negative radiance */
+    uint64_t camera_rays, other_rays;
+    double samples_per_s;   /* samples / elapsed_s */
+    double error_estimate;  /* at the last pass end; < 0 when not yet known */
+} ts_job_progress;
+
+typedef struct ts_job_callbacks {
+    void (*on_tile)(void *user, ts_sched_job *job, const ts_tile_event *ev);
+    void (*on_pass)(void *user, ts_sched_job *job, const ts_job_progress *p);
+    void (*on_done)(void *user, ts_sched_job *job, const ts_job_progress *p);
+    void *user;
+} ts_job_callbacks;
+
+typedef struct ts_sched_job_desc {
+    ts_scene *scene;            /* ownership passes to the job on success (destroyed with it);
+                                 * may be NULL only with `finished` set */
+    ts_integrator_type integrator;
+    uint32_t spp;               /* target, ≥ 1 */
+    int priority;               /* higher first */
+    double time_limit_s;        /* 0 = none */
+    double target_error;        /* 0 = none */
+    ts_job_callbacks callbacks;
+    /* Resuming (all optional): a film of the scene's crop window with samples already in it
+     * (ownership passes to the job on success) and, per tile (row-major over the grid),
+     * the samples per pixel it holds. `elapsed_s`, `samples`, `nonfinite` carry the
+     * counters of the earlier run. */
+    ts_film *film;
+    const uint32_t *tile_spp;
+    double elapsed_s;
+    uint64_t samples, nonfinite;
+    /* Restoring a finished job: it is registered in this state (TS_JOB_DONE, _CANCELLED or
+     * _FAILED) and never rendered; `film` is required then, with width/height below. */
+    ts_job_state finished;      /* 0 (TS_JOB_QUEUED) = render it */
+    int full_width, full_height; /* only when scene is NULL */
+} ts_sched_job_desc;
+
+/* Starts `threads` workers (≥ 1); at most `max_running` jobs (≥ 1) are active at once.
+ * NULL with err filled when threads cannot be started. */
+ts_scheduler *ts_scheduler_create(int threads, int max_running, ts_error *err);
+
+/* Stops the workers after the tiles they are rendering (their snapshots are published),
+ * without changing any job's state: used before a final checkpoint. Idempotent. Jobs
+ * submitted afterwards are kept but never rendered. */
+void ts_scheduler_stop(ts_scheduler *s);
+
+/* Stops (if needed) and frees the scheduler; drops its references to jobs. Jobs the
+ * caller still references stay readable. */
+void ts_scheduler_destroy(ts_scheduler *s);
+
+/* Total samples rendered by this scheduler, all jobs (for metrics). */
+uint64_t ts_scheduler_samples(ts_scheduler *s);
+int ts_scheduler_threads(const ts_scheduler *s);
+
+/* Submits a job; returns it with one reference for the caller (ts_sched_job_release).
+ * NULL with err filled (TS_ERR_INVALID for a bad description, TS_ERR_NOMEM); then the
+ * scene and film still belong to the caller. */
+ts_sched_job *ts_scheduler_submit(ts_scheduler *s, const ts_sched_job_desc *desc, ts_error *err);
+
+void ts_sched_job_retain(ts_sched_job *j);
+void ts_sched_job_release(ts_sched_job *j); /* NULL is fine */
+
+/* Asks the job to stop; tiles being rendered finish and keep their samples. Returns true
+ * if the job was unfinished. on_done may run on the calling thread. */
+bool ts_sched_job_cancel(ts_sched_job *j);
+
+void ts_sched_job_progress(ts_sched_job *j, ts_job_progress *out);
+
+/* The job's scene (NULL for a restored finished job); immutable, valid while j is held. */
+const ts_scene *ts_sched_job_scene(const ts_sched_job *j);
+
+/* Film geometry of the job: full image size and the window (crop) the film covers. */
+void ts_sched_job_window(const ts_sched_job *j, int *full_w, int *full_h, int *x0, int *y0, int *w, int *h);
+/* Tiles across and down the film window. */
+void ts_sched_job_grid(const ts_sched_job *j, int *nx, int *ny);
+
+/* A reference to tile (tx, ty)'s latest snapshot, or NULL when out of range or not yet
+ * rendered. Release with ts_tile_snapshot_release. */
+ts_tile_snapshot *ts_sched_job_tile(ts_sched_job *j, int tx, int ty);
+void ts_tile_snapshot_release(ts_tile_snapshot *t); /* NULL is fine */
+
+/* A new film (caller destroys) of the job's window holding every tile's latest snapshot,
+ * and optionally (tile_spp: nx·ny entries, caller-allocated) each tile's spp. Tiles not
+ * rendered yet are empty. Consistent per tile; reads no working state. */
+ts_film *ts_sched_job_film(ts_sched_job *j, uint32_t *tile_spp, ts_error *err);
+
+/* A new film (caller destroys) covering just one snapshot's tile. */
+ts_film *ts_tile_snapshot_film(const ts_tile_snapshot *t, int full_w, int full_h, ts_error *err);
+
+#endif

@@ -1,0 +1,232 @@
+/* distribution.c — piecewise-constant distributions and the alias table (see
+ * distribution.h). Tables are built in double and stored in float; the CDF is
+ * renormalised so cdf[n] is exactly 1. */
+#include "sampling/distribution.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+ts_status ts_distribution1d_init(ts_distribution1d *d, const float *f, uint32_t n, ts_arena *arena, ts_error *err)
+{
+    memset(d, 0, sizeof *d);
+    if (n == 0) return ts_error_set(err, TS_ERR_INVALID, "distribution: no values");
+    float *func = ts_arena_calloc(arena, n, sizeof *func);
+    float *cdf = ts_arena_calloc(arena, (size_t)n + 1, sizeof *cdf);
+    if (!func || !cdf) return ts_error_set(err, TS_ERR_NOMEM, "distribution: out of memory for %u values", n);
+    double sum = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        if (!isfinite(f[i])) return ts_error_set(err, TS_ERR_INVALID, "distribution: value %u is not finite", i);
+        func[i] = fabsf(f[i]);
+        sum += func[i];
+    }
+    /* cdf[i] = Σ_{j<i} f_j / Σ f, accumulated in double. */
+    double acc = 0;
+    cdf[0] = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        acc += sum > 0 ? func[i] : 1.0;
+        cdf[i + 1] = (float)(acc / (sum > 0 ? sum : (double)n));
+    }
+    cdf[n] = 1.0f;
+    d->n = n;
+    d->func = func;
+    d->cdf = cdf;
+    d->func_int = (float)(sum / n);
+    return TS_OK;
+}
+
+/* Largest i with cdf[i] ≤ u, clamped to [0, n−1]. */
+static uint32_t find_interval(const float *cdf, uint32_t n, float u)
+{
+    uint32_t lo = 0, hi = n; /* invariant: cdf[lo] ≤ u (or lo = 0), answer in [lo, hi) */
+    while (hi - lo > 1) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (cdf[mid] <= u) lo = mid;
+        else hi = mid;
+    }
+    return lo;
+}
+
+/* Density of piece i (in x) — uniform when the function is zero. */
+static float piece_pdf(const ts_distribution1d *d, uint32_t i)
+{
+    return d->func_int > 0 ? d->func[i] / d->func_int : 1.0f;
+}
+
+float ts_distribution1d_sample_continuous(const ts_distribution1d *d, float u, float *pdf, uint32_t *offset)
+{
+    uint32_t i = find_interval(d->cdf, d->n, u);
+    /* Skip pieces of zero width (zero function value), which cannot be landed in. */
+    while (i + 1 < d->n && d->cdf[i + 1] <= u) i++;
+    if (offset) *offset = i;
+    float width = d->cdf[i + 1] - d->cdf[i];
+    float du = u - d->cdf[i];
+    if (width > 0) du /= width;
+    du = ts_clampf(du, 0.0f, TS_ONE_MINUS_EPSILON);
+    if (pdf) *pdf = piece_pdf(d, i);
+    float x = (i + du) / d->n;
+    return x < 1.0f ? x : TS_ONE_MINUS_EPSILON;
+}
+
+float ts_distribution1d_pdf(const ts_distribution1d *d, float x)
+{
+    if (!(x >= 0.0f && x <= 1.0f)) return 0.0f;
+    uint32_t i = (uint32_t)(x * d->n);
+    if (i >= d->n) i = d->n - 1;
+    return piece_pdf(d, i);
+}
+
+float ts_distribution1d_invert(const ts_distribution1d *d, float x)
+{
+    x = ts_clampf(x, 0.0f, 1.0f);
+    float fx = x * d->n;
+    uint32_t i = (uint32_t)fx;
+    if (i >= d->n) return 1.0f;
+    float frac = fx - (float)i;
+    return ts_lerpf(frac, d->cdf[i], d->cdf[i + 1]);
+}
+
+uint32_t ts_distribution1d_sample_discrete(const ts_distribution1d *d, float u, float *pmf, float *u_remapped)
+{
+    uint32_t i = find_interval(d->cdf, d->n, u);
+    while (i + 1 < d->n && d->cdf[i + 1] <= u) i++;
+    float width = d->cdf[i + 1] - d->cdf[i];
+    if (pmf) *pmf = ts_distribution1d_discrete_pmf(d, i);
+    if (u_remapped) *u_remapped = width > 0 ? ts_clampf((u - d->cdf[i]) / width, 0.0f, TS_ONE_MINUS_EPSILON) : 0.0f;
+    return i;
+}
+
+float ts_distribution1d_discrete_pmf(const ts_distribution1d *d, uint32_t i)
+{
+    if (i >= d->n) return 0.0f;
+    return d->func_int > 0 ? d->func[i] / (d->func_int * d->n) : 1.0f / d->n;
+}
+
+/* ---- 2D ---- */
+
+ts_status ts_distribution2d_init(ts_distribution2d *d, const float *f, uint32_t nu, uint32_t nv, ts_arena *arena,
+                                 ts_error *err)
+{
+    memset(d, 0, sizeof *d);
+    if (nu == 0 || nv == 0) return ts_error_set(err, TS_ERR_INVALID, "distribution: empty %u×%u table", nu, nv);
+    ts_distribution1d *rows = ts_arena_calloc(arena, nv, sizeof *rows);
+    float *row_int = ts_arena_calloc(arena, nv, sizeof *row_int);
+    if (!rows || !row_int) return ts_error_set(err, TS_ERR_NOMEM, "distribution: out of memory for %u rows", nv);
+    for (uint32_t v = 0; v < nv; v++) {
+        ts_status st = ts_distribution1d_init(&rows[v], f + (size_t)v * nu, nu, arena, err);
+        if (st) return st;
+        row_int[v] = rows[v].func_int;
+    }
+    ts_status st = ts_distribution1d_init(&d->marginal, row_int, nv, arena, err);
+    if (st) return st;
+    d->nu = nu;
+    d->nv = nv;
+    d->conditional = rows;
+    return TS_OK;
+}
+
+ts_vec2 ts_distribution2d_sample(const ts_distribution2d *d, ts_vec2 u, float *pdf)
+{
+    float pdf_v, pdf_u;
+    uint32_t v;
+    float y = ts_distribution1d_sample_continuous(&d->marginal, u.y, &pdf_v, &v);
+    float x = ts_distribution1d_sample_continuous(&d->conditional[v], u.x, &pdf_u, NULL);
+    if (pdf) *pdf = pdf_v * pdf_u;
+    return (ts_vec2){x, y};
+}
+
+float ts_distribution2d_pdf(const ts_distribution2d *d, ts_vec2 p)
+{
+    if (!(p.x >= 0.0f && p.x <= 1.0f && p.y >= 0.0f && p.y <= 1.0f)) return 0.0f;
+    uint32_t iv = (uint32_t)(p.y * d->nv);
+    if (iv >= d->nv) iv = d->nv - 1;
+    float pv = ts_distribution1d_pdf(&d->marginal, p.y);
+    return pv * ts_distribution1d_pdf(&d->conditional[iv], p.x);
+}
+
+ts_vec2 ts_distribution2d_invert(const ts_distribution2d *d, ts_vec2 p)
+{
+    uint32_t iv = (uint32_t)(ts_clampf(p.y, 0.0f, 1.0f) * d->nv);
+    if (iv >= d->nv) iv = d->nv - 1;
+    return (ts_vec2){ts_distribution1d_invert(&d->conditional[iv], p.x), ts_distribution1d_invert(&d->marginal, p.y)};
+}
+
+/* ---- alias table (Vose's algorithm, in double) ---- */
+
+ts_status ts_alias_table_init(ts_alias_table *t, const double *w, uint32_t n, ts_arena *arena, ts_error *err)
+{
+    memset(t, 0, sizeof *t);
+    if (n == 0) return ts_error_set(err, TS_ERR_INVALID, "alias table: no weights");
+    float *pmf = ts_arena_calloc(arena, n, sizeof *pmf);
+    float *q = ts_arena_calloc(arena, n, sizeof *q);
+    uint32_t *alias = ts_arena_calloc(arena, n, sizeof *alias);
+    double *scaled = malloc((size_t)n * sizeof *scaled);
+    uint32_t *work = malloc((size_t)n * sizeof *work);
+    ts_status st = TS_OK;
+    if (!pmf || !q || !alias || !scaled || !work) {
+        st = ts_error_set(err, TS_ERR_NOMEM, "alias table: out of memory for %u weights", n);
+        goto fail_free;
+    }
+    double sum = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        if (!(w[i] >= 0) || !isfinite(w[i])) {
+            st = ts_error_set(err, TS_ERR_INVALID, "alias table: weight %u is %g, expected a finite value ≥ 0", i, w[i]);
+            goto fail_free;
+        }
+        sum += w[i];
+    }
+    for (uint32_t i = 0; i < n; i++) {
+        double p = sum > 0 ? w[i] / sum : 1.0 / n;
+        pmf[i] = (float)p;
+        scaled[i] = p * n;
+        alias[i] = i;
+    }
+    /* work holds small indices from the front and large ones from the back. */
+    uint32_t n_small = 0, n_large = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        if (scaled[i] < 1.0) work[n_small++] = i;
+        else work[n - 1 - n_large++] = i;
+    }
+    while (n_small > 0 && n_large > 0) {
+        uint32_t s = work[--n_small];
+        uint32_t l = work[n - n_large]; /* most recently pushed large */
+        q[s] = (float)scaled[s];
+        alias[s] = l;
+        scaled[l] = (scaled[l] + scaled[s]) - 1.0;
+        if (scaled[l] < 1.0) {
+            n_large--;
+            work[n_small++] = l;
+        }
+    }
+    /* Leftovers are 1 up to rounding. */
+    for (uint32_t k = 0; k < n_small; k++) q[work[k]] = 1.0f;
+    for (uint32_t k = 0; k < n_large; k++) q[work[n - 1 - k]] = 1.0f;
+    /* An outcome of probability 0 must never be returned, even through rounding: send its
+     * bin wholly to its alias (or to any positive outcome). */
+    uint32_t any_positive = 0;
+    while (any_positive < n && pmf[any_positive] == 0) any_positive++;
+    if (any_positive < n) {
+        for (uint32_t i = 0; i < n; i++) {
+            if (pmf[i] == 0) q[i] = 0.0f;
+            if (q[i] < 1.0f && pmf[alias[i]] == 0) alias[i] = any_positive;
+        }
+    }
+    t->n = n;
+    t->pmf = pmf;
+    t->q = q;
+    t->alias = alias;
+    t->total_weight = sum;
+fail_free:
+    free(work);
+    free(scaled);
+    return st;
+}
+
+uint32_t ts_alias_table_sample(const ts_alias_table *t, float u, float *pmf)
+{
+    double x = (double)u * t->n; /* double: bins stay resolved for large n */
+    uint32_t i = x < (double)t->n ? (uint32_t)x : t->n - 1;
+    float up = ts_minf((float)(x - i), TS_ONE_MINUS_EPSILON);
+    uint32_t k = up < t->q[i] ? i : t->alias[i];
+    if (pmf) *pmf = t->pmf[k];
+    return k;
+}

@@ -1,8 +1,0 @@
-/* merge.h — `tessera merge SHARD.exr... [-o OUT.exr] [-o OUT.png] [--allow-partial]`
- * (DESIGN.md §5b, §7). */
-#ifndef TS_MERGE_CMD_H
-#define TS_MERGE_CMD_H
-/* Runs the merge command (argv[0] is "merge"); returns the exit status: 0 merged, 1 a
- * file was refused or missing samples without --allow-partial, 2 usage. */
-int ts_cli_merge(int argc, char **argv);
-#endif
