@@ -99,7 +99,7 @@ static bool token_matches(const char *given, const char *token)
 
 static bool authorised(srv_request *r)
 {
-    const char *token = r->srv->cfg.token;
+    const char *token = ((srv_api *)r->app)->token;
     if (!token) return true;
     const char *h = MHD_lookup_connection_value(r->conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_AUTHORIZATION);
     const char *given = NULL;
@@ -186,7 +186,7 @@ static void encode_task(void *arg)
     srv_http_complete(r);
 }
 
-void srv_api_request_done(srv_request *r)
+static void request_done(srv_request *r)
 {
     image_task *t = r->task;
     if (!t) return;
@@ -279,13 +279,13 @@ static int post_job(srv_request *r)
     if (!r->body_len) return srv_http_error(r, 400, "the request body is empty: send a scene document (JSON)");
     ts_error err = {0};
     int status = 500;
-    srv_job *j = srv_store_submit(r->srv->store, r->body, r->body_len, &status, &err);
+    srv_job *j = srv_store_submit(((srv_api *)r->app)->store, r->body, r->body_len, &status, &err);
     if (!j) return srv_http_error(r, (unsigned)status, "%s", err.message);
-    if (r->srv->cfg.data_dir) {
+    if (((srv_api *)r->app)->data_dir) {
         /* On disk before the 201: an accepted job is not lost to a crash before its first
          * checkpoint. If that fails the job renders on and its status says why. */
         ts_error perr = {0};
-        if (srv_persist_save_submitted(r->srv->cfg.data_dir, j, &perr) && srv_job_set_checkpoint_error(j, perr.message))
+        if (srv_persist_save_submitted(((srv_api *)r->app)->data_dir, j, &perr) && srv_job_set_checkpoint_error(j, perr.message))
             fprintf(stderr, "tessera: recording job %s failed, it renders on unrecorded: %s\n", j->id, perr.message);
     }
     cJSON *o = srv_job_status_json(j);
@@ -308,7 +308,7 @@ static int post_job(srv_request *r)
 static int list_jobs(srv_request *r)
 {
     int n = 0;
-    srv_job **jobs = srv_store_list(r->srv->store, &n);
+    srv_job **jobs = srv_store_list(((srv_api *)r->app)->store, &n);
     if (!jobs) return srv_http_error(r, 500, "out of memory");
     cJSON *o = cJSON_CreateObject();
     cJSON *arr = cJSON_AddArrayToObject(o, "jobs");
@@ -322,7 +322,7 @@ static int list_jobs(srv_request *r)
 
 static int metrics(srv_request *r)
 {
-    srv_server *srv = r->srv;
+    srv_api *srv = r->app;
     int n = 0, by_state[5] = {0};
     double sps = 0;
     srv_job **jobs = srv_store_list(srv->store, &n);
@@ -378,12 +378,12 @@ static const char ui_html[] =
     "p.spp_target+' spp, '+p.elapsed_s.toFixed(1)+' s';});es.addEventListener('done',()=>es.close());});\n"
     "</script></body></html>\n";
 
-int srv_api_handle(srv_request *r)
+static int handle(srv_request *r)
 {
     parsed p;
     parse_url(r->url, &p);
     const char *m = r->method;
-    const srv_config *cfg = &r->srv->cfg;
+    const srv_api *cfg = r->app;
     if (!strcmp(m, "OPTIONS") && cfg->cors_origin && p.route != SRV_ROUTE_OTHER) {
         struct MHD_Response *resp = MHD_create_response_from_buffer(0, (void *)"", MHD_RESPMEM_PERSISTENT);
         MHD_add_response_header(resp, "Access-Control-Allow-Methods", "GET, POST, DELETE, OPTIONS");
@@ -422,13 +422,13 @@ int srv_api_handle(srv_request *r)
     bool is_job = p.route == SRV_ROUTE_JOB;
     if (!(get || (is_job && !strcmp(m, "DELETE"))))
         return srv_http_method_not_allowed(r, is_job ? "GET, HEAD, DELETE" : "GET, HEAD");
-    srv_job *j = srv_store_get(r->srv->store, p.id);
+    srv_job *j = srv_store_get(cfg->store, p.id);
     if (!j) return srv_http_error(r, 404, "no job with id '%s'", p.id);
     switch (p.route) {
     case SRV_ROUTE_JOB: {
         if (!strcmp(m, "DELETE") && (j->failure[0] || ts_job_state_finished(srv_job_state(j)))) {
             /* A finished job is deleted: its slot (--max-jobs) and its files are freed. */
-            if (srv_store_remove(r->srv->store, j) && cfg->data_dir) srv_persist_remove(cfg->data_dir, j);
+            if (srv_store_remove(cfg->store, j) && cfg->data_dir) srv_persist_remove(cfg->data_dir, j);
             srv_job_release(j);
             return srv_http_reply(r, 204, NULL, "", 0);
         }
@@ -442,4 +442,9 @@ int srv_api_handle(srv_request *r)
     case SRV_ROUTE_TILE: return get_image(r, j, &p);
     default: srv_job_release(j); return srv_http_error(r, 404, "no such resource: %s", r->url);
     }
+}
+
+srv_http_handlers srv_api_handlers(srv_api *api)
+{
+    return (srv_http_handlers){srv_api_route, handle, request_done, api};
 }

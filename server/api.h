@@ -9,10 +9,25 @@
 
 #include "http.h"
 
+struct srv_store;
+struct srv_metrics;
+struct ts_scheduler;
+
+/* What the routes read: the server's parts and the settings that concern them. Owned by
+ * the caller; must outlive the HTTP daemon that uses it. */
+typedef struct srv_api {
+    const char *token;        /* NULL = no auth; never printed or logged */
+    const char *data_dir;     /* --data, or NULL: accepted jobs are written there */
+    const char *cors_origin;  /* NULL = no CORS preflight answers */
+    struct srv_store *store;
+    struct ts_scheduler *sched;
+    struct srv_metrics *metrics;
+} srv_api;
+
+/* The handler table of API v1 over api (srv_http_start takes it). */
+srv_http_handlers srv_api_handlers(srv_api *api);
+
+/* The route template a URL falls under (for metrics and the fuzz harness). */
 srv_route srv_api_route(const char *url);
-/* Answers r (its body, if any, is complete). Returns an MHD_Result. */
-int srv_api_handle(srv_request *r);
-/* Frees what the route attached to r (called once the request is over). */
-void srv_api_request_done(srv_request *r);
 
 #endif

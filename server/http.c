@@ -11,17 +11,19 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "api.h"
 #include "offload.h"
 
 struct srv_http {
     struct MHD_Daemon *d;
-    srv_server *srv;
+    srv_http_config cfg;         /* immutable */
+    srv_http_handlers handlers;  /* immutable */
 };
+
+const srv_http_config *srv_http_config_of(const srv_http *h) { return &h->cfg; }
 
 static void add_common_headers(srv_request *r, struct MHD_Response *resp)
 {
-    const srv_config *cfg = &r->srv->cfg;
+    const srv_http_config *cfg = &r->http->cfg;
     if (cfg->cors_origin) {
         MHD_add_response_header(resp, "Access-Control-Allow-Origin", cfg->cors_origin);
         MHD_add_response_header(resp, "Vary", "Origin");
@@ -35,7 +37,7 @@ int srv_http_queue(srv_request *r, unsigned status, struct MHD_Response *resp)
     add_common_headers(r, resp);
     r->status = status;
     /* Counted when queued, so a client's next request already sees it in /metrics. */
-    srv_metrics_count(r->srv->metrics, r->route, status);
+    srv_metrics_count(r->http->cfg.metrics, r->route, status);
     enum MHD_Result ret = MHD_queue_response(r->conn, status, resp);
     MHD_destroy_response(resp);
     return ret;
@@ -142,7 +144,7 @@ int srv_http_defer(srv_request *r, void (*fn)(void *r))
     r->deferred = true;
     r->completed = false;
     MHD_suspend_connection(r->conn);
-    if (!srv_offload_submit(r->srv->offload, run_deferred, d)) {
+    if (!srv_offload_submit(r->http->cfg.offload, run_deferred, d)) {
         free(d);
         r->reply_status = 503;
         r->reply_type = "application/json";
@@ -175,21 +177,22 @@ static enum MHD_Result handler(void *cls, struct MHD_Connection *conn, const cha
                                const char *version, const char *upload, size_t *upload_size, void **con_cls)
 {
     (void)version;
-    srv_server *srv = cls;
+    srv_http *h = cls;
     srv_request *r = *con_cls;
     if (!r) {
         r = calloc(1, sizeof *r);
         if (!r) return MHD_NO;
-        r->srv = srv;
+        r->http = h;
+        r->app = h->handlers.app;
         r->conn = conn;
-        r->route = srv_api_route(url);
+        r->route = h->handlers.route(url);
         *con_cls = r;
         const char *cl = MHD_lookup_connection_value(conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH);
-        if (cl && strtoull(cl, NULL, 10) > srv->cfg.max_body) {
+        if (cl && strtoull(cl, NULL, 10) > h->cfg.max_body) {
             r->method = method, r->url = url;
             r->body_too_large = true;
             return (enum MHD_Result)srv_http_error(r, 413, "the request body (%s bytes) is larger than the limit of %zu bytes",
-                                                   cl, srv->cfg.max_body);
+                                                   cl, h->cfg.max_body);
         }
         return MHD_YES;
     }
@@ -202,7 +205,7 @@ static enum MHD_Result handler(void *cls, struct MHD_Connection *conn, const cha
     if (*upload_size) {
         size_t n = *upload_size;
         *upload_size = 0;
-        if (r->body_too_large || r->body_len + n > srv->cfg.max_body) {
+        if (r->body_too_large || r->body_len + n > h->cfg.max_body) {
             r->body_too_large = true;
             return MHD_YES; /* keep reading, discard */
         }
@@ -221,65 +224,68 @@ static enum MHD_Result handler(void *cls, struct MHD_Connection *conn, const cha
     }
     if (r->body_too_large)
         return (enum MHD_Result)srv_http_error(r, 413, "the request body is larger than the limit of %zu bytes",
-                                               srv->cfg.max_body);
-    return (enum MHD_Result)srv_api_handle(r);
+                                               h->cfg.max_body);
+    return (enum MHD_Result)h->handlers.handle(r);
 }
 
 static void completed(void *cls, struct MHD_Connection *conn, void **con_cls, enum MHD_RequestTerminationCode toe)
 {
-    (void)cls, (void)conn, (void)toe;
+    (void)conn, (void)toe;
+    srv_http *h = cls;
     srv_request *r = *con_cls;
     if (!r) return;
-    srv_api_request_done(r);
+    if (h->handlers.done) h->handlers.done(r);
     free(r->body);
     free(r->reply_body);
     free(r);
     *con_cls = NULL;
 }
 
-srv_http *srv_http_start(srv_server *srv, int *port_out, char *err, size_t err_len)
+srv_http *srv_http_start(const srv_http_config *cfg, const srv_http_handlers *handlers, int *port_out, char *err,
+                         size_t err_len)
 {
     srv_http *h = calloc(1, sizeof *h);
     if (!h) {
         snprintf(err, err_len, "out of memory");
         return NULL;
     }
-    h->srv = srv;
+    h->cfg = *cfg;
+    h->handlers = *handlers;
     struct sockaddr_storage ss;
     memset(&ss, 0, sizeof ss);
-    const char *bind = srv->cfg.bind;
+    const char *bind = h->cfg.bind;
     if (strchr(bind, ':')) {
         struct sockaddr_in6 *a = (struct sockaddr_in6 *)&ss;
         a->sin6_family = AF_INET6;
-        a->sin6_port = htons((uint16_t)srv->cfg.port);
+        a->sin6_port = htons((uint16_t)h->cfg.port);
         if (inet_pton(AF_INET6, bind, &a->sin6_addr) != 1) goto bad_addr;
     } else {
         struct sockaddr_in *a = (struct sockaddr_in *)&ss;
         a->sin_family = AF_INET;
-        a->sin_port = htons((uint16_t)srv->cfg.port);
+        a->sin_port = htons((uint16_t)h->cfg.port);
         if (inet_pton(AF_INET, bind, &a->sin_addr) != 1) goto bad_addr;
     }
     unsigned flags = MHD_USE_AUTO | MHD_USE_INTERNAL_POLLING_THREAD | MHD_ALLOW_SUSPEND_RESUME;
     if (strchr(bind, ':')) flags |= MHD_USE_IPv6;
-    h->d = MHD_start_daemon(flags, (uint16_t)srv->cfg.port, NULL, NULL, handler, srv,
+    h->d = MHD_start_daemon(flags, (uint16_t)h->cfg.port, NULL, NULL, handler, h,
                             MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&ss,
-                            MHD_OPTION_NOTIFY_COMPLETED, completed, srv,
-                            MHD_OPTION_THREAD_POOL_SIZE, (unsigned)(srv->cfg.http_threads > 0 ? srv->cfg.http_threads : 1),
+                            MHD_OPTION_NOTIFY_COMPLETED, completed, h,
+                            MHD_OPTION_THREAD_POOL_SIZE, (unsigned)(h->cfg.threads > 0 ? h->cfg.threads : 1),
                             MHD_OPTION_CONNECTION_LIMIT, (unsigned)4000,
                             /* Slow clients hold no thread (the pool polls); these bound
                              * what they hold: idle connections close, and one address may
                              * keep only so many open (more are refused at accept). */
-                            MHD_OPTION_CONNECTION_TIMEOUT, srv->cfg.client_timeout_s ? srv->cfg.client_timeout_s : 60u,
-                            MHD_OPTION_PER_IP_CONNECTION_LIMIT, srv->cfg.max_client_conns,
+                            MHD_OPTION_CONNECTION_TIMEOUT, h->cfg.client_timeout_s ? h->cfg.client_timeout_s : 60u,
+                            MHD_OPTION_PER_IP_CONNECTION_LIMIT, h->cfg.max_client_conns,
                             MHD_OPTION_LISTEN_BACKLOG_SIZE, (unsigned)1024,
                             MHD_OPTION_END);
     if (!h->d) {
-        snprintf(err, err_len, "cannot listen on %s port %d (in use, or not an address of this host)", bind, srv->cfg.port);
+        snprintf(err, err_len, "cannot listen on %s port %d (in use, or not an address of this host)", bind, h->cfg.port);
         free(h);
         return NULL;
     }
     const union MHD_DaemonInfo *info = MHD_get_daemon_info(h->d, MHD_DAEMON_INFO_BIND_PORT);
-    *port_out = info ? info->port : srv->cfg.port;
+    *port_out = info ? info->port : h->cfg.port;
     return h;
 bad_addr:
     snprintf(err, err_len, "--bind %s: not a numeric IPv4 or IPv6 address", bind);

@@ -2,8 +2,11 @@
  *
  * Design note (STYLE.md's handler contract): the access handler allocates a srv_request
  * on its first call, consumes the body in chunks (up to cfg.max_body; beyond it the
- * request is answered 413), dispatches to api.c on the last call, and the completion
- * callback frees the context and counts the request for /metrics. Work a handler must not
+ * request is answered 413), dispatches to the handler table it was started with (the
+ * routes of api.c, in the server) on the last call, and the completion callback lets the
+ * handlers free what they attached, frees the context and counts the request for
+ * /metrics. The HTTP layer knows nothing of jobs or of the server around it: it takes its
+ * own configuration and an opaque `app` pointer that it hands to the handlers. Work a handler must not
  * do (encoding images) goes to the offload pool: srv_http_defer suspends the connection,
  * the task fills the reply and srv_http_complete resumes it; the handler, called again,
  * queues that reply. The daemon uses an internal polling thread pool (epoll/poll) with
@@ -15,13 +18,16 @@
 #include <stddef.h>
 
 #include "metrics.h"
-#include "serve.h"
 
 struct MHD_Connection;
 struct MHD_Response;
+struct srv_offload;
+
+typedef struct srv_http srv_http;
 
 typedef struct srv_request {
-    srv_server *srv;
+    srv_http *http;           /* the daemon answering it */
+    void *app;                /* the handler table's app pointer */
     struct MHD_Connection *conn;
     const char *method, *url; /* valid during handler calls */
     char *body;
@@ -39,17 +45,42 @@ typedef struct srv_request {
     void *task;               /* api.c's task state */
 } srv_request;
 
-typedef struct srv_http srv_http;
+/* What the daemon needs to know; copied at start (strings must outlive the daemon). */
+typedef struct srv_http_config {
+    const char *bind;            /* numeric IPv4 or IPv6 address */
+    int port;                    /* 0 = any free port */
+    int threads;                 /* libmicrohttpd's thread pool */
+    unsigned client_timeout_s;   /* a connection idle this long is closed (0: 60 s) */
+    unsigned max_client_conns;   /* connections from one address at once */
+    size_t max_body;             /* request body cap, bytes (413 beyond) */
+    const char *cors_origin;     /* NULL = no CORS headers */
+    struct srv_metrics *metrics; /* every answer is counted here */
+    struct srv_offload *offload; /* the pool srv_http_defer runs tasks on */
+} srv_http_config;
 
-/* Starts the daemon on cfg.bind:cfg.port; *port_out gets the bound port. NULL with a
+/* The routes: `route` names a URL's route (for metrics) on a request's first call,
+ * `handle` answers a complete request (returns an MHD_Result), `done` frees what handle
+ * attached (once the request is over; may be NULL). Called on the daemon's threads. */
+typedef struct srv_http_handlers {
+    srv_route (*route)(const char *url);
+    int (*handle)(srv_request *r);
+    void (*done)(srv_request *r);
+    void *app; /* given to the handlers as r->app */
+} srv_http_handlers;
+
+/* Starts the daemon on cfg->bind:cfg->port; *port_out gets the bound port. NULL with a
  * message in err on failure. */
-srv_http *srv_http_start(srv_server *srv, int *port_out, char *err, size_t err_len);
+srv_http *srv_http_start(const srv_http_config *cfg, const srv_http_handlers *handlers, int *port_out, char *err,
+                         size_t err_len);
 /* Stops accepting connections (existing ones continue). */
 void srv_http_quiesce(srv_http *h);
 void srv_http_stop(srv_http *h);
 /* Connections the daemon holds now (a request's completion callback has run once its
  * connection is no longer counted): for tests. */
 unsigned srv_http_connections(srv_http *h);
+
+/* The daemon's configuration (immutable while it runs). */
+const srv_http_config *srv_http_config_of(const srv_http *h);
 
 /* Replies (from a handler). body is copied. Adds CORS headers when configured. */
 int srv_http_reply(srv_request *r, unsigned status, const char *type, const void *body, size_t len);

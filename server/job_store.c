@@ -12,18 +12,18 @@
 #include "tessera.h"
 
 struct srv_store {
-    srv_server *srv;
+    srv_store_config cfg; /* immutable */
     pthread_mutex_t mu;
     srv_job *jobs; /* guarded by mu: newest first */
     int n_jobs;    /* guarded by mu: jobs in the list */
     int n_pending; /* guarded by mu: submissions that hold a slot and are not in the list yet */
 };
 
-srv_store *srv_store_create(srv_server *srv)
+srv_store *srv_store_create(const srv_store_config *cfg)
 {
     srv_store *st = calloc(1, sizeof *st);
     if (!st) return NULL;
-    st->srv = srv;
+    st->cfg = *cfg;
     pthread_mutex_init(&st->mu, NULL);
     return st;
 }
@@ -166,7 +166,7 @@ static void on_done(void *user, ts_sched_job *sj, const ts_job_progress *p)
     publish_json(j, "progress", srv_job_progress_json(j, p));
     publish_json(j, "done", srv_job_progress_json(j, p));
     srv_events_close(j->events);
-    srv_server_kick(j->srv);
+    if (j->store->cfg.on_job_finished) j->store->cfg.on_job_finished(j->store->cfg.user);
 }
 
 /* ---------------------------------------------------------------- creation */
@@ -191,7 +191,7 @@ static srv_job *job_new(srv_store *st, const char *id, const char *text, size_t 
     atomic_init(&j->version, 1);
     pthread_mutex_init(&j->ckpt_mu, NULL);
     pthread_mutex_init(&j->disk_mu, NULL);
-    j->srv = st->srv;
+    j->store = st;
     j->events = srv_events_create();
     j->scene_text = malloc(len + 1);
     if (!j->events || !j->scene_text) {
@@ -243,7 +243,7 @@ static srv_job *submit(srv_store *st, const char *text, size_t len, int *http_st
 srv_job *srv_store_submit(srv_store *st, const char *text, size_t len, int *http_status, ts_error *err)
 {
     /* Checked before the document is parsed: a full server allocates nothing for it. */
-    int max_jobs = st->srv->cfg.max_jobs;
+    int max_jobs = st->cfg.max_jobs;
     if (!reserve_slot(st, max_jobs)) {
         *http_status = 503;
         ts_error_set(err, TS_ERR_LIMIT,
@@ -257,7 +257,7 @@ srv_job *srv_store_submit(srv_store *st, const char *text, size_t len, int *http
 
 static srv_job *submit(srv_store *st, const char *text, size_t len, int *http_status, ts_error *err)
 {
-    const srv_config *cfg = &st->srv->cfg;
+    const srv_store_config *cfg = &st->cfg;
     /* Resolution and spp are checked here (422) against the server's limits; the loader
      * gets the generous defaults for those and the server's for scene size (413). */
     ts_scene_limits lim = cfg->limits, def;
@@ -316,7 +316,7 @@ static srv_job *submit(srv_store *st, const char *text, size_t len, int *http_st
     /* j->sj is set before the job is listed (store_add's lock publishes it to the threads
      * that find the job there); our reference keeps j alive for the scheduler's callbacks
      * until the store holds its own, which outlives them. */
-    j->sj = ts_scheduler_submit(st->srv->sched, &d, err);
+    j->sj = ts_scheduler_submit(st->cfg.sched, &d, err);
     if (!j->sj) {
         /* Unlikely (out of memory): it stays in the store as failed. */
         snprintf(j->failure, sizeof j->failure, "%s", err->message);
@@ -385,7 +385,7 @@ srv_job *srv_store_restore(srv_store *st, const srv_restore *r, ts_error *err)
         d.full_width = r->film->full_width;
         d.full_height = r->film->full_height;
     }
-    j->sj = ts_scheduler_submit(st->srv->sched, &d, err);
+    j->sj = ts_scheduler_submit(st->cfg.sched, &d, err);
     store_add(st, j); /* after j->sj is set, as in submit */
     if (!j->sj) {
         snprintf(j->failure, sizeof j->failure, "%s", err->message);

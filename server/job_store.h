@@ -11,12 +11,12 @@
 #define SRV_JOB_STORE_H
 
 #include <cjson/cJSON.h>
+#include <pthread.h>
 #include <stdatomic.h>
 #include <stdbool.h>
 #include <stdint.h>
 
 #include "events.h"
-#include "serve.h"
 #include "tessera.h"
 
 typedef struct srv_job {
@@ -35,7 +35,7 @@ typedef struct srv_job {
     int full_w, full_h, x0, y0, w, h, nx, ny;
     ts_sched_job *sj;
     srv_events *events;
-    srv_server *srv;
+    struct srv_store *store;     /* the store it was created in */
     char failure[512];           /* why a restored job failed, or "" */
     /* The last checkpoint's failure ("" when it was written): set by the maintenance
      * thread, read by status requests; guarded by ckpt_mu. */
@@ -53,13 +53,26 @@ typedef struct srv_job {
 
 typedef struct srv_store srv_store;
 
-srv_store *srv_store_create(srv_server *srv);
+/* What a store needs: copied at creation (assets_dir must outlive the store). */
+typedef struct srv_store_config {
+    ts_scene_limits limits;   /* posted scenes: resolution and spp → 422, scene size → 413 */
+    const char *assets_dir;   /* the only folder posted scenes may read files from; NULL = none */
+    int max_jobs;             /* jobs held at once (any state); 0 = no limit */
+    ts_scheduler *sched;      /* where jobs render */
+    /* Optional: called (on a render thread, no lock held) when a job has finished, so a
+     * checkpoint can follow soon. Must be quick. */
+    void (*on_job_finished)(void *user);
+    void *user;
+} srv_store_config;
+
+/* NULL when out of memory. */
+srv_store *srv_store_create(const srv_store_config *cfg);
 /* Releases every job (after the scheduler and HTTP daemon stopped). */
 void srv_store_destroy(srv_store *st);
 
-/* Loads, checks and queues a posted scene; file references resolve inside cfg.assets_dir
+/* Loads, checks and queues a posted scene; file references resolve inside config.assets_dir
  * (none without it). On failure NULL, *http_status (400, 413, 422, 500, or 503 when the
- * store already holds cfg.max_jobs jobs — checked before the document is parsed) and
+ * store already holds config.max_jobs jobs — checked before the document is parsed) and
  * err's sentence say why. The returned job carries a reference for the caller. */
 srv_job *srv_store_submit(srv_store *st, const char *text, size_t len, int *http_status, ts_error *err);
 

@@ -18,10 +18,6 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "http.h"
-#include "job_store.h"
-#include "metrics.h"
-#include "offload.h"
 #include "persist.h"
 #include "tessera.h"
 
@@ -80,7 +76,7 @@ static bool parse_u64(const char *s, unsigned long long lo, unsigned long long h
     return true;
 }
 
-void srv_server_kick(srv_server *srv)
+static void srv_server_kick(srv_server *srv)
 {
     pthread_mutex_lock(&srv->mu);
     srv->kick = true;
@@ -146,6 +142,90 @@ static void *maintenance(void *arg)
     }
     pthread_mutex_unlock(&srv->mu);
     return NULL;
+}
+
+static void on_job_finished(void *user) { srv_server_kick(user); }
+
+bool srv_server_start(srv_server *srv, int *port_out, char *err, size_t err_len)
+{
+    const srv_config *cfg = &srv->cfg;
+    ts_error e = {0};
+    pthread_mutex_init(&srv->mu, NULL);
+    pthread_cond_init(&srv->cv, NULL);
+    srv->metrics = srv_metrics_create();
+    srv->offload = srv_offload_create(2);
+    srv->sched = ts_scheduler_create(cfg->threads, cfg->max_running, &e);
+    srv_store_config sc = {cfg->limits, cfg->assets_dir, cfg->max_jobs, srv->sched, on_job_finished, srv};
+    srv->store = srv->sched ? srv_store_create(&sc) : NULL;
+    if (!srv->metrics || !srv->store || !srv->offload || !srv->sched) {
+        snprintf(err, err_len, "%s", e.message[0] ? e.message : "out of memory");
+        goto fail;
+    }
+    if (cfg->data_dir) {
+        if (srv_persist_init(cfg->data_dir, &e)) {
+            snprintf(err, err_len, "--data: %s", e.message);
+            goto fail;
+        }
+        int n = srv_persist_restore_all(cfg->data_dir, srv->store, &cfg->limits, cfg->assets_dir);
+        if (n) fprintf(stderr, "tessera serve: %d job(s) restored from %s\n", n, cfg->data_dir);
+    }
+    if (cfg->assets_dir)
+        fprintf(stderr, "tessera serve: posted scenes may read files under %s (each at most %llu bytes)\n",
+                cfg->assets_dir, (unsigned long long)cfg->limits.max_file_bytes);
+    if (cfg->queue_builtin) {
+        size_t len;
+        const char *text = ts_scene_builtin_text(&len);
+        int status;
+        srv_job *j = srv_store_submit(srv->store, text, len, &status, &e);
+        if (!j) fprintf(stderr, "tessera serve: the built-in scene was not queued: %s\n", e.message);
+        else fprintf(stderr, "tessera serve: queued the built-in Cornell box as job %s\n", j->id);
+        srv_job_release(j);
+    }
+    if (pthread_create(&srv->maint, NULL, maintenance, srv) != 0) {
+        snprintf(err, err_len, "cannot start the maintenance thread");
+        goto fail;
+    }
+    srv->maint_started = true;
+    srv->api = (srv_api){cfg->token, cfg->data_dir, cfg->cors_origin, srv->store, srv->sched, srv->metrics};
+    srv_http_config hc = {cfg->bind,       cfg->port,        cfg->http_threads, cfg->client_timeout_s,
+                          cfg->max_client_conns, cfg->max_body, cfg->cors_origin, srv->metrics,
+                          srv->offload};
+    srv_http_handlers handlers = srv_api_handlers(&srv->api);
+    srv->http = srv_http_start(&hc, &handlers, port_out, err, err_len);
+    if (!srv->http) goto fail;
+    return true;
+fail:
+    srv_server_stop(srv, false);
+    return false;
+}
+
+void srv_server_stop(srv_server *srv, bool checkpoint)
+{
+    const srv_config *cfg = &srv->cfg;
+    if (srv->http) srv_http_quiesce(srv->http);
+    if (srv->maint_started) {
+        pthread_mutex_lock(&srv->mu);
+        srv->stopping = true;
+        pthread_cond_signal(&srv->cv);
+        pthread_mutex_unlock(&srv->mu);
+        pthread_join(srv->maint, NULL);
+        srv->maint_started = false;
+    }
+    if (srv->sched) ts_scheduler_stop(srv->sched);
+    if (cfg->data_dir && srv->store && checkpoint) {
+        int n = srv_persist_save_changed(cfg->data_dir, srv->store);
+        fprintf(stderr, "tessera serve: checkpointed %d job(s) to %s\n", n, cfg->data_dir);
+    }
+    if (srv->store) shutdown_streams(srv->store);
+    if (srv->offload) srv_offload_drain(srv->offload);
+    srv_http_stop(srv->http);
+    srv_offload_destroy(srv->offload);
+    srv_store_destroy(srv->store);
+    ts_scheduler_destroy(srv->sched);
+    srv_metrics_destroy(srv->metrics);
+    srv->http = NULL, srv->offload = NULL, srv->store = NULL, srv->sched = NULL, srv->metrics = NULL;
+    pthread_cond_destroy(&srv->cv);
+    pthread_mutex_destroy(&srv->mu);
 }
 
 int srv_serve_main(int argc, char **argv)
@@ -319,83 +399,21 @@ int srv_serve_main(int argc, char **argv)
     signal(SIGPIPE, SIG_IGN);
 
     int rc = 1;
-    ts_error err = {0};
-    pthread_mutex_init(&srv->mu, NULL);
-    pthread_cond_init(&srv->cv, NULL);
-    pthread_t maint;
-    bool maint_started = false;
-    srv->metrics = srv_metrics_create();
-    srv->store = srv_store_create(srv);
-    srv->offload = srv_offload_create(2);
-    srv->sched = ts_scheduler_create(cfg->threads, cfg->max_running, &err);
-    if (!srv->metrics || !srv->store || !srv->offload || !srv->sched) {
-        fprintf(stderr, "tessera serve: %s\n", err.message[0] ? err.message : "out of memory");
-        goto fail;
-    }
-    if (cfg->data_dir) {
-        if (srv_persist_init(cfg->data_dir, &err)) {
-            fprintf(stderr, "tessera serve: --data: %s\n", err.message);
-            goto fail;
-        }
-        int n = srv_persist_restore_all(cfg->data_dir, srv->store, &cfg->limits, cfg->assets_dir);
-        if (n) fprintf(stderr, "tessera serve: %d job(s) restored from %s\n", n, cfg->data_dir);
-    }
-    if (cfg->assets_dir)
-        fprintf(stderr, "tessera serve: posted scenes may read files under %s (each at most %llu bytes)\n",
-                cfg->assets_dir, (unsigned long long)cfg->limits.max_file_bytes);
-    if (cfg->queue_builtin) {
-        size_t len;
-        const char *text = ts_scene_builtin_text(&len);
-        int status;
-        srv_job *j = srv_store_submit(srv->store, text, len, &status, &err);
-        if (!j) fprintf(stderr, "tessera serve: the built-in scene was not queued: %s\n", err.message);
-        else fprintf(stderr, "tessera serve: queued the built-in Cornell box as job %s\n", j->id);
-        srv_job_release(j);
-    }
-    if (pthread_create(&maint, NULL, maintenance, srv) != 0) {
-        fprintf(stderr, "tessera serve: cannot start the maintenance thread\n");
-        goto fail;
-    }
-    maint_started = true;
-    char msg[256];
+    char msg[TS_ERROR_MAX];
     int port = 0;
-    srv->http = srv_http_start(srv, &port, msg, sizeof msg);
-    if (!srv->http) {
+    if (srv_server_start(srv, &port, msg, sizeof msg)) {
+        const char *host = strchr(cfg->bind, ':') ? NULL : cfg->bind;
+        if (host) printf("tessera: listening on http://%s:%d/\n", host, port);
+        else printf("tessera: listening on http://[%s]:%d/\n", cfg->bind, port);
+        fflush(stdout);
+        int sig = 0;
+        sigwait(&sigs, &sig);
+        fprintf(stderr, "tessera serve: %s, shutting down\n", sig == SIGINT ? "interrupted" : "terminated");
+        srv_server_stop(srv, true);
+        rc = 0;
+    } else {
         fprintf(stderr, "tessera serve: %s\n", msg);
-        goto fail;
     }
-    const char *host = strchr(cfg->bind, ':') ? NULL : cfg->bind;
-    if (host) printf("tessera: listening on http://%s:%d/\n", host, port);
-    else printf("tessera: listening on http://[%s]:%d/\n", cfg->bind, port);
-    fflush(stdout);
-
-    int sig = 0;
-    sigwait(&sigs, &sig);
-    fprintf(stderr, "tessera serve: %s, shutting down\n", sig == SIGINT ? "interrupted" : "terminated");
-    rc = 0;
-fail:
-    if (srv->http) srv_http_quiesce(srv->http);
-    if (maint_started) {
-        pthread_mutex_lock(&srv->mu);
-        srv->stopping = true;
-        pthread_cond_signal(&srv->cv);
-        pthread_mutex_unlock(&srv->mu);
-        pthread_join(maint, NULL);
-    }
-    if (srv->sched) ts_scheduler_stop(srv->sched);
-    if (cfg->data_dir && srv->store && rc == 0) {
-        int n = srv_persist_save_changed(cfg->data_dir, srv->store);
-        fprintf(stderr, "tessera serve: checkpointed %d job(s) to %s\n", n, cfg->data_dir);
-    }
-    if (srv->store) shutdown_streams(srv->store);
-    if (srv->offload) srv_offload_drain(srv->offload);
-    srv_http_stop(srv->http);
-    srv_offload_destroy(srv->offload);
-    srv_store_destroy(srv->store);
-    ts_scheduler_destroy(srv->sched);
-    srv_metrics_destroy(srv->metrics);
-    pthread_cond_destroy(&srv->cv);
-    pthread_mutex_destroy(&srv->mu);
     free(assets_real);
     free(token_buf);
     return rc;

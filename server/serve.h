@@ -13,6 +13,11 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "api.h"
+#include "http.h"
+#include "job_store.h"
+#include "metrics.h"
+#include "offload.h"
 #include "tessera.h"
 
 typedef struct srv_config {
@@ -34,27 +39,33 @@ typedef struct srv_config {
     bool queue_builtin;          /* queue the Cornell box at start (make run) */
 } srv_config;
 
-struct srv_store;
-struct srv_metrics;
-struct srv_offload;
-struct srv_http;
-struct ts_scheduler;
-
 typedef struct srv_server {
     srv_config cfg;                 /* immutable after start */
-    struct ts_scheduler *sched;
-    struct srv_store *store;
-    struct srv_metrics *metrics;
-    struct srv_offload *offload;
-    struct srv_http *http;
+    ts_scheduler *sched;
+    srv_store *store;
+    srv_metrics *metrics;
+    srv_offload *offload;
+    srv_http *http;
+    srv_api api;                    /* what the routes read; immutable after start */
     /* maintenance thread */
+    pthread_t maint;
+    bool maint_started;
     pthread_mutex_t mu;
     pthread_cond_t cv;              /* kicks: stop, or a job finished (checkpoint soon) */
     bool stopping, kick;            /* guarded by mu */
 } srv_server;
 
-/* Wakes the maintenance thread to checkpoint now (a job finished). Thread-safe. */
-void srv_server_kick(srv_server *srv);
+/* Starts a server whose cfg is filled in (the rest of *srv zeroed): the render scheduler,
+ * the job store (restoring --data, queueing the built-in scene if asked), the encoder
+ * pool, the maintenance thread and the HTTP daemon; *port_out gets the bound port. Start-up
+ * notes go to stderr. On failure returns false with a sentence in err, and whatever was
+ * started is stopped again (srv_server_stop is not needed then). */
+bool srv_server_start(srv_server *srv, int *port_out, char *err, size_t err_len);
+
+/* Stops a started server in order: no new connections, the maintenance thread, the render
+ * workers after their current tiles, a final checkpoint of every changed job when
+ * `checkpoint` (and --data), the event streams, the encoders, the daemon; then frees it. */
+void srv_server_stop(srv_server *srv, bool checkpoint);
 
 /* `tessera serve [options]`: runs until SIGINT/SIGTERM; returns the exit status. */
 int srv_serve_main(int argc, char **argv);

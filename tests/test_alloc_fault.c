@@ -23,10 +23,6 @@
  * front of it: the plain build (make test) runs the test, which counts leaks itself. */
 #include <stdio.h>
 
-#include "serve.h"
-
-void srv_server_kick(srv_server *srv) { (void)srv; } /* job_store.c is linked in */
-
 int main(void)
 {
     printf("SKIPPED: the allocation-failure test replaces malloc, which the sanitizer owns here\n");
@@ -494,13 +490,6 @@ static void test_scene_with_mesh_files(void **state)
 
 /* ---------------------------------------------------------------- job creation */
 
-/* serve.c's kick wakes the maintenance thread; there is none here. */
-static atomic_int kicks;
-void srv_server_kick(srv_server *srv)
-{
-    (void)srv;
-    atomic_fetch_add(&kicks, 1);
-}
 
 typedef struct submit_arg {
     const char *text;
@@ -525,13 +514,12 @@ static bool wait_done(srv_job *j, double timeout_s)
 static ts_status op_submit(void *arg, ts_error *err)
 {
     submit_arg *a = arg;
-    srv_server srv;
-    memset(&srv, 0, sizeof srv);
-    srv.cfg.max_body = 1u << 20;
-    ts_scene_limits_default(&srv.cfg.limits);
+    struct { ts_scheduler *sched; srv_store *store; } srv = {0};
+    srv_store_config sc = {0};
+    ts_scene_limits_default(&sc.limits);
     ts_error e2 = {0};
-    srv.sched = ts_scheduler_create(1, 2, &e2);
-    srv.store = srv.sched ? srv_store_create(&srv) : NULL;
+    srv.sched = sc.sched = ts_scheduler_create(1, 2, &e2);
+    srv.store = srv.sched ? srv_store_create(&sc) : NULL;
     if (!srv.store) fail_msg("cannot set up a store: %s", e2.message);
 
     int http = 0;

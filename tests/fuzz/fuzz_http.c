@@ -108,8 +108,8 @@ static void settle(srv_job *j)
     abort();
 }
 
-/* The parts of `tessera serve` (serve.c, in its order), without signals, --data and the
- * maintenance thread (checkpoints and keep-alives run on timers, not on requests). */
+/* `tessera serve`'s own start-up (srv_server_start), without signals or --data, then two
+ * fixture jobs. */
 static void server_start(void)
 {
     srv_server *srv = &g_srv;
@@ -133,14 +133,12 @@ static void server_start(void)
     cfg->limits.max_shapes = 64;
     cfg->limits.max_file_bytes = 0;
     cfg->limits.max_memory = 64u << 20;
-    pthread_mutex_init(&srv->mu, NULL);
-    pthread_cond_init(&srv->cv, NULL);
     ts_error err = {0};
-    srv->metrics = srv_metrics_create();
-    srv->store = srv_store_create(srv);
-    srv->offload = srv_offload_create(1);
-    srv->sched = ts_scheduler_create(cfg->threads, cfg->max_running, &err);
-    FUZZ_CHECK(srv->metrics && srv->store && srv->offload && srv->sched);
+    char msg[TS_ERROR_MAX];
+    if (!srv_server_start(srv, &g_port, msg, sizeof msg)) {
+        fprintf(stderr, "fuzz_http: %s\n", msg);
+        abort();
+    }
     /* The finished job goes in as a job restored from scratch (the way --data brings jobs
      * back), for an id that is the same in every run: posted jobs get random ids, and an id
      * that differs between runs would change what the fuzzer learns from comparisons. */
@@ -170,39 +168,16 @@ static void server_start(void)
     j = srv_store_restore(srv->store, &fr, &err);
     FUZZ_CHECK(j != NULL);
     srv_job_release(j);
-    char msg[256];
-    srv->http = srv_http_start(srv, &g_port, msg, sizeof msg);
-    if (!srv->http) {
-        fprintf(stderr, "fuzz_http: %s\n", msg);
-        abort();
-    }
     g_running = true;
     g_store_not_utf8 = false;
     g_jobs = 2;
     g_full_inputs = 0;
 }
 
-/* serve.c's shutdown, in its order. */
+/* serve.c's shutdown (no checkpoint: there is no --data). */
 static void server_stop(void)
 {
-    srv_server *srv = &g_srv;
-    srv_http_quiesce(srv->http);
-    ts_scheduler_stop(srv->sched);
-    int n = 0;
-    srv_job **jobs = srv_store_list(srv->store, &n);
-    for (int i = 0; jobs && i < n; i++) {
-        srv_events_shutdown(jobs[i]->events);
-        srv_job_release(jobs[i]);
-    }
-    free(jobs);
-    srv_offload_drain(srv->offload);
-    srv_http_stop(srv->http);
-    srv_offload_destroy(srv->offload);
-    srv_store_destroy(srv->store);
-    ts_scheduler_destroy(srv->sched);
-    srv_metrics_destroy(srv->metrics);
-    pthread_cond_destroy(&srv->cv);
-    pthread_mutex_destroy(&srv->mu);
+    srv_server_stop(&g_srv, false);
     g_running = false;
 }
 
