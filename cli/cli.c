@@ -64,91 +64,19 @@ static bool parse_positive(const char *s, double *out)
     return true;
 }
 
-/* ---------------------------------------------------------------- progress */
+/* ---------------------------------------------------------------- options */
 
-typedef struct progress {
-    bool enabled;
-    pthread_mutex_t lock;   /* guards the fields below and stderr writes */
-    uint64_t total, done;   /* pixel-samples */
-    uint32_t pass_spp;
-    int last_permille;
-    double t0;
-} progress;
+typedef struct render_opts {
+    cli_outputs outputs;
+    unsigned long long spp, threads, seed, shard_count;
+    bool have_seed, quiet;
+    double time_limit, target_error, checkpoint_interval;
+    const char *scene_path, *shard_text, *checkpoint;
+} render_opts;
 
-static void on_tile(void *user, int x, int y, int w, int h)
-{
-    (void)x, (void)y;
-    progress *p = user;
-    pthread_mutex_lock(&p->lock);
-    p->done += (uint64_t)w * (uint64_t)h * p->pass_spp;
-    int permille = p->total ? (int)(1000 * p->done / p->total) : 1000;
-    if (p->enabled && permille != p->last_permille) {
-        p->last_permille = permille;
-        int bars = permille * 30 / 1000;
-        char bar[31];
-        for (int i = 0; i < 30; i++) bar[i] = i < bars ? '#' : '.';
-        bar[30] = '\0';
-        fprintf(stderr, "\rrendering [%s] %5.1f%%  %.1f s ", bar, permille / 10.0, ts_now_seconds() - p->t0);
-        fflush(stderr);
-    }
-    pthread_mutex_unlock(&p->lock);
-}
-
-/* ---------------------------------------------------------------- output */
-
-static ts_status write_outputs(const ts_scene *scene, const ts_film *film, const cli_outputs *outputs,
-                               const ts_render_stats *stats, uint32_t spp_done, double error, const char *integrator,
-                               ts_error *err)
-{
-    ts_image img;
-    ts_status st = ts_film_to_image(film, TS_FILM_IMAGE_STATS, &img, err);
-    if (st) return st;
-    char version[64];
-    snprintf(version, sizeof version, "tessera %s", TS_VERSION);
-    if (!st) st = ts_image_set_string(&img, "software", version, err);
-    if (!st) st = ts_image_set_string(&img, "tessera_scene", scene->name, err);
-    if (!st) st = ts_image_set_string(&img, "tessera_integrator", integrator, err);
-    if (!st) st = ts_image_set_int(&img, "tessera_spp", (int32_t)spp_done, err);
-    if (!st) st = ts_image_set_int(&img, "tessera_seed", (int32_t)scene->sampler.seed, err);
-    if (!st) st = ts_image_set_double(&img, "tessera_render_time_s", stats->seconds, err);
-    if (!st) st = ts_image_set_double(&img, "tessera_error_estimate", error, err);
-    if (!st) st = ts_image_set_double(&img, "tessera_nonfinite_samples", (double)stats->counters.nonfinite, err);
-    for (int i = 0; !st && i < outputs->n; i++) {
-        if (cli_output_is_exr(outputs->path[i])) st = ts_exr_write(outputs->path[i], &img, err);
-        else st = ts_png_write(outputs->path[i], &img, 0.0f, err);
-    }
-    ts_image_fini(&img);
-    return st;
-}
-
-/* ---------------------------------------------------------------- farm shards
-
- * With --checkpoint, SIGTERM and SIGINT stop the render between tiles and the last
- * complete pass is saved before exiting (DESIGN.md §7). A signal handler can reach only
- * process-wide state, so these two atomics are the one exception to "no global mutable
- * state": written by the handler, read by the render loop and the workers. */
-static atomic_bool g_cancel;
-static volatile sig_atomic_t g_signal;
-
-static void on_stop_signal(int sig)
-{
-    g_signal = sig;
-    atomic_store(&g_cancel, true);
-}
-
-static void catch_stop_signals(void)
-{
-    struct sigaction sa;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_stop_signal;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGTERM, &sa, NULL);
-    sigaction(SIGINT, &sa, NULL);
-}
-
-/* ---------------------------------------------------------------- render */
-
-static int cmd_render(int argc, char **argv)
+/* Fills o from the command line; -1 when the render should go ahead, else the exit status
+ * (usage errors, --help). */
+static int parse_render_options(int argc, char **argv, render_opts *o)
 {
     enum { OPT_SPP = 256, OPT_THREADS, OPT_SEED, OPT_TIME, OPT_TARGET, OPT_QUIET, OPT_HELP, OPT_SHARD, OPT_SHARD_COUNT,
            OPT_CHECKPOINT, OPT_CHECKPOINT_INTERVAL };
@@ -161,52 +89,47 @@ static int cmd_render(int argc, char **argv)
         {"checkpoint", required_argument, NULL, OPT_CHECKPOINT},
         {"checkpoint-interval", required_argument, NULL, OPT_CHECKPOINT_INTERVAL},
         {NULL, 0, NULL, 0}};
-    cli_outputs outputs = {0};
-    unsigned long long spp = 0, threads = 0, seed = 0;
-    bool have_seed = false, quiet = false;
-    double time_limit = 0, target_error = 0;
-    const char *shard_text = NULL, *checkpoint = NULL;
-    unsigned long long shard_count = 0;
-    double checkpoint_interval = 60;
+    memset(o, 0, sizeof *o);
+    o->checkpoint_interval = 60;
     optind = 1;
     opterr = 0;
     int c;
     while ((c = getopt_long(argc, argv, ":o:", opts, NULL)) != -1) {
         switch (c) {
         case 'o':
-            if (!cli_outputs_add(&outputs, optarg)) return usage_error("at most %s outputs", "8");
+            if (!cli_outputs_add(&o->outputs, optarg)) return usage_error("at most %s outputs", "8");
             break;
         case OPT_SPP:
-            if (!parse_uint(optarg, 1u << 24, &spp) || spp == 0)
+            if (!parse_uint(optarg, 1u << 24, &o->spp) || o->spp == 0)
                 return usage_error("--spp: expected a whole number from 1 to 16777216, got '%s'", optarg);
             break;
         case OPT_THREADS:
-            if (!parse_uint(optarg, 1024, &threads) || threads == 0)
+            if (!parse_uint(optarg, 1024, &o->threads) || o->threads == 0)
                 return usage_error("--threads: expected a whole number from 1 to 1024, got '%s'", optarg);
             break;
         case OPT_SEED:
-            if (!parse_uint(optarg, UINT32_MAX, &seed))
+            if (!parse_uint(optarg, UINT32_MAX, &o->seed))
                 return usage_error("--seed: expected a whole number from 0 to 4294967295, got '%s'", optarg);
-            have_seed = true;
+            o->have_seed = true;
             break;
         case OPT_TIME:
-            if (!parse_positive(optarg, &time_limit))
+            if (!parse_positive(optarg, &o->time_limit))
                 return usage_error("--time-limit: expected a positive number of seconds, got '%s'", optarg);
             break;
         case OPT_TARGET:
-            if (!parse_positive(optarg, &target_error))
+            if (!parse_positive(optarg, &o->target_error))
                 return usage_error("--target-error: expected a positive relative error, got '%s'", optarg);
             break;
-        case OPT_QUIET: quiet = true; break;
+        case OPT_QUIET: o->quiet = true; break;
         case OPT_HELP: usage(stdout); return 0;
-        case OPT_SHARD: shard_text = optarg; break;
+        case OPT_SHARD: o->shard_text = optarg; break;
         case OPT_SHARD_COUNT:
-            if (!parse_uint(optarg, 1000000, &shard_count) || shard_count == 0)
+            if (!parse_uint(optarg, 1000000, &o->shard_count) || o->shard_count == 0)
                 return usage_error("--shard-count: expected a whole number from 1 to 1000000, got '%s'", optarg);
             break;
-        case OPT_CHECKPOINT: checkpoint = optarg; break;
+        case OPT_CHECKPOINT: o->checkpoint = optarg; break;
         case OPT_CHECKPOINT_INTERVAL:
-            if (!parse_positive(optarg, &checkpoint_interval))
+            if (!parse_positive(optarg, &o->checkpoint_interval))
                 return usage_error("--checkpoint-interval: expected a positive number of seconds, got '%s'", optarg);
             break;
         case ':': return usage_error("option '%s' needs a value", argv[optind - 1]);
@@ -214,216 +137,363 @@ static int cmd_render(int argc, char **argv)
         }
     }
     if (argc - optind > 1) return usage_error("render takes at most one scene file, got another: '%s'", argv[optind + 1]);
-    const char *scene_path = optind < argc ? argv[optind] : NULL;
-    const char *unsupported = cli_outputs_unsupported(&outputs);
+    o->scene_path = optind < argc ? argv[optind] : NULL;
+    const char *unsupported = cli_outputs_unsupported(&o->outputs);
     if (unsupported) return usage_error("-o %s: the extension must be .exr or .png", unsupported);
-    if (shard_count && !shard_text) return usage_error("%s", "--shard-count goes with --shard auto");
-    if (checkpoint && !cli_output_is_exr(checkpoint))
-        return usage_error("--checkpoint %s: the checkpoint is an EXR file; give it the .exr extension", checkpoint);
+    if (o->shard_count && !o->shard_text) return usage_error("%s", "--shard-count goes with --shard auto");
+    if (o->checkpoint && !cli_output_is_exr(o->checkpoint))
+        return usage_error("--checkpoint %s: the checkpoint is an EXR file; give it the .exr extension", o->checkpoint);
+    return -1;
+}
 
-    /* Which shard (DESIGN.md §7): I/N given, or from the scheduler's environment. */
+/* ---------------------------------------------------------------- the render in flight
+
+ * `tessera render` renders through the scheduler of the server (render/scheduler.h, with
+ * the pass and halt policy of render/progressive.h), as one job on a pool of its own, so
+ * the CLI and the server produce the same pixels by construction. The callbacks below run
+ * on the render threads: on_tile draws the progress bar, on_pass (while no tile of the job
+ * renders) keeps the last complete pass for a checkpoint and writes the periodic one,
+ * on_done wakes the main thread.
+ *
+ * With --checkpoint, SIGTERM and SIGINT stop the render: the main thread takes them with
+ * sigwait (they are blocked in every thread, which inherit the mask), cancels the job, and
+ * saves the last complete pass before exiting as the signal would (docs/design.md §7). */
+typedef struct render_run {
+    const ts_scene *scene;      /* immutable while the job runs (the job owns it) */
+    const char *integrator;
+    ts_sample_range range;
+    uint32_t target_spp, span;  /* the render's spp; samples per pixel this process must hold */
+    int nx, ny;
+    const char *checkpoint;     /* NULL: no checkpoints, no signal handling */
+    double checkpoint_interval;
+    pthread_t main_thread;
+    pthread_mutex_t mu;         /* guards everything below, and stderr writes of the bar */
+    pthread_cond_t cv;
+    bool finished;
+    ts_job_progress final;
+    bool bar;
+    uint64_t total, done_px;    /* pixel-samples this process renders; of them, done */
+    uint32_t *tile_spp;         /* per tile, for the bar */
+    int last_permille;
+    double t0;
+    /* checkpoints: only on_pass (one at a time per job) and, after the job, main */
+    ts_film *complete;          /* the last complete pass (or the starting film) */
+    uint32_t complete_spp;      /* samples per pixel in it, relative to range.begin */
+    double last_checkpoint;
+    ts_status ckpt_status;
+    ts_error ckpt_err;
+} render_run;
+
+static void on_tile(void *user, ts_sched_job *job, const ts_tile_event *ev)
+{
+    (void)job;
+    render_run *r = user;
+    pthread_mutex_lock(&r->mu);
+    uint32_t *held = &r->tile_spp[ev->ty * r->nx + ev->tx];
+    r->done_px += (uint64_t)ev->w * (uint64_t)ev->h * (ev->spp - *held);
+    *held = ev->spp;
+    int permille = r->total ? (int)(1000 * r->done_px / r->total) : 1000;
+    if (r->bar && permille != r->last_permille) {
+        r->last_permille = permille;
+        int bars = permille * 30 / 1000;
+        char bar[31];
+        for (int i = 0; i < 30; i++) bar[i] = i < bars ? '#' : '.';
+        bar[30] = '\0';
+        fprintf(stderr, "\rrendering [%s] %5.1f%%  %.1f s ", bar, permille / 10.0, ts_now_seconds() - r->t0);
+        fflush(stderr);
+    }
+    pthread_mutex_unlock(&r->mu);
+}
+
+static ts_status write_checkpoint(render_run *r, const ts_film *film, uint32_t spp, double seconds, ts_error *err)
+{
+    ts_sample_range held = {r->range.begin, r->range.begin + spp};
+    ts_shard_info info;
+    ts_shard_info_init(&info, r->scene, film, r->integrator, &held, spp ? 1 : 0, r->target_spp, seconds);
+    return ts_shard_write(r->checkpoint, film, &info, err);
+}
+
+static void on_pass(void *user, ts_sched_job *job, const ts_job_progress *p)
+{
+    render_run *r = user;
+    if (!r->checkpoint || r->ckpt_status) return;
+    ts_error err = {0};
+    ts_film *film = ts_sched_job_film(job, NULL, &err);
+    ts_status st = film ? TS_OK : err.status;
+    if (film) {
+        ts_film_destroy(r->complete);
+        r->complete = film;
+        r->complete_spp = p->spp_done;
+        if (p->spp_done < r->span && ts_now_seconds() - r->last_checkpoint >= r->checkpoint_interval) {
+            st = write_checkpoint(r, film, p->spp_done, p->elapsed_s, &err);
+            r->last_checkpoint = ts_now_seconds();
+        }
+    }
+    if (st) { /* the render cannot keep its promise of a checkpoint: stop it */
+        r->ckpt_status = st;
+        r->ckpt_err = err;
+        ts_sched_job_cancel(job);
+    }
+}
+
+static void on_done(void *user, ts_sched_job *job, const ts_job_progress *p)
+{
+    (void)job;
+    render_run *r = user;
+    pthread_mutex_lock(&r->mu);
+    r->finished = true;
+    r->final = *p;
+    pthread_cond_signal(&r->cv);
+    pthread_mutex_unlock(&r->mu);
+    if (r->checkpoint) pthread_kill(r->main_thread, SIGUSR1); /* main waits in sigwait */
+}
+
+/* Waits for the job; with checkpoints, a SIGTERM/SIGINT meanwhile cancels it. Returns the
+ * signal taken, or 0. */
+static int wait_for_job(render_run *r, ts_sched_job *job, const sigset_t *sigs)
+{
+    int stop_signal = 0;
+    if (!r->checkpoint) {
+        pthread_mutex_lock(&r->mu);
+        while (!r->finished) pthread_cond_wait(&r->cv, &r->mu);
+        pthread_mutex_unlock(&r->mu);
+        return 0;
+    }
+    for (;;) {
+        int sig = 0;
+        if (sigwait(sigs, &sig) != 0) continue;
+        if (sig != SIGUSR1) {
+            if (!stop_signal) stop_signal = sig;
+            ts_sched_job_cancel(job);
+        }
+        pthread_mutex_lock(&r->mu);
+        bool finished = r->finished;
+        pthread_mutex_unlock(&r->mu);
+        if (finished) return stop_signal;
+    }
+}
+
+/* ---------------------------------------------------------------- output */
+
+static ts_status write_outputs(const render_run *r, const ts_film *film, const cli_outputs *outputs, double error,
+                               ts_error *err)
+{
+    ts_image img;
+    ts_status st = ts_film_to_image(film, TS_FILM_IMAGE_STATS, &img, err);
+    if (st) return st;
+    ts_render_info info = {r->scene->name,   r->integrator, r->final.spp_done, true, r->scene->sampler.seed,
+                           r->final.elapsed_s, error,        (double)r->final.nonfinite, NULL};
+    st = ts_image_set_render_info(&img, &info, err);
+    for (int i = 0; !st && i < outputs->n; i++) {
+        if (cli_output_is_exr(outputs->path[i])) st = ts_exr_write(outputs->path[i], &img, err);
+        else st = ts_png_write(outputs->path[i], &img, 0.0f, err);
+    }
+    ts_image_fini(&img);
+    return st;
+}
+
+/* ---------------------------------------------------------------- render */
+
+/* Loads the scene and settles what to render: the settings (scene, then options), the
+ * shard's sample range. Returns -1 to go ahead, else the exit status. */
+static int prepare_render(const render_opts *o, ts_scene **scene_out, ts_job_settings *js, ts_sample_range *range,
+                          char *shard_how, size_t shard_how_len)
+{
+    /* Which shard (docs/design.md §7): I/N given, or from the scheduler's environment. */
     uint32_t shard_i = 0, shard_n = 1;
-    char shard_how[256] = "";
-    if (shard_text) {
+    if (o->shard_text) {
         ts_error serr = {0};
-        ts_status sst = strcmp(shard_text, "auto") == 0
+        ts_status sst = strcmp(o->shard_text, "auto") == 0
                             ? ts_shard_auto(getenv("JOB_COMPLETION_INDEX"), getenv("SLURM_ARRAY_TASK_ID"),
                                             getenv("SLURM_ARRAY_TASK_COUNT"), getenv("SLURM_ARRAY_TASK_MIN"),
-                                            (uint32_t)shard_count, &shard_i, &shard_n, shard_how, sizeof shard_how, &serr)
-                            : ts_shard_parse(shard_text, &shard_i, &shard_n, &serr);
+                                            (uint32_t)o->shard_count, &shard_i, &shard_n, shard_how, shard_how_len,
+                                            &serr)
+                            : ts_shard_parse(o->shard_text, &shard_i, &shard_n, &serr);
         if (sst) return usage_error("--shard: %s", serr.message);
-        if (!shard_how[0]) snprintf(shard_how, sizeof shard_how, "shard %u/%u", shard_i, shard_n);
+        if (!shard_how[0]) snprintf(shard_how, shard_how_len, "shard %u/%u", shard_i, shard_n);
     }
-
     ts_error err = {0};
     ts_scene *scene = NULL;
     ts_scene_limits limits;
     ts_scene_limits_default(&limits);
-    ts_status st = scene_path ? ts_scene_load_file(scene_path, &limits, &scene, &err)
-                              : ts_scene_load_builtin(&limits, &scene, &err);
+    ts_status st = o->scene_path ? ts_scene_load_file(o->scene_path, &limits, &scene, &err)
+                                 : ts_scene_load_builtin(&limits, &scene, &err);
     if (st) {
-        fprintf(stderr, "tessera: %s%s%s\n", scene_path ? scene_path : "", scene_path ? ": " : "", err.message);
+        fprintf(stderr, "tessera: %s%s%s\n", o->scene_path ? o->scene_path : "", o->scene_path ? ": " : "", err.message);
         return 1;
     }
-    if (have_seed) scene->sampler.seed = (uint32_t)seed;
-    uint32_t target_spp = spp ? (uint32_t)spp : (scene->job.spp ? scene->job.spp : scene->spp);
-    if (!time_limit) time_limit = scene->job.time_limit_s;
-    if (!target_error) target_error = scene->job.target_error;
-    if (shard_n > target_spp) {
+    if (o->have_seed) scene->sampler.seed = (uint32_t)o->seed;
+    ts_job_settings_from_scene(scene, js);
+    if (o->spp) js->spp = (uint32_t)o->spp;
+    if (o->time_limit) js->time_limit_s = o->time_limit;
+    if (o->target_error) js->target_error = o->target_error;
+    if (shard_n > js->spp) {
         fprintf(stderr, "tessera: %u shards of a %u-spp render would leave some without samples; use at most %u shards\n",
-                shard_n, target_spp, target_spp);
+                shard_n, js->spp, js->spp);
         ts_scene_destroy(scene);
         return 1;
     }
-    ts_sample_range range = ts_shard_range(shard_i, shard_n, target_spp);
-    int n_threads = threads ? (int)threads : (int)sysconf(_SC_NPROCESSORS_ONLN);
-    if (n_threads < 1) n_threads = 1;
-
-    ts_integrator_type integ = scene->integrator.type;
-    if (!ts_integrator_available(integ)) {
+    *range = ts_shard_range(shard_i, shard_n, js->spp);
+    if (!ts_integrator_available(js->integrator)) {
         fprintf(stderr, "tessera: note: the '%s' integrator is not implemented yet; rendering the 'ao' debugging view\n",
-                ts_integrator_name(integ));
-        integ = TS_INTEGRATOR_AO;
+                ts_integrator_name(js->integrator));
+        js->integrator = TS_INTEGRATOR_AO;
     }
-
-    if (!quiet) {
+    if (!o->quiet) {
         char on[400], off[400];
         ts_effects_format(scene->effects, on, sizeof on);
         ts_effects_format(TS_EFFECTS_ALL & ~scene->effects, off, sizeof off);
         fprintf(stderr, "tessera: effects simulated: %s; skipped: %s\n", on, off);
     }
+    *scene_out = scene;
+    return -1;
+}
 
+static ts_film *film_copy(const ts_film *f, ts_error *err)
+{
+    ts_film *c = ts_film_create(f->full_width, f->full_height, f->x0, f->y0, f->width, f->height, err);
+    if (c) memcpy(c->pixels, f->pixels, (size_t)f->width * (size_t)f->height * sizeof *f->pixels);
+    return c;
+}
+
+static int cmd_render(int argc, char **argv)
+{
+    render_opts o;
+    int rc = parse_render_options(argc, argv, &o);
+    if (rc >= 0) return rc;
+    ts_scene *scene = NULL;
+    ts_job_settings js;
+    ts_sample_range range;
+    char shard_how[256] = "";
+    rc = prepare_render(&o, &scene, &js, &range, shard_how, sizeof shard_how);
+    if (rc >= 0) return rc;
+    int n_threads = o.threads ? (int)o.threads : (int)sysconf(_SC_NPROCESSORS_ONLN);
+    if (n_threads < 1) n_threads = 1;
+
+    render_run r = {0};
+    r.scene = scene;
+    r.integrator = ts_integrator_name(js.integrator);
+    r.range = range;
+    r.target_spp = js.spp;
+    r.span = range.end - range.begin;
+    r.checkpoint = o.checkpoint;
+    r.checkpoint_interval = o.checkpoint_interval;
+    r.main_thread = pthread_self();
+    pthread_mutex_init(&r.mu, NULL);
+    pthread_cond_init(&r.cv, NULL);
+    ts_tile_grid_size(scene->crop_x1 - scene->crop_x0, scene->crop_y1 - scene->crop_y0, &r.nx, &r.ny);
+
+    ts_error err = {0};
+    ts_status st = TS_OK;
+    ts_scheduler *sched = NULL;
+    ts_sched_job *job = NULL;
     ts_film *film = ts_film_create(scene->width, scene->height, scene->crop_x0, scene->crop_y0,
                                    scene->crop_x1 - scene->crop_x0, scene->crop_y1 - scene->crop_y0, &err);
-    if (!film) {
-        fprintf(stderr, "tessera: %s\n", err.message);
-        ts_scene_destroy(scene);
-        return 1;
+    r.tile_spp = calloc((size_t)r.nx * (size_t)r.ny, sizeof *r.tile_spp);
+    if (!film || !r.tile_spp) {
+        if (film) ts_error_set(&err, TS_ERR_NOMEM, "out of memory for the tile grid");
+        goto fail;
     }
-    uint32_t span = range.end - range.begin; /* samples per pixel this process must hold */
-    uint32_t done = 0;                        /* of them, [range.begin, range.begin + done) are in the film */
-    ts_shard_info info;
-    if (checkpoint) {
-        ts_shard_info_init(&info, scene, film, ts_integrator_name(integ), NULL, 0, target_spp, 0);
+    uint32_t done = 0; /* of the range, [range.begin, range.begin + done) are in the film */
+    if (o.checkpoint) {
+        ts_shard_info info;
+        ts_shard_info_init(&info, scene, film, r.integrator, NULL, 0, js.spp, 0);
         ts_film *resumed = NULL;
         uint32_t at = range.begin;
-        st = ts_shard_checkpoint_load(checkpoint, &info, range, &resumed, &at, &err);
-        if (st) {
-            fprintf(stderr, "tessera: %s\n", err.message);
-            ts_film_destroy(film);
-            ts_scene_destroy(scene);
-            return 1;
-        }
+        if ((st = ts_shard_checkpoint_load(o.checkpoint, &info, range, &resumed, &at, &err))) goto fail;
         if (resumed) {
             ts_film_destroy(film);
             film = resumed;
             done = at - range.begin;
-            if (!quiet)
+            if (!o.quiet)
                 fprintf(stderr, "tessera: resuming from checkpoint %s: samples [%u,%u) of [%u,%u) already done\n",
-                        checkpoint, range.begin, at, range.begin, range.end);
+                        o.checkpoint, range.begin, at, range.begin, range.end);
         }
+        if (!(r.complete = film_copy(film, &err))) goto fail;
+        r.complete_spp = done;
     }
-    if (shard_text && !quiet)
-        fprintf(stderr, "tessera: %s: samples [%u,%u) of %u\n", shard_how, range.begin, range.end, target_spp);
-    /* With a checkpoint, each pass starts from a copy of the film so a signal mid-pass can
-     * save the last complete state. */
-    ts_film *snapshot = NULL;
-    if (checkpoint) {
-        snapshot = ts_film_create(film->full_width, film->full_height, film->x0, film->y0, film->width, film->height, &err);
-        if (!snapshot) {
-            fprintf(stderr, "tessera: %s\n", err.message);
-            ts_film_destroy(film);
-            ts_scene_destroy(scene);
-            return 1;
-        }
-        catch_stop_signals();
-    }
-    progress prog = {0};
-    prog.enabled = !quiet && isatty(STDERR_FILENO);
-    pthread_mutex_init(&prog.lock, NULL);
-    prog.total = (uint64_t)film->width * (uint64_t)film->height * (span - done);
-    prog.t0 = ts_now_seconds();
+    if (o.shard_text && !o.quiet)
+        fprintf(stderr, "tessera: %s: samples [%u,%u) of %u\n", shard_how, range.begin, range.end, js.spp);
+    for (int i = 0; i < r.nx * r.ny; i++) r.tile_spp[i] = done;
+    r.bar = !o.quiet && isatty(STDERR_FILENO);
+    r.total = (uint64_t)film->width * (uint64_t)film->height * (r.span - done);
+    r.t0 = r.last_checkpoint = ts_now_seconds();
 
-    ts_render_stats stats = {0};
-    uint32_t done0 = done, pass = done > 1 ? done : 1;
-    double error = 0, last_checkpoint = prog.t0;
-    const char *stop_reason = "sample count reached";
-    while (done < span && !g_signal) {
-        uint32_t n = pass < span - done ? pass : span - done;
-        uint32_t here = done - done0; /* rendered by this process */
-        double per_spp = here ? stats.seconds / here : 0;
-        if (time_limit > 0 && here > 0) {
-            double elapsed = ts_now_seconds() - prog.t0;
-            if (elapsed >= time_limit) {
-                stop_reason = "time limit reached";
-                break;
-            }
-            /* Shrink the pass to what fits in the time left (at least one sample). */
-            double fit = (time_limit - elapsed) / (per_spp > 0 ? per_spp : 1e-9);
-            if (fit < n) n = fit >= 1 ? (uint32_t)fit : 1;
-        }
-        if (checkpoint && per_spp > 0) { /* a pass fits in one checkpoint interval */
-            double fit = checkpoint_interval / per_spp;
-            if (fit < n) n = fit >= 1 ? (uint32_t)fit : 1;
-        }
-        if (snapshot) memcpy(snapshot->pixels, film->pixels, (size_t)film->width * film->height * sizeof *film->pixels);
-        prog.pass_spp = n;
-        ts_render_request req = {scene, integ, film, range.begin + done, range.begin + done + n, n_threads,
-                                 checkpoint ? &g_cancel : NULL, on_tile, &prog};
-        st = ts_render(&req, &stats, &err);
-        if (st) break;
-        if (stats.cancelled) { /* part of the pass is in the film: go back to its start */
-            ts_film *t = film;
-            film = snapshot, snapshot = t;
-            break;
-        }
-        done += n;
-        if (done > 1) pass = done; /* 1, 1, 2, 4, 8, ... */
-        if (target_error > 0 && done >= 4) {
-            error = ts_film_relative_error(film);
-            if (error <= target_error) {
-                stop_reason = "target error reached";
-                break;
-            }
-        }
-        if (checkpoint && done < span && ts_now_seconds() - last_checkpoint >= checkpoint_interval) {
-            ts_sample_range held = {range.begin, range.begin + done};
-            ts_shard_info_init(&info, scene, film, ts_integrator_name(integ), &held, 1, target_spp, stats.seconds);
-            st = ts_shard_write(checkpoint, film, &info, &err);
-            if (st) break;
-            last_checkpoint = ts_now_seconds();
-        }
+    /* Taken by sigwait in wait_for_job; blocked before the render threads start, so they
+     * inherit the mask and never run the default action. */
+    sigset_t sigs;
+    sigemptyset(&sigs);
+    sigaddset(&sigs, SIGUSR1);
+    sigaddset(&sigs, SIGINT);
+    sigaddset(&sigs, SIGTERM);
+    if (o.checkpoint) pthread_sigmask(SIG_BLOCK, &sigs, NULL);
+    if (!(sched = ts_scheduler_create(n_threads, 1, &err))) goto fail;
+    ts_sched_job_desc d = {0};
+    d.scene = scene;
+    d.settings = js;
+    d.settings.spp = r.span;
+    d.sample_begin = range.begin;
+    d.max_pass_s = o.checkpoint ? o.checkpoint_interval : 0;
+    d.callbacks = (ts_job_callbacks){on_tile, on_pass, on_done, &r};
+    d.film = film;
+    d.tile_spp = r.tile_spp;
+    if (!(job = ts_scheduler_submit(sched, &d, &err))) goto fail;
+    scene = NULL, film = NULL; /* the job's now */
+    int stop_signal = wait_for_job(&r, job, &sigs);
+    if (r.bar) fprintf(stderr, "\n");
+    if (r.ckpt_status) {
+        err = r.ckpt_err;
+        st = r.ckpt_status;
+        goto fail;
     }
-    if (prog.enabled) fprintf(stderr, "\n");
-    if (!st && g_signal) { /* stopped by SIGTERM/SIGINT: save, then exit as the signal would */
-        ts_sample_range held = {range.begin, range.begin + done};
-        ts_shard_info_init(&info, scene, film, ts_integrator_name(integ), &held, done ? 1 : 0, target_spp, stats.seconds);
-        st = ts_shard_write(checkpoint, film, &info, &err);
-        int sig = g_signal;
-        if (st) fprintf(stderr, "tessera: %s; could not save the checkpoint: %s\n", strsignal(sig), err.message);
+    if (!(film = ts_sched_job_film(job, NULL, &err))) goto fail;
+    done = r.final.spp_done;
+    if (stop_signal) { /* stopped by SIGTERM/SIGINT: save, then exit as the signal would */
+        const ts_film *keep = r.final.halt == TS_HALT_SPP ? film : r.complete;
+        uint32_t keep_spp = r.final.halt == TS_HALT_SPP ? done : r.complete_spp;
+        st = write_checkpoint(&r, keep, keep_spp, r.final.elapsed_s, &err);
+        if (st) fprintf(stderr, "tessera: %s; could not save the checkpoint: %s\n", strsignal(stop_signal), err.message);
         else
             fprintf(stderr, "tessera: %s: saved samples [%u,%u) to checkpoint %s; run the same command to resume\n",
-                    strsignal(sig), range.begin, range.begin + done, checkpoint);
-        pthread_mutex_destroy(&prog.lock);
-        ts_film_destroy(snapshot);
-        ts_film_destroy(film);
-        ts_scene_destroy(scene);
-        return 128 + sig;
+                    strsignal(stop_signal), range.begin, range.begin + keep_spp, o.checkpoint);
+        rc = 128 + stop_signal;
+        goto out;
     }
-    ts_film_destroy(snapshot);
-    error = ts_film_relative_error(film);
-    int rc = 0;
-    if (st) {
-        fprintf(stderr, "tessera: %s\n", err.message);
-        rc = 1;
+    double error = ts_film_relative_error(film);
+    if (o.shard_text) {
+        ts_sample_range held = {range.begin, range.begin + done};
+        ts_shard_info info;
+        ts_shard_info_init(&info, r.scene, film, r.integrator, &held, done ? 1 : 0, js.spp, r.final.elapsed_s);
+        st = cli_outputs_write_shard(&o.outputs, film, &info, &err);
     } else {
-        if (shard_text) {
-            ts_sample_range held = {range.begin, range.begin + done};
-            ts_shard_info_init(&info, scene, film, ts_integrator_name(integ), &held, done ? 1 : 0, target_spp,
-                               stats.seconds);
-            st = cli_outputs_write_shard(&outputs, film, &info, &err);
-        } else {
-            st = write_outputs(scene, film, &outputs, &stats, done, error, ts_integrator_name(integ), &err);
-        }
-        if (st) {
-            fprintf(stderr, "tessera: %s\n", err.message);
-            rc = 1;
-        } else if (checkpoint && done == span) {
-            unlink(checkpoint); /* finished: the outputs hold everything the checkpoint did */
-        }
+        st = write_outputs(&r, film, &o.outputs, error, &err);
     }
-    if (!quiet && rc == 0) {
-        double msps = stats.seconds > 0 ? stats.counters.samples / stats.seconds / 1e6 : 0;
+    if (st) goto fail;
+    if (o.checkpoint && done == r.span) unlink(o.checkpoint); /* finished: the outputs hold everything it did */
+    if (!o.quiet) {
+        double seconds = r.final.elapsed_s;
+        double msps = seconds > 0 ? r.final.samples / seconds / 1e6 : 0;
         fprintf(stderr,
                 "tessera: %s: %d×%d, %u spp (%s), %s integrator, %d threads, %.2f s, %.2f Msamples/s, "
                 "error estimate %.3g%%, %llu non-finite samples dropped\n",
-                scene->name, film->width, film->height, done, stop_reason, ts_integrator_name(integ), n_threads,
-                stats.seconds, msps, 100 * error, (unsigned long long)stats.counters.nonfinite);
-        for (int i = 0; i < outputs.n; i++) fprintf(stderr, "tessera: wrote %s\n", outputs.path[i]);
+                r.scene->name, film->width, film->height, done, ts_halt_reason_phrase(r.final.halt), r.integrator,
+                n_threads, seconds, msps, 100 * error, (unsigned long long)r.final.nonfinite);
+        for (int i = 0; i < o.outputs.n; i++) fprintf(stderr, "tessera: wrote %s\n", o.outputs.path[i]);
     }
-    pthread_mutex_destroy(&prog.lock);
+    rc = 0;
+    goto out;
+fail:
+    fprintf(stderr, "tessera: %s\n", err.message);
+    rc = 1;
+out:
+    ts_sched_job_release(job); /* the scene goes with the job, once the scheduler lets it go */
+    ts_scheduler_destroy(sched);
     ts_film_destroy(film);
+    ts_film_destroy(r.complete);
     ts_scene_destroy(scene);
+    free(r.tile_spp);
+    pthread_cond_destroy(&r.cv);
+    pthread_mutex_destroy(&r.mu);
     return rc;
 }
 

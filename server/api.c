@@ -117,7 +117,6 @@ typedef struct image_task {
     int tx, ty;
 } image_task;
 
-static const char *attr_name_or(const char *s, const char *def) { return s && *s ? s : def; }
 
 static void encode_task(void *arg)
 {
@@ -132,10 +131,8 @@ static void encode_task(void *arg)
         ts_tile_snapshot *snap = ts_sched_job_tile(j->sj, t->tx, t->ty);
         if (!snap) {
             /* Not rendered yet: an empty tile of the right size. */
-            int x = j->x0 + t->tx * TS_TILE_SIZE, y = j->y0 + t->ty * TS_TILE_SIZE;
-            int w = j->w - t->tx * TS_TILE_SIZE, h = j->h - t->ty * TS_TILE_SIZE;
-            film = ts_film_create(j->full_w, j->full_h, x, y, w < TS_TILE_SIZE ? w : TS_TILE_SIZE,
-                                  h < TS_TILE_SIZE ? h : TS_TILE_SIZE, &err);
+            ts_tile_rect tr = ts_tile_grid_rect(j->x0, j->y0, j->w, j->h, t->tx, t->ty);
+            film = ts_film_create(j->full_w, j->full_h, tr.x, tr.y, tr.w, tr.h, &err);
         } else {
             film = ts_tile_snapshot_film(snap, j->full_w, j->full_h, &err);
         }
@@ -152,18 +149,10 @@ static void encode_task(void *arg)
         ts_job_progress p;
         ts_sched_job_progress(j->sj, &p);
         const ts_scene *sc = ts_sched_job_scene(j->sj);
-        char version[64];
-        snprintf(version, sizeof version, "tessera %s", TS_VERSION);
-        double error = t->tile ? -1 : ts_film_relative_error(film);
-        if (!st) st = ts_image_set_string(&img, "software", version, &err);
-        if (!st) st = ts_image_set_string(&img, "tessera_scene", attr_name_or(sc ? sc->name : NULL, "scene"), &err);
-        if (!st) st = ts_image_set_string(&img, "tessera_integrator", j->integrator, &err);
-        if (!st) st = ts_image_set_int(&img, "tessera_spp", (int32_t)p.spp_done, &err);
-        if (!st && sc) st = ts_image_set_int(&img, "tessera_seed", (int32_t)sc->sampler.seed, &err);
-        if (!st) st = ts_image_set_double(&img, "tessera_render_time_s", p.elapsed_s, &err);
-        if (!st && !t->tile) st = ts_image_set_double(&img, "tessera_error_estimate", error, &err);
-        if (!st) st = ts_image_set_double(&img, "tessera_nonfinite_samples", (double)p.nonfinite, &err);
-        if (!st && !t->tile) st = ts_image_set_string(&img, "tessera_job", j->id, &err);
+        ts_render_info info = {sc ? sc->name : NULL, j->integrator, p.spp_done, sc != NULL, sc ? sc->sampler.seed : 0,
+                               p.elapsed_s, t->tile ? -1 : ts_film_relative_error(film), (double)p.nonfinite,
+                               t->tile ? NULL : j->id};
+        st = ts_image_set_render_info(&img, &info, &err);
         if (!st) st = t->png ? ts_png_encode(&img, 0.0f, &buf, &len, &err) : ts_exr_write_memory(&img, &buf, &len, &err);
     }
     ts_image_fini(&img);

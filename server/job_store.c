@@ -271,7 +271,9 @@ static srv_job *submit(srv_store *st, const char *text, size_t len, int *http_st
         return NULL;
     }
     uint64_t pixels = (uint64_t)(s->crop_x1 - s->crop_x0) * (uint64_t)(s->crop_y1 - s->crop_y0);
-    uint32_t spp = s->job.spp ? s->job.spp : s->spp;
+    ts_job_settings js;
+    ts_job_settings_from_scene(s, &js);
+    uint32_t spp = js.spp;
     *http_status = 422;
     if (s->width > (int)cfg->limits.max_width || s->height > (int)cfg->limits.max_height ||
         pixels > cfg->limits.max_pixels) {
@@ -298,20 +300,13 @@ static srv_job *submit(srv_store *st, const char *text, size_t len, int *http_st
         if (j) job_free(j);
         goto fail_scene;
     }
-    j->priority = s->job.priority;
-    j->spp_target = spp;
-    j->time_limit_s = s->job.time_limit_s;
-    j->target_error = s->job.target_error;
+    j->settings = js;
     struct timespec now;
     clock_gettime(CLOCK_REALTIME, &now);
     j->created_unix = (double)now.tv_sec + 1e-6 * (double)(now.tv_nsec / 1000); /* µs: orders restored jobs */
     ts_sched_job_desc d = {0};
     d.scene = s;
-    d.integrator = s->integrator.type;
-    d.spp = spp;
-    d.priority = j->priority;
-    d.time_limit_s = j->time_limit_s;
-    d.target_error = j->target_error;
+    d.settings = js;
     d.callbacks = (ts_job_callbacks){on_tile, on_pass, on_done, j};
     /* j->sj is set before the job is listed (store_add's lock publishes it to the threads
      * that find the job there); our reference keeps j alive for the scheduler's callbacks
@@ -341,10 +336,7 @@ srv_job *srv_store_restore(srv_store *st, const srv_restore *r, ts_error *err)
         ts_error_set(err, TS_ERR_NOMEM, "out of memory for a job");
         return NULL;
     }
-    j->priority = r->priority;
-    j->spp_target = r->spp_target;
-    j->time_limit_s = r->time_limit_s;
-    j->target_error = r->target_error;
+    j->settings = r->settings;
     j->created_unix = r->created_unix;
     if ((r->name && !(j->name = strdup(r->name))) || (r->scene && !describe_scene(j, r->scene))) {
         job_free(j);
@@ -355,8 +347,7 @@ srv_job *srv_store_restore(srv_store *st, const srv_restore *r, ts_error *err)
     if (!r->scene && r->film) {
         j->full_w = r->film->full_width, j->full_h = r->film->full_height;
         j->x0 = r->film->x0, j->y0 = r->film->y0, j->w = r->film->width, j->h = r->film->height;
-        j->nx = (j->w + TS_TILE_SIZE - 1) / TS_TILE_SIZE;
-        j->ny = (j->h + TS_TILE_SIZE - 1) / TS_TILE_SIZE;
+        ts_tile_grid_size(j->w, j->h, &j->nx, &j->ny);
     }
     if (r->failure && !r->film) {
         /* Nothing to show: a failed job without a scheduler job. */
@@ -369,11 +360,7 @@ srv_job *srv_store_restore(srv_store *st, const srv_restore *r, ts_error *err)
         for (size_t i = 0; i < (size_t)r->film->width * (size_t)r->film->height; i++) samples += r->film->pixels[i].count;
     ts_sched_job_desc d = {0};
     d.scene = r->scene;
-    d.integrator = r->scene ? r->scene->integrator.type : TS_INTEGRATOR_AO;
-    d.spp = r->spp_target;
-    d.priority = r->priority;
-    d.time_limit_s = r->time_limit_s;
-    d.target_error = r->target_error;
+    d.settings = r->settings;
     d.callbacks = (ts_job_callbacks){on_tile, on_pass, on_done, j};
     d.film = r->film;
     d.tile_spp = r->tile_spp;
@@ -442,7 +429,7 @@ cJSON *srv_job_status_json(srv_job *j)
 {
     ts_job_progress p = {0};
     if (j->sj) ts_sched_job_progress(j->sj, &p);
-    else p.state = TS_JOB_FAILED, p.error_estimate = -1, p.spp_target = j->spp_target;
+    else p.state = TS_JOB_FAILED, p.error_estimate = -1, p.spp_target = j->settings.spp;
     cJSON *o = cJSON_CreateObject();
     char url[160];
     cJSON_AddStringToObject(o, "id", j->id);
@@ -453,7 +440,7 @@ cJSON *srv_job_status_json(srv_job *j)
     pthread_mutex_lock(&j->ckpt_mu);
     if (j->checkpoint_error[0]) cJSON_AddStringToObject(o, "checkpoint_error", j->checkpoint_error);
     pthread_mutex_unlock(&j->ckpt_mu);
-    cJSON_AddNumberToObject(o, "priority", j->priority);
+    cJSON_AddNumberToObject(o, "priority", j->settings.priority);
     cJSON_AddNumberToObject(o, "created_at", j->created_unix);
     cJSON_AddNumberToObject(o, "spp_done", p.spp_done);
     cJSON_AddNumberToObject(o, "spp_target", p.spp_target);
@@ -467,8 +454,8 @@ cJSON *srv_job_status_json(srv_job *j)
     cJSON_AddNumberToObject(o, "camera_rays", (double)p.camera_rays);
     cJSON_AddNumberToObject(o, "other_rays", (double)p.other_rays);
     cJSON_AddStringToObject(o, "halt_reason", ts_halt_reason_name(p.halt));
-    add_number_or_null(o, "time_limit_s", j->time_limit_s, j->time_limit_s > 0);
-    add_number_or_null(o, "target_error", j->target_error, j->target_error > 0);
+    add_number_or_null(o, "time_limit_s", j->settings.time_limit_s, j->settings.time_limit_s > 0);
+    add_number_or_null(o, "target_error", j->settings.target_error, j->settings.target_error > 0);
     cJSON_AddStringToObject(o, "integrator", j->integrator);
     cJSON *fx = cJSON_AddArrayToObject(o, "effects");
     for (uint32_t b = 1; b < (1u << TS_EFFECT_COUNT); b <<= 1) {

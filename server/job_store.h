@@ -28,9 +28,7 @@ typedef struct srv_job {
     size_t scene_len;
     char integrator[16];
     char effects[256];           /* "diffuse, area_lights, …" */
-    int priority;
-    uint32_t spp_target;
-    double time_limit_s, target_error;
+    ts_job_settings settings;    /* what the job renders: integrator, spp target, priority, halting bounds */
     double created_unix;
     int full_w, full_h, x0, y0, w, h, nx, ny;
     ts_sched_job *sj;
@@ -87,9 +85,7 @@ typedef struct srv_restore {
     ts_scene *scene;
     ts_film *film;               /* may be NULL: start from scratch */
     const uint32_t *tile_spp;
-    int priority;
-    uint32_t spp_target;
-    double time_limit_s, target_error;
+    ts_job_settings settings;    /* integrator: the scene's, or AO when there is none */
     const char *failure;         /* non-NULL: register as failed with this message */
 } srv_restore;
 srv_job *srv_store_restore(srv_store *st, const srv_restore *r, ts_error *err);

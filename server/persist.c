@@ -279,10 +279,11 @@ static void restore_one(const char *dir, const char *id, srv_store *st, const ts
     r.created_unix = num(meta, "created_at", 0);
     r.elapsed_s = num(meta, "elapsed_s", 0);
     r.nonfinite = (uint64_t)num(meta, "nonfinite_samples", 0);
-    r.priority = (int)num(meta, "priority", 0);
-    r.spp_target = (uint32_t)num(meta, "spp_target", 1);
-    r.time_limit_s = num(meta, "time_limit_s", 0);
-    r.target_error = num(meta, "target_error", 0);
+    r.settings.integrator = TS_INTEGRATOR_AO; /* the scene's, once it loads */
+    r.settings.priority = (int)num(meta, "priority", 0);
+    r.settings.spp = (uint32_t)num(meta, "spp_target", 1);
+    r.settings.time_limit_s = num(meta, "time_limit_s", 0);
+    r.settings.target_error = num(meta, "target_error", 0);
     r.state = TS_JOB_QUEUED;
     const char *sname = cJSON_IsString(state) ? state->valuestring : "queued";
     if (!strcmp(sname, "done")) r.state = TS_JOB_DONE;
@@ -295,8 +296,9 @@ static void restore_one(const char *dir, const char *id, srv_store *st, const ts
         snprintf(failure, sizeof failure, "the checkpointed scene no longer loads: %s", err.message);
         goto add;
     }
-    int nx = (scene->crop_x1 - scene->crop_x0 + TS_TILE_SIZE - 1) / TS_TILE_SIZE;
-    int ny = (scene->crop_y1 - scene->crop_y0 + TS_TILE_SIZE - 1) / TS_TILE_SIZE;
+    r.settings.integrator = scene->integrator.type;
+    int nx, ny;
+    ts_tile_grid_size(scene->crop_x1 - scene->crop_x0, scene->crop_y1 - scene->crop_y0, &nx, &ny);
     snprintf(path, sizeof path, "%s/film.bin", folder);
     struct stat sb;
     if (stat(path, &sb) == 0) {

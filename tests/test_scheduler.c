@@ -106,9 +106,9 @@ static ts_sched_job *submit(ts_scheduler *sch, ts_scene *s, uint32_t spp, int pr
     ts_error err = {0};
     ts_sched_job_desc d = {0};
     d.scene = s;
-    d.integrator = TS_INTEGRATOR_AO;
-    d.spp = spp;
-    d.priority = priority;
+    d.settings.integrator = TS_INTEGRATOR_AO;
+    d.settings.spp = spp;
+    d.settings.priority = priority;
     d.callbacks = (ts_job_callbacks){on_tile, on_pass, on_done, r};
     ts_sched_job *j = ts_scheduler_submit(sch, &d, &err);
     assert_non_null(j);
@@ -224,9 +224,9 @@ static void test_time_limit(void **state)
     ts_error e2 = {0};
     ts_sched_job_desc d = {0};
     d.scene = load(0, 128, 0, 128);
-    d.integrator = TS_INTEGRATOR_AO;
-    d.spp = 1u << 22;
-    d.time_limit_s = 0.5;
+    d.settings.integrator = TS_INTEGRATOR_AO;
+    d.settings.spp = 1u << 22;
+    d.settings.time_limit_s = 0.5;
     d.callbacks = (ts_job_callbacks){on_tile, on_pass, on_done, &r};
     double t0 = ts_now_seconds();
     ts_sched_job *j = ts_scheduler_submit(sch, &d, &e2);
@@ -266,8 +266,8 @@ static void test_resume_from_partial_film(void **state)
     rec_init(&r2);
     ts_sched_job_desc d = {0};
     d.scene = s;
-    d.integrator = TS_INTEGRATOR_AO;
-    d.spp = 12;
+    d.settings.integrator = TS_INTEGRATOR_AO;
+    d.settings.spp = 12;
     d.film = partial;
     d.tile_spp = tile_spp;
     d.callbacks = (ts_job_callbacks){on_tile, on_pass, on_done, &r2};

@@ -3,6 +3,7 @@
 
 #include <float.h>
 #include <math.h>
+#include <stdio.h>
 
 /* SHARD channel order as written (the EXR file lists them sorted; readers go by name). */
 enum { SH_R, SH_G, SH_B, SH_SUM_LO, SH_SQ_HI = SH_SUM_LO + 3, SH_SQ_LO = SH_SQ_HI + 3, SH_W_HI = SH_SQ_LO + 3,
@@ -133,4 +134,22 @@ ts_film *ts_film_from_image(const ts_image *img, int full_width, int full_height
             }
         }
     return f;
+}
+
+ts_status ts_image_set_render_info(ts_image *img, const ts_render_info *info, ts_error *err)
+{
+    char version[64];
+    snprintf(version, sizeof version, "tessera %s", TS_VERSION);
+    const char *scene = info->scene && info->scene[0] ? info->scene : "scene";
+    ts_status st = ts_image_set_string(img, "software", version, err);
+    if (!st) st = ts_image_set_string(img, "tessera_scene", scene, err);
+    if (!st) st = ts_image_set_string(img, "tessera_integrator", info->integrator, err);
+    if (!st) st = ts_image_set_int(img, "tessera_spp", (int32_t)info->spp, err);
+    if (!st && info->has_seed) st = ts_image_set_int(img, "tessera_seed", (int32_t)info->seed, err);
+    if (!st) st = ts_image_set_double(img, "tessera_render_time_s", info->render_time_s, err);
+    if (!st && info->error_estimate >= 0)
+        st = ts_image_set_double(img, "tessera_error_estimate", info->error_estimate, err);
+    if (!st) st = ts_image_set_double(img, "tessera_nonfinite_samples", info->nonfinite_samples, err);
+    if (!st && info->job) st = ts_image_set_string(img, "tessera_job", info->job, err);
+    return st;
 }

@@ -31,6 +31,7 @@
 #define TS_FILM_IMAGE_H
 
 #include <stdbool.h>
+#include <stdint.h>
 
 #include "core/error.h"
 #include "film/film.h"
@@ -55,5 +56,24 @@ bool ts_film_image_is_shard(const ts_image *img);
  * channel is missing — TS_ERR_INVALID naming it — or memory runs out). Counts must be
  * whole non-negative numbers. Free with ts_film_destroy. */
 ts_film *ts_film_from_image(const ts_image *img, int full_width, int full_height, int x0, int y0, ts_error *err);
+
+/* What a rendered image says about its render (EXR attributes): the one description that
+ * `tessera render` and the server's image answers both write. */
+typedef struct ts_render_info {
+    const char *scene;          /* scene name ("scene" when NULL or empty) */
+    const char *integrator;     /* integrator name */
+    uint32_t spp;               /* samples per pixel the image holds */
+    bool has_seed;
+    uint32_t seed;
+    double render_time_s;
+    double error_estimate;      /* < 0: not written (a tile) */
+    double nonfinite_samples;   /* samples dropped for NaN/∞/negative radiance */
+    const char *job;            /* job id, or NULL */
+} ts_render_info;
+
+/* Sets software ("tessera VERSION"), tessera_scene, tessera_integrator, tessera_spp,
+ * tessera_seed, tessera_render_time_s, tessera_error_estimate, tessera_nonfinite_samples and
+ * tessera_job on img. */
+ts_status ts_image_set_render_info(ts_image *img, const ts_render_info *info, ts_error *err);
 
 #endif

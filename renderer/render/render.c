@@ -16,11 +16,52 @@ double ts_now_seconds(void)
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
-typedef struct tile { int x, y, w, h; float key; } tile; /* key: distance² of its centre from the image centre */
+void ts_tile_grid_size(int w, int h, int *nx, int *ny)
+{
+    *nx = (w + TS_TILE_SIZE - 1) / TS_TILE_SIZE;
+    *ny = (h + TS_TILE_SIZE - 1) / TS_TILE_SIZE;
+}
+
+ts_tile_rect ts_tile_grid_rect(int x0, int y0, int w, int h, int tx, int ty)
+{
+    ts_tile_rect t = {tx, ty, x0 + tx * TS_TILE_SIZE, y0 + ty * TS_TILE_SIZE, 0, 0};
+    t.w = (tx + 1) * TS_TILE_SIZE <= w ? TS_TILE_SIZE : w - tx * TS_TILE_SIZE;
+    t.h = (ty + 1) * TS_TILE_SIZE <= h ? TS_TILE_SIZE : h - ty * TS_TILE_SIZE;
+    return t;
+}
+
+typedef struct keyed { float key; int y, x, index; } keyed;
+
+static int cmp_keyed(const void *a, const void *b)
+{
+    const keyed *ta = a, *tb = b;
+    if (ta->key != tb->key) return ta->key < tb->key ? -1 : 1;
+    if (ta->y != tb->y) return ta->y < tb->y ? -1 : 1;
+    return ta->x < tb->x ? -1 : (ta->x > tb->x);
+}
+
+void ts_tile_grid_order(int x0, int y0, int w, int h, int full_w, int full_h, int *order)
+{
+    int nx, ny;
+    ts_tile_grid_size(w, h, &nx, &ny);
+    keyed *k = malloc(sizeof *k * (size_t)nx * (size_t)ny);
+    for (int ty = 0; ty < ny; ty++)
+        for (int tx = 0; tx < nx; tx++) {
+            int i = ty * nx + tx;
+            ts_tile_rect t = ts_tile_grid_rect(x0, y0, w, h, tx, ty);
+            float dx = t.x + t.w * 0.5f - full_w * 0.5f, dy = t.y + t.h * 0.5f - full_h * 0.5f;
+            if (k) k[i] = (keyed){dx * dx + dy * dy, t.y, t.x, i};
+            order[i] = i;
+        }
+    if (!k) return; /* out of memory: row-major order, still every tile once */
+    qsort(k, (size_t)nx * (size_t)ny, sizeof *k, cmp_keyed);
+    for (int i = 0; i < nx * ny; i++) order[i] = k[i].index;
+    free(k);
+}
 
 typedef struct job {
     const ts_render_request *req;
-    tile *tiles;
+    ts_tile_rect *tiles;
     int n_tiles;
     atomic_int next;        /* next tile to take */
     pthread_mutex_t lock;   /* guards stats while workers add their counters */
@@ -67,7 +108,7 @@ static void *worker(void *arg)
         if (req->cancel && atomic_load(req->cancel)) break;
         int k = atomic_fetch_add(&j->next, 1);
         if (k >= j->n_tiles) break;
-        const tile *t = &j->tiles[k];
+        const ts_tile_rect *t = &j->tiles[k];
         ts_render_tile(req, t->x, t->y, t->w, t->h, &c);
         if (req->on_tile) req->on_tile(req->user, t->x, t->y, t->w, t->h);
     }
@@ -81,35 +122,26 @@ static void *worker(void *arg)
     return NULL;
 }
 
-static int cmp_tiles(const void *a, const void *b)
-{
-    const tile *ta = a, *tb = b;
-    if (ta->key != tb->key) return ta->key < tb->key ? -1 : 1;
-    if (ta->y != tb->y) return ta->y < tb->y ? -1 : 1;
-    return ta->x < tb->x ? -1 : (ta->x > tb->x);
-}
-
 ts_status ts_render(const ts_render_request *req, ts_render_stats *stats, ts_error *err)
 {
     const ts_film *f = req->film;
-    int nx = (f->width + TS_TILE_SIZE - 1) / TS_TILE_SIZE, ny = (f->height + TS_TILE_SIZE - 1) / TS_TILE_SIZE;
+    int nx, ny;
+    ts_tile_grid_size(f->width, f->height, &nx, &ny);
     job j = {0};
     j.req = req;
     j.n_tiles = nx * ny;
     j.stats = stats;
     j.tiles = malloc(sizeof *j.tiles * (size_t)j.n_tiles);
-    if (!j.tiles) return ts_error_set(err, TS_ERR_NOMEM, "out of memory for %d tiles", j.n_tiles);
-    for (int ty = 0; ty < ny; ty++)
-        for (int tx = 0; tx < nx; tx++) {
-            tile *t = &j.tiles[ty * nx + tx];
-            t->x = f->x0 + tx * TS_TILE_SIZE;
-            t->y = f->y0 + ty * TS_TILE_SIZE;
-            t->w = (tx + 1) * TS_TILE_SIZE <= f->width ? TS_TILE_SIZE : f->width - tx * TS_TILE_SIZE;
-            t->h = (ty + 1) * TS_TILE_SIZE <= f->height ? TS_TILE_SIZE : f->height - ty * TS_TILE_SIZE;
-            float dx = t->x + t->w * 0.5f - f->full_width * 0.5f, dy = t->y + t->h * 0.5f - f->full_height * 0.5f;
-            t->key = dx * dx + dy * dy;
-        }
-    qsort(j.tiles, (size_t)j.n_tiles, sizeof *j.tiles, cmp_tiles);
+    int *order = malloc(sizeof *order * (size_t)j.n_tiles);
+    if (!j.tiles || !order) {
+        free(j.tiles);
+        free(order);
+        return ts_error_set(err, TS_ERR_NOMEM, "out of memory for %d tiles", j.n_tiles);
+    }
+    ts_tile_grid_order(f->x0, f->y0, f->width, f->height, f->full_width, f->full_height, order);
+    for (int k = 0; k < j.n_tiles; k++)
+        j.tiles[k] = ts_tile_grid_rect(f->x0, f->y0, f->width, f->height, order[k] % nx, order[k] / nx);
+    free(order);
     atomic_init(&j.next, 0);
     pthread_mutex_init(&j.lock, NULL);
 

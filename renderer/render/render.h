@@ -20,6 +20,19 @@
 
 #define TS_TILE_SIZE 32
 
+/* The tile grid of a film window of w × h pixels whose top-left pixel is (x0, y0) in a
+ * full_w × full_h image: TS_TILE_SIZE squares from the window's corner, the last column
+ * and row cut to fit. The one grid of the renderer, the scheduler and the server. */
+typedef struct ts_tile_rect { int tx, ty, x, y, w, h; } ts_tile_rect;
+
+/* Tiles across and down a w × h window. */
+void ts_tile_grid_size(int w, int h, int *nx, int *ny);
+/* Tile (tx, ty) of the window (full-image pixels). */
+ts_tile_rect ts_tile_grid_rect(int x0, int y0, int w, int h, int tx, int ty);
+/* The grid's tile indices (ty · nx + tx) from the image centre outwards (distance² of a
+ * tile's centre from the image centre, ties by row then column) into order[nx · ny]. */
+void ts_tile_grid_order(int x0, int y0, int w, int h, int full_w, int full_h, int *order);
+
 typedef struct ts_render_request {
     const ts_scene *scene;
     ts_integrator_type integrator; /* usually scene->integrator.type */

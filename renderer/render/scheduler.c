@@ -14,7 +14,6 @@
 
 typedef struct tile_state {
     int tx, ty, x, y, w, h; /* immutable */
-    float key;              /* immutable: distance² of the centre from the image centre */
     uint32_t spp;           /* guarded: samples in the published snapshot (and the film) */
     ts_tile_snapshot *snap; /* guarded: latest snapshot, or NULL */
 } tile_state;
@@ -24,11 +23,11 @@ struct ts_sched_job {
     ts_scheduler *s;            /* immutable; the job holds a reference on its memory */
     /* immutable after submit */
     ts_scene *scene;
-    ts_integrator_type integrator;
-    uint32_t spp_target;
-    int priority;
+    ts_job_settings settings;
+    uint32_t sample_begin;
+    double max_pass_s;
+    uint32_t done_before;       /* spp every tile held at submission (a resume) */
     uint64_t seq;
-    double time_limit_s, target_error;
     ts_job_callbacks cb;
     int full_w, full_h, x0, y0, w, h, nx, ny, n_tiles;
     tile_state *tiles;
@@ -70,19 +69,6 @@ const char *ts_job_state_name(ts_job_state s)
     case TS_JOB_DONE: return "done";
     case TS_JOB_CANCELLED: return "cancelled";
     case TS_JOB_FAILED: return "failed";
-    }
-    return "unknown";
-}
-
-const char *ts_halt_reason_name(ts_halt_reason r)
-{
-    switch (r) {
-    case TS_HALT_NONE: return "none";
-    case TS_HALT_SPP: return "spp";
-    case TS_HALT_TIME: return "time_limit";
-    case TS_HALT_ERROR: return "target_error";
-    case TS_HALT_CANCELLED: return "cancelled";
-    case TS_HALT_RESTORED: return "restored";
     }
     return "unknown";
 }
@@ -144,7 +130,7 @@ static void fill_progress(const ts_sched_job *j, ts_job_progress *p)
     p->state = j->state;
     p->halt = j->halt;
     p->spp_done = job_spp_done(j);
-    p->spp_target = j->spp_target;
+    p->spp_target = j->settings.spp;
     p->pass_end = j->pass_end;
     p->tiles = j->n_tiles;
     for (int i = 0; i < j->n_tiles; i++)
@@ -184,20 +170,6 @@ static void list_remove(ts_scheduler *s, ts_sched_job *j)
         }
 }
 
-/* The pass after `done` spp: 1, 2, 4, 8, … (passes of 1, 1, 2, 4, …), capped at the target,
- * and shrunk to what fits in the time left. */
-static uint32_t next_pass_end(const ts_sched_job *j, uint32_t done, double elapsed)
-{
-    uint64_t end = done == 0 ? 1 : 2ull * done;
-    if (end > j->spp_target) end = j->spp_target;
-    if (j->time_limit_s > 0 && done > 0 && elapsed > 0) {
-        double per_spp = elapsed / done;
-        double fit = (j->time_limit_s - elapsed) / per_spp;
-        if (fit < (double)(end - done)) end = done + (fit >= 1 ? (uint64_t)fit : 1);
-    }
-    return (uint32_t)end;
-}
-
 /* ---------------------------------------------------------------- workers */
 
 static ts_tile_snapshot *snapshot_from_film(const ts_film *f, const tile_state *t, uint32_t spp)
@@ -222,12 +194,10 @@ static void close_pass(ts_scheduler *s, ts_sched_job *j)
     double error = done > 0 && j->film ? ts_film_relative_error(j->film) : -1;
     pthread_mutex_lock(&s->mu);
     if (done > 0) j->error = error;
-    double now = ts_now_seconds(), elapsed = job_elapsed(j, now);
-    ts_halt_reason halt = TS_HALT_NONE;
-    if (j->cancel) halt = TS_HALT_CANCELLED;
-    else if (done >= j->spp_target) halt = TS_HALT_SPP;
-    else if (j->target_error > 0 && done >= 4 && error >= 0 && error <= j->target_error) halt = TS_HALT_ERROR;
-    else if (j->time_limit_s > 0 && done > 0 && elapsed >= j->time_limit_s) halt = TS_HALT_TIME;
+    double now = ts_now_seconds();
+    ts_pass_state ps = {done, j->done_before, job_elapsed(j, now), j->elapsed_before, done > 0 ? error : j->error,
+                        j->cancel};
+    ts_halt_reason halt = ts_progressive_halt(&j->settings, &ps);
     bool finished = halt != TS_HALT_NONE;
     if (finished) {
         j->halt = halt;
@@ -239,19 +209,24 @@ static void close_pass(ts_scheduler *s, ts_sched_job *j)
         uint32_t max = 0;
         for (int i = 0; i < j->n_tiles; i++)
             if (j->tiles[i].spp > max) max = j->tiles[i].spp;
-        j->pass_end = max > done ? (max < j->spp_target ? max : j->spp_target) : next_pass_end(j, done, elapsed);
+        uint32_t cap = j->settings.spp;
+        j->pass_end = max > done ? (max < cap ? max : cap) : ts_progressive_next_pass_end(&j->settings, &ps, j->max_pass_s);
         j->cursor = 0;
     }
-    j->closing = false;
     ts_job_progress p;
     fill_progress(j, &p);
+    if (!finished && done > 0 && j->cb.on_pass) {
+        /* Still closing: no tile of the next pass starts until on_pass returns. */
+        pthread_mutex_unlock(&s->mu);
+        j->cb.on_pass(j->cb.user, j, &p);
+        pthread_mutex_lock(&s->mu);
+    }
+    j->closing = false;
     pthread_cond_broadcast(&s->work);
     pthread_mutex_unlock(&s->mu);
     if (finished) {
         if (j->cb.on_done) j->cb.on_done(j->cb.user, j, &p);
         ts_sched_job_release(j); /* the list's reference */
-    } else if (done > 0 && j->cb.on_pass) {
-        j->cb.on_pass(j->cb.user, j, &p);
     }
     pthread_mutex_lock(&s->mu);
 }
@@ -302,14 +277,15 @@ static void *worker(void *arg)
             continue;
         }
         tile_state *t = &j->tiles[ti];
-        ts_render_request req = {j->scene, j->integrator, j->film, t->spp, j->pass_end, 1, NULL, NULL, NULL};
+        ts_render_request req = {j->scene, j->settings.integrator, j->film, j->sample_begin + t->spp,
+                                 j->sample_begin + j->pass_end, 1, NULL, NULL, NULL};
         ts_sched_job_retain(j);
         pthread_mutex_unlock(&s->mu);
 
         ts_counters c = {0};
         ts_render_tile(&req, t->x, t->y, t->w, t->h, &c);
-        ts_tile_snapshot *snap = snapshot_from_film(j->film, t, req.sample_end);
-        ts_tile_event ev = {t->tx, t->ty, t->x, t->y, t->w, t->h, req.sample_end};
+        ts_tile_snapshot *snap = snapshot_from_film(j->film, t, j->pass_end);
+        ts_tile_event ev = {t->tx, t->ty, t->x, t->y, t->w, t->h, j->pass_end};
 
         pthread_mutex_lock(&s->mu);
         ts_tile_snapshot *old = NULL;
@@ -317,7 +293,7 @@ static void *worker(void *arg)
             old = t->snap;
             t->snap = snap;
         }
-        t->spp = req.sample_end;
+        t->spp = j->pass_end;
         j->samples += c.samples;
         j->nonfinite += c.nonfinite;
         j->camera_rays += c.camera_rays;
@@ -414,27 +390,6 @@ void ts_scheduler_destroy(ts_scheduler *s)
     scheduler_unref(s);
 }
 
-static int cmp_key(const void *a, const void *b, const tile_state *tiles)
-{
-    const tile_state *ta = &tiles[*(const int *)a], *tb = &tiles[*(const int *)b];
-    if (ta->key != tb->key) return ta->key < tb->key ? -1 : 1;
-    if (ta->y != tb->y) return ta->y < tb->y ? -1 : 1;
-    return ta->x < tb->x ? -1 : (ta->x > tb->x);
-}
-
-/* Insertion sort of the order by key (qsort has no context argument in C11). */
-static void sort_order(int *order, int n, const tile_state *tiles)
-{
-    for (int i = 1; i < n; i++) {
-        int v = order[i], k = i;
-        while (k > 0 && cmp_key(&order[k - 1], &v, tiles) > 0) {
-            order[k] = order[k - 1];
-            k--;
-        }
-        order[k] = v;
-    }
-}
-
 ts_sched_job *ts_scheduler_submit(ts_scheduler *s, const ts_sched_job_desc *d, ts_error *err)
 {
     bool finished = ts_job_state_finished(d->finished);
@@ -442,7 +397,7 @@ ts_sched_job *ts_scheduler_submit(ts_scheduler *s, const ts_sched_job_desc *d, t
         ts_error_set(err, TS_ERR_INVALID, "a job needs a scene (or a film when restored finished)");
         return NULL;
     }
-    if (d->spp < 1 && !finished) {
+    if (d->settings.spp < 1 && !finished) {
         ts_error_set(err, TS_ERR_INVALID, "a job needs at least 1 sample per pixel");
         return NULL;
     }
@@ -452,11 +407,9 @@ ts_sched_job *ts_scheduler_submit(ts_scheduler *s, const ts_sched_job_desc *d, t
         return NULL;
     }
     atomic_init(&j->refs, 1);
-    j->integrator = d->integrator;
-    j->spp_target = d->spp;
-    j->priority = d->priority;
-    j->time_limit_s = d->time_limit_s;
-    j->target_error = d->target_error;
+    j->settings = d->settings;
+    j->sample_begin = d->sample_begin;
+    j->max_pass_s = d->max_pass_s;
     j->cb = d->callbacks;
     j->error = -1;
     if (d->scene) {
@@ -473,8 +426,7 @@ ts_sched_job *ts_scheduler_submit(ts_scheduler *s, const ts_sched_job_desc *d, t
         free(j);
         return NULL;
     }
-    j->nx = (j->w + TS_TILE_SIZE - 1) / TS_TILE_SIZE;
-    j->ny = (j->h + TS_TILE_SIZE - 1) / TS_TILE_SIZE;
+    ts_tile_grid_size(j->w, j->h, &j->nx, &j->ny);
     j->n_tiles = j->nx * j->ny;
     j->tiles = calloc((size_t)j->n_tiles, sizeof *j->tiles);
     j->order = malloc(sizeof *j->order * (size_t)j->n_tiles);
@@ -491,18 +443,12 @@ ts_sched_job *ts_scheduler_submit(ts_scheduler *s, const ts_sched_job_desc *d, t
         for (int tx = 0; tx < j->nx; tx++) {
             int i = ty * j->nx + tx;
             tile_state *t = &j->tiles[i];
-            t->tx = tx, t->ty = ty;
-            t->x = j->x0 + tx * TS_TILE_SIZE;
-            t->y = j->y0 + ty * TS_TILE_SIZE;
-            t->w = (tx + 1) * TS_TILE_SIZE <= j->w ? TS_TILE_SIZE : j->w - tx * TS_TILE_SIZE;
-            t->h = (ty + 1) * TS_TILE_SIZE <= j->h ? TS_TILE_SIZE : j->h - ty * TS_TILE_SIZE;
-            float dx = t->x + t->w * 0.5f - j->full_w * 0.5f, dy = t->y + t->h * 0.5f - j->full_h * 0.5f;
-            t->key = dx * dx + dy * dy;
+            ts_tile_rect r = ts_tile_grid_rect(j->x0, j->y0, j->w, j->h, tx, ty);
+            t->tx = tx, t->ty = ty, t->x = r.x, t->y = r.y, t->w = r.w, t->h = r.h;
             t->spp = d->tile_spp ? d->tile_spp[i] : 0;
             if (d->film && t->spp > 0) t->snap = snapshot_from_film(film, t, t->spp);
-            j->order[i] = i;
         }
-    sort_order(j->order, j->n_tiles, j->tiles);
+    ts_tile_grid_order(j->x0, j->y0, j->w, j->h, j->full_w, j->full_h, j->order);
     j->film = film;
     j->scene = d->scene;
     j->elapsed_before = d->elapsed_s;
@@ -510,6 +456,7 @@ ts_sched_job *ts_scheduler_submit(ts_scheduler *s, const ts_sched_job_desc *d, t
     j->nonfinite = d->nonfinite;
     j->t_submit = ts_now_seconds();
     j->cursor = j->n_tiles; /* pass_end 0: the first close starts pass 1 */
+    j->done_before = job_spp_done(j);
     if (d->film && !finished) j->error = ts_film_relative_error(film);
 
     atomic_fetch_add(&s->refs, 1);
@@ -526,7 +473,8 @@ ts_sched_job *ts_scheduler_submit(ts_scheduler *s, const ts_sched_job_desc *d, t
     }
     j->state = TS_JOB_QUEUED;
     ts_sched_job **pp = &s->jobs;
-    while (*pp && ((*pp)->priority > j->priority || ((*pp)->priority == j->priority && (*pp)->seq < j->seq)))
+    int prio = j->settings.priority;
+    while (*pp && ((*pp)->settings.priority > prio || ((*pp)->settings.priority == prio && (*pp)->seq < j->seq)))
         pp = &(*pp)->next;
     j->next = *pp;
     *pp = j;

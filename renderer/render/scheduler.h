@@ -18,18 +18,23 @@
  * reference-counted ts_tile_snapshot and publishes it; readers (HTTP, checkpoints) take
  * references to snapshots and never touch the working film, so they never stop workers.
  *
- * Halting: the spp target; time_limit_s (rendering wall time; the last pass is shrunk to
- * what the measured speed says still fits); target_error (ts_film_relative_error, checked
- * at pass ends from 4 spp on; proto/error-estimate.md); cancellation (tiles being rendered
- * finish, nothing new starts, pixels stay). Samples of a pixel are added in index order by
- * one thread, so a job's film is bit-identical to ts_render of the same sample count.
+ * Passes and halting follow progressive.h, the one policy of every render: the spp target;
+ * time_limit_s (rendering wall time; the last pass is shrunk to what the measured speed
+ * says still fits); target_error (ts_film_relative_error, checked at pass ends from
+ * TS_PROGRESSIVE_ERROR_MIN_SPP on; proto/error-estimate.md); cancellation (tiles being
+ * rendered finish, nothing new starts, pixels stay). A job may render a sample range that
+ * starts past 0 (a farm shard): its tiles' sample counts are relative to sample_begin.
+ * Samples of a pixel are added in index order by one thread, so a job's film is
+ * bit-identical to ts_render of the same sample range.
  *
  * Threads: every function here is thread-safe. One mutex guards all scheduling state;
  * it is held only for bookkeeping, never while rendering, copying a film or calling back.
  * Workers wait on a condition variable when there is no work. Callbacks run on worker
  * threads (or the thread calling ts_sched_job_cancel) with no lock held; they must be
  * quick and must not call ts_scheduler_destroy. For one job, every on_tile call of a pass
- * returns before the pass's on_pass and the final on_done. */
+ * returns before the pass's on_pass and the final on_done, and no tile of the next pass
+ * starts before on_pass returns: during on_pass every tile holds exactly pass_end samples
+ * (ts_sched_job_film then gives a consistent film, e.g. for a checkpoint). */
 #ifndef TS_SCHEDULER_H
 #define TS_SCHEDULER_H
 
@@ -40,6 +45,7 @@
 #include "core/error.h"
 #include "film/film.h"
 #include "integrators/integrator.h"
+#include "render/progressive.h"
 #include "render/render.h"
 #include "scene/scene.h"
 
@@ -57,17 +63,6 @@ typedef enum ts_job_state {
 /* "queued", "running", "done", "cancelled", "failed". */
 const char *ts_job_state_name(ts_job_state s);
 static inline bool ts_job_state_finished(ts_job_state s) { return s >= TS_JOB_DONE; }
-
-/* Why a finished job stopped. */
-typedef enum ts_halt_reason {
-    TS_HALT_NONE,       /* not finished */
-    TS_HALT_SPP,        /* sample target reached */
-    TS_HALT_TIME,       /* time limit reached */
-    TS_HALT_ERROR,      /* target error reached */
-    TS_HALT_CANCELLED,  /* ts_sched_job_cancel */
-    TS_HALT_RESTORED,   /* submitted already finished (restored from a checkpoint) */
-} ts_halt_reason;
-const char *ts_halt_reason_name(ts_halt_reason r);
 
 /* One tile as it stood after a tile pass: immutable once published. Pixels are the
  * film's accumulators for the tile rectangle, row-major, w·h of them. */
@@ -108,11 +103,9 @@ typedef struct ts_job_callbacks {
 typedef struct ts_sched_job_desc {
     ts_scene *scene;            /* ownership passes to the job on success (destroyed with it);
                                  * may be NULL only with `finished` set */
-    ts_integrator_type integrator;
-    uint32_t spp;               /* target, ≥ 1 */
-    int priority;               /* higher first */
-    double time_limit_s;        /* 0 = none */
-    double target_error;        /* 0 = none */
+    ts_job_settings settings;   /* integrator, spp target (≥ 1), priority, halting bounds */
+    uint32_t sample_begin;      /* the job renders sample indices [sample_begin, sample_begin + spp) */
+    double max_pass_s;          /* a pass is shrunk to about this long (e.g. a checkpoint interval); 0 = no bound */
     ts_job_callbacks callbacks;
     /* Resuming (all optional): a film of the scene's crop window with samples already in it
      * (ownership passes to the job on success) and, per tile (row-major over the grid),

@@ -154,7 +154,8 @@ static void server_start(void)
     fr.scene_len = sizeof fixture_scene - 1;
     fr.state = TS_JOB_QUEUED;
     fr.scene = scene;
-    fr.spp_target = scene->spp;
+    fr.settings.spp = scene->spp;
+    fr.settings.integrator = scene->integrator.type;
     srv_job *j = srv_store_restore(srv->store, &fr, &err);
     FUZZ_CHECK(j != NULL && j->sj != NULL);
     settle(j);
@@ -163,7 +164,7 @@ static void server_start(void)
     fr.id = FAILED_ID;
     fr.name = "broken";
     fr.state = TS_JOB_FAILED;
-    fr.spp_target = 4;
+    fr.settings.spp = 4;
     fr.failure = "checkpoint unreadable: the fuzz harness made it so";
     j = srv_store_restore(srv->store, &fr, &err);
     FUZZ_CHECK(j != NULL);

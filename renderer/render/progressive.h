@@ -1,0 +1,72 @@
+/* progressive.h — what a render is asked to do, and the pass and halt policy that every
+ * progressive render follows (the server's jobs and `tessera render` alike).
+ *
+ * Design note: a render is described once, by ts_job_settings: the integrator, the samples
+ * per pixel to reach, a priority, and two optional halting bounds (time, error). The
+ * scene's "job" block gives the defaults (ts_job_settings_from_scene); the CLI's options
+ * and the server's restore override fields of the same type. A render advances in passes
+ * whose ends are 1, 2, 4, 8, … samples per pixel (passes of 1, 1, 2, 4, …), so a preview
+ * improves evenly, capped at the target; with a time limit the last pass is shrunk to what
+ * the measured speed says still fits, and a pass may be bounded in time (a checkpoint
+ * interval). At every pass end the render halts on, in this order: cancellation, the
+ * sample target, the target error (checked from TS_PROGRESSIVE_ERROR_MIN_SPP on, since an
+ * estimate of a few samples is noise), the time limit. The scheduler (scheduler.h) is the
+ * one caller of the policy; these functions are pure and thread-safe. */
+#ifndef TS_PROGRESSIVE_H
+#define TS_PROGRESSIVE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "scene/scene.h"
+
+/* The error estimate is not used to halt before this many samples per pixel. */
+#define TS_PROGRESSIVE_ERROR_MIN_SPP 4
+
+typedef struct ts_job_settings {
+    ts_integrator_type integrator;
+    uint32_t spp;        /* samples per pixel to reach, ≥ 1 */
+    int priority;        /* higher first, in a shared scheduler */
+    double time_limit_s; /* rendering wall time; 0 = none */
+    double target_error; /* relative error estimate (ts_film_relative_error) to reach; 0 = none */
+} ts_job_settings;
+
+/* The settings a scene document asks for: its integrator, its "job" block's spp (else the
+ * sampler's), priority, time limit and target error. */
+void ts_job_settings_from_scene(const ts_scene *s, ts_job_settings *out);
+
+/* Why a render stopped. */
+typedef enum ts_halt_reason {
+    TS_HALT_NONE,      /* not finished */
+    TS_HALT_SPP,       /* sample target reached */
+    TS_HALT_TIME,      /* time limit reached */
+    TS_HALT_ERROR,     /* target error reached */
+    TS_HALT_CANCELLED, /* cancelled */
+    TS_HALT_RESTORED,  /* submitted already finished (restored from a checkpoint) */
+} ts_halt_reason;
+
+/* "none", "spp", "time_limit", "target_error", "cancelled", "restored". */
+const char *ts_halt_reason_name(ts_halt_reason r);
+/* A phrase for people: "sample count reached", "time limit reached", … */
+const char *ts_halt_reason_phrase(ts_halt_reason r);
+
+/* Where a render stands at a pass end. */
+typedef struct ts_pass_state {
+    uint32_t done;          /* samples per pixel every tile holds */
+    uint32_t done_before;   /* of them, held before this process rendered any (a resume) */
+    double elapsed_s;       /* rendering wall time, including elapsed_before */
+    double elapsed_before;  /* of it, spent before this process (a resume) */
+    double error;           /* error estimate at `done`; < 0 when unknown */
+    bool cancelled;
+} ts_pass_state;
+
+/* Whether (and why) the render halts at this pass end. */
+ts_halt_reason ts_progressive_halt(const ts_job_settings *js, const ts_pass_state *st);
+
+/* The end (samples per pixel) of the pass after st->done, for a render that does not
+ * halt: double the samples (1 after 0), capped at js->spp; shrunk, once this process has
+ * a measured speed, to what fits in the time limit's remainder and in max_pass_s (0 = no
+ * bound), but always at least one more sample. */
+uint32_t ts_progressive_next_pass_end(const ts_job_settings *js, const ts_pass_state *st, double max_pass_s);
+
+#endif
