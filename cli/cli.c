@@ -1,4 +1,4 @@
-/* cli.c — the command line of DESIGN.md §5b.
+/* cli.c — the command line of docs/design.md §5b.
  *
  * `tessera render` loads a scene (or the built-in Cornell box), renders it in progressive
  * passes of 1, 1, 2, 4, … samples per pixel until the sample count, the time limit or the
@@ -124,7 +124,7 @@ static ts_status write_outputs(const ts_scene *scene, const ts_film *film, const
 /* ---------------------------------------------------------------- farm shards
 
  * With --checkpoint, SIGTERM and SIGINT stop the render between tiles and the last
- * complete pass is saved before exiting (DESIGN.md §7). A signal handler can reach only
+ * complete pass is saved before exiting (docs/design.md §7). A signal handler can reach only
  * process-wide state, so these two atomics are the one exception to "no global mutable
  * state": written by the handler, read by the render loop and the workers. */
 static atomic_bool g_cancel;
@@ -221,7 +221,7 @@ static int cmd_render(int argc, char **argv)
     if (checkpoint && !cli_output_is_exr(checkpoint))
         return usage_error("--checkpoint %s: the checkpoint is an EXR file; give it the .exr extension", checkpoint);
 
-    /* Which shard (DESIGN.md §7): I/N given, or from the scheduler's environment. */
+    /* Which shard (docs/design.md §7): I/N given, or from the scheduler's environment. */
     uint32_t shard_i = 0, shard_n = 1;
     char shard_how[256] = "";
     if (shard_text) {

@@ -1,4 +1,4 @@
-/* test_farm_merge.c — farm shards as an operator uses them (DESIGN.md §7, issue 10):
+/* test_farm_merge.c — farm shards as an operator uses them (docs/design.md §7, issue 10):
  * `tessera render --shard` + `tessera merge` equal one render, a tree of merges equals a
  * flat one, bad merges are refused with their sentences, missing ranges are named,
  * `--shard auto` reads the scheduler's variables, and a shard killed with SIGTERM and

@@ -1,7 +1,7 @@
 /* test_material.c — materials through the whole BSDF (issue 3): χ² of the BSDF's lobe-
  * mixing sampler for the specular-plus-diffuse mixtures and the rough dielectric and
  * conductor; the reflect/transmit split of FresnelSpecular; "no material with unit
- * parameters reflects more than 1.01 at any wo" for every material of DESIGN.md §4
+ * parameters reflects more than 1.01 at any wo" for every material of docs/design.md §4
  * (the Fourier material's bound is in test_fourier_bsdf, which owns the table writer);
  * ρ_hh against closed forms; dielectric roughness 1e-3 against smooth. */
 #include <setjmp.h>

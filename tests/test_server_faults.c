@@ -305,7 +305,7 @@ static int run_checkpoint(void)
 
 static char kill_dir[64];
 
-/* The reference: `tessera render` of the same document (same pixels, DESIGN.md §1). */
+/* The reference: `tessera render` of the same document (same pixels, docs/design.md §1). */
 static ts_image reference(const char *doc)
 {
     char scene_path[128], out[128], log[128];

@@ -1,4 +1,4 @@
-/* scene.h — scene format v1 (DESIGN.md §4, proto/scene.schema.json): loading, validation
+/* scene.h — scene format v1 (docs/design.md §4, proto/scene.schema.json): loading, validation
  * and the immutable Scene every render thread reads.
  *
  * Design note: loading is two phases. Phase one walks the whole JSON document and checks
