@@ -1,4 +1,4 @@
-/* test_server_faults.c — `tessera serve` under faults (issue 11, "Faults"), one group per
+/* test_server_faults.c — `tessera serve` under faults (disk, crash, clients), one group per
  * ctest entry (the first argument):
  *
  *   checkpoint  checkpoints into a full file system (a 1 MiB tmpfs) and into a read-only
