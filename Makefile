@@ -8,7 +8,7 @@ BUILD_TYPE ?= Release
 JOBS       ?= $(shell nproc 2>/dev/null || echo 2)
 CMAKE_ARGS ?=
 
-# Debian packages the build and tests need (DESIGN.md §3).
+# Debian packages the build and tests need (docs/design.md §3).
 DEB_PACKAGES := cmake make gcc pkg-config libembree-dev libopenexr-dev libpng-dev libcjson-dev nettle-dev \
                 libmicrohttpd-dev libcmocka-dev libcurl4-openssl-dev \
                 clang libclang-rt-14-dev wrk curl

@@ -1,4 +1,5 @@
-/* bench/effects.c — what simulating only the effects a scene calls for saves (issue 5).
+/* bench/effects.c — what simulating only the effects a scene calls for saves
+ * (docs/design.md §8).
  *
  * For each scene given, renders the same samples alternately with the specialisation off
  * (`generic`: every effect simulated) and on, REPS times side by side, checks that the

@@ -1,6 +1,6 @@
 #!/bin/sh
 # bench/http.sh BUILD_DIR OUT_DIR — time from job submission to the first tile on screen, and
-# the same job through HTTP against the CLI, as a ratio (issue 8, part 2).
+# the same job through HTTP against the CLI, as a ratio (docs/design.md §8).
 #
 # Starts `tessera serve` on loopback, then REPS times (alternating which goes first):
 #   - HTTP: POST the Cornell box (BENCH_HTTP_SIZE² pixels, BENCH_HTTP_SPP spp), open its event

@@ -1,5 +1,5 @@
 /* throughput.c — samples/s and rays/s of a render against the ceiling of raw Embree on the
- * same rays (issue 8, part 2; how to read the numbers: bench/README.md).
+ * same rays (docs/design.md §8; how to read the numbers: bench/README.md).
  *
  *   bench_throughput [--integrators LIST] [--threads N] [--reps R] [--seconds S]
  *                    [--max-rays N] [--header] SCENE.json...

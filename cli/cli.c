@@ -1,4 +1,4 @@
-/* cli.c — the command line of DESIGN.md §5b.
+/* cli.c — the command line of docs/design.md §5b.
  *
  * `tessera render` loads a scene (or the built-in Cornell box), renders it in progressive
  * passes of 1, 1, 2, 4, … samples per pixel until the sample count, the time limit or the

@@ -1,4 +1,4 @@
-/* main.c — entry point of the tessera binary: dispatches sub-commands (DESIGN.md §5b). */
+/* main.c — entry point of the tessera binary: dispatches sub-commands (docs/design.md §5b). */
 #include <stdio.h>
 #include <string.h>
 

@@ -1,5 +1,5 @@
 /* merge.h — `tessera merge SHARD.exr... [-o OUT.exr] [-o OUT.png] [--allow-partial]`
- * (DESIGN.md §5b, §7). */
+ * (docs/design.md §5b, §7). */
 #ifndef CLI_MERGE_H
 #define CLI_MERGE_H
 /* Runs the merge command (argv[0] is "merge"); returns the exit status: 0 merged, 1 a

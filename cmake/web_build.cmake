@@ -1,4 +1,4 @@
-# The web UI build (issue 7), run by the build of `tessera`: copies web/'s sources into the
+# The web UI build, run by the build of `tessera`: copies web/'s sources into the
 # build folder (SRC -> DIR/src), installs the npm packages of web/package-lock.json there
 # (`npm ci`, only when the lock changed; offline from npm's cache when it has them), and
 # runs Vite, leaving DIR/dist for cmake/embed_assets.cmake. SCENES: the example scenes.

@@ -1,4 +1,4 @@
-/* api.h — the routes of HTTP API v1 (DESIGN.md §5, proto/openapi.yaml).
+/* api.h — the routes of HTTP API v1 (docs/design.md §5, proto/openapi.yaml).
  *
  * Design note: one function picks the route (a template, for metrics) from the URL and
  * one answers a complete request. Handlers only read the store and the scheduler's

@@ -1,6 +1,6 @@
 /* http.h — libmicrohttpd glue: the daemon, the per-request context, replies.
  *
- * Design note (STYLE.md's handler contract): the access handler allocates a srv_request
+ * Design note (docs/style.md's handler contract): the access handler allocates a srv_request
  * on its first call, consumes the body in chunks (up to cfg.max_body; beyond it the
  * request is answered 413), dispatches to the handler table it was started with (the
  * routes of api.c, in the server) on the last call, and the completion callback lets the

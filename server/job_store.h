@@ -4,7 +4,7 @@
  * an id, the scene document as posted (for checkpoints), the event hub of its SSE
  * streams, and a version counter that checkpoints compare. The scheduler's callbacks turn
  * into `tile`, `progress` and `done` events here. The store is the one piece of mutable
- * state shared across the server (DESIGN.md §6); its list is guarded by one mutex, a
+ * state shared across the server (docs/design.md §6); its list is guarded by one mutex, a
  * job's immutable fields need no lock, and everything else about a job is read through
  * the scheduler (which has its own lock) or is atomic. */
 #ifndef SRV_JOB_STORE_H

@@ -1,10 +1,10 @@
-/* serve.h — `tessera serve`: the render server of DESIGN.md §5 (proto/openapi.yaml).
+/* serve.h — `tessera serve`: the render server of docs/design.md §5 (proto/openapi.yaml).
  *
  * Design note: one srv_server value holds everything the server shares between threads
- * (DESIGN.md §6: no global mutable state outside the job store): the configuration
+ * (docs/design.md §6: no global mutable state outside the job store): the configuration
  * (immutable after start), the render scheduler, the job store, metrics, the encoder
- * pool and the HTTP daemon. main() blocks SIGINT/SIGTERM and waits for them with
- * sigwait; a maintenance thread checkpoints (--data) and sends SSE keep-alives on a
+ * pool and the HTTP daemon. srv_serve_main blocks SIGINT/SIGTERM and waits for them
+ * with sigwait; a maintenance thread checkpoints (--data) and sends SSE keep-alives on a
  * condition variable's timed wait. */
 #ifndef SRV_SERVE_H
 #define SRV_SERVE_H

@@ -33,7 +33,7 @@ ts_chi2_outcome ts_chi2_bsdf_sample(void *ctx, ts_pcg32 *rng, ts_vec3 *w);
 double ts_chi2_bsdf_pdf(void *ctx, ts_vec3 w);
 
 /* ∫pdf against the fraction of samples that were directions (*frac): equal within 1e-3
- * (the issues' tolerance) plus 4σ of that binomial fraction (≤ 2e-3 at 10⁶ samples). */
+ * (docs/design.md §8) plus 4σ of that binomial fraction (≤ 2e-3 at 10⁶ samples). */
 bool ts_chi2_pdf_normalised(const ts_chi2_params *p, const ts_chi2_result *r, double *frac);
 
 #endif

@@ -1,5 +1,5 @@
 /* test_alloc_fault.c — allocation failure injected at every allocation of scene loading
- * and of job creation (issue 11, "Faults").
+ * and of job creation (docs/security.md, "Parsers under test").
  *
  * Design note: this executable defines malloc, calloc, realloc, free and the aligned
  * allocators itself; glibc lets a program replace them (every library, libc's own strdup,

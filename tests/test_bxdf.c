@@ -1,5 +1,5 @@
 /* test_bxdf.c — every BxDF: χ² of its sampling against its pdf, sample/eval consistency,
- * pdf normalisation, energy, reciprocity, and finiteness at the limits (issue 3). */
+ * pdf normalisation, energy, reciprocity, and finiteness at the limits (docs/design.md §8). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -211,7 +211,7 @@ static void test_consistency(void **state)
     for (int k = 0; k < n; k++) {
         /* 10^5 random (wo, u) per BxDF. f and pdf of a sample are computed by the same
          * functions as f()/pdf() at the returned wi, so agreement is to float rounding:
-         * relative 1e-4 (issue) is loose by orders of magnitude. */
+         * relative 1e-4 (docs/design.md §8) is loose by orders of magnitude. */
         for (int i = 0; i < 100000; i++) {
             ts_vec3 wo = ts_sample_uniform_sphere((ts_vec2){ts_pcg32_float(&rng), ts_pcg32_float(&rng)});
             ts_vec2 u = {ts_pcg32_float(&rng), ts_pcg32_float(&rng)};

@@ -1,12 +1,12 @@
-/* test_farm_merge.c — farm shards as an operator uses them (DESIGN.md §7, issue 10):
+/* test_farm_merge.c — farm shards as an operator uses them (docs/design.md §7):
  * `tessera render --shard` + `tessera merge` equal one render, a tree of merges equals a
  * flat one, bad merges are refused with their sentences, missing ranges are named,
  * `--shard auto` reads the scheduler's variables, and a shard killed with SIGTERM and
  * then SIGKILL resumes from its checkpoint to the same film. Also the library pieces: the
  * SHARD image layout's round-trip precision and the scene digest's canonical form.
  *
- * Bounds. The issue asks for the mean over pixels within 1e-6 relative and every pixel
- * within 1e-5 relative. What the code reaches is far tighter: a shard stores each sum
+ * Bounds. docs/design.md §8 asks for the mean over pixels within 1e-6 relative and every
+ * pixel within 1e-5 relative. What the code reaches is far tighter: a shard stores each sum
  * with relative error < 2^-47 (film_image.h) and merging adds N partial sums in double,
  * so a merged pixel differs from the single render by a few 2^-52 relative; the tests
  * assert 1e-12 per pixel (and 1e-13 on the mean) and print the largest difference seen. */

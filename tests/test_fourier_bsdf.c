@@ -1,4 +1,4 @@
-/* test_fourier_bsdf.c — the pbrt-v3 Fourier BSDF (issue 3, acceptance 5): tables written
+/* test_fourier_bsdf.c — the pbrt-v3 Fourier BSDF (docs/design.md §8): tables written
  * by this test in the "SCATFUN" v1 format, evaluated against the analytic BRDFs they
  * encode, their sampling checked by χ² against their pdf, and malformed files rejected.
  *
@@ -217,7 +217,7 @@ static ts_vec3 dir_cos(double cos_theta, double phi)
 
 /* ----------------------------------------------------------- evaluation ---- */
 
-/* Evaluation within 1% of the analytic BRDF (the issue's bound) over a grid of
+/* Evaluation within 1% of the analytic BRDF (docs/design.md §8) over a grid of
  * (θo, θi, Δφ), both hemispheres (wo below gives the mirrored table rows). The only
  * approximation is the Catmull-Rom spline over μ (the series are exact), whose error on
  * this 64-node grid is O(h³) of the lobe's curvature: measured 0.67% at worst (glossy
@@ -282,7 +282,7 @@ static void test_evaluation(void **state)
 /* χ² with the harness defaults (10⁶ samples, significance 0.01 Šidák-corrected over
  * TS_CHI2_FAMILY_SIZE). Also ∫pdf must equal the fraction of samples produced: the
  * spline sampler of μi and the pdf use the same stored CDF, so the only slack is the
- * issue's 1e-3 plus 4σ of that binomial fraction. */
+ * 1e-3 of docs/design.md §8 plus 4σ of that binomial fraction. */
 static void run_chi2(const char *name, const ts_fourier_table *t, ts_vec3 wo)
 {
     ts_chi2_bxdf c = {ts_bxdf_fourier(t), ts_vec3_normalize(wo)};
@@ -317,9 +317,9 @@ static void test_chi2(void **state)
  * sweep of wo on both sides). The Lambertian table must give 0.8: its μi sampler follows
  * the same spline as f·|μi| and φ is uniform, so the weights are nearly constant and the
  * only error is the spline's (≤ 1e-4 here) — held to 1% (the evaluation bound) + 4σ.
- * Every channel of the glossy table must stay ≤ 1.01 + 4σ, the issue's energy rule for
- * every material (σ the estimate's standard error from its own variance; one-sided 4σ
- * fails correct code with probability 3e-5 per estimate). */
+ * Every channel of the glossy table must stay ≤ 1.01 + 4σ, the energy rule for every
+ * material (docs/design.md §8; σ the estimate's standard error from its own variance;
+ * one-sided 4σ fails correct code with probability 3e-5 per estimate). */
 static void test_energy(void **state)
 {
     (void)state;

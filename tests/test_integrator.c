@@ -10,7 +10,7 @@
  * likewise gives (ρ/π)·I/R² at every point. Those renders must match to float rounding
  * (relative 1e-4 covers the float sums of up to ~1000 terms). Cases with Russian
  * roulette have variance; their tolerance is 4 standard errors of the pixel mean,
- * estimated from the film's per-pixel variance, plus the issue's own bound. */
+ * estimated from the film's per-pixel variance, plus the 1% of docs/design.md §8. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -100,7 +100,7 @@ static void test_emitting_sphere_roulette(void **state)
 {
     (void)state;
     /* path to (practically) infinite depth with roulette after 3 bounces: Le/(1−ρ) within
-     * 1% (the issue's bound) and within 4 standard errors. Each vertex's estimate is exact,
+     * 1% (docs/design.md §8) and within 4 standard errors. Each vertex's estimate is exact,
      * so all variance comes from the roulette's random path length: its relative standard
      * deviation per sample is about 1 at ρ = 0.99 (a geometric length with mean 100), so
      * 16×16 pixels × 512 spp give se ≈ 0.28%, and 1% is 3.5 se: a false failure at this
@@ -153,7 +153,8 @@ static void test_point_light_in_sphere(void **state)
  * the origin and the camera above the origin does not see it. An
  * orthographic camera looks at a tiny patch around that point; the irradiance varies over
  * the patch by at most 1.5·(x/d)² ≈ 1e-4 relative for the patches below. Tolerance: the
- * issue's 1% and 4 standard errors (cone sampling of the light varies only with cosθ). */
+ * 1% of docs/design.md §8 and 4 standard errors (cone sampling of the light varies only
+ * with cosθ). */
 static void sphere_over_plane(char *doc, size_t n, double scale, double shift, double r, double L, double view_deg,
                               double patch)
 {
@@ -241,8 +242,8 @@ static void test_strategies_converge_alike(void **state)
  * with unit reflectance and transmittance) is invisible: every pixel is 1. A camera
  * inside a smooth glass sphere (η = 1.5) sees η² = 2.25: radiance inside a denser medium
  * is higher by η², and the 4% reflected at normal incidence returns the same value
- * (L = T·η²/(1 − R) = η²). Tolerance: the issue's 1% and 4 standard errors (256 spp put
- * the Lambertian's 1% at about 5 se), with a 1e-5 floor for float rounding. */
+ * (L = T·η²/(1 − R) = η²). Tolerance: the 1% of docs/design.md §8 and 4 standard errors
+ * (256 spp put the Lambertian's 1% at about 5 se), with a 1e-5 floor for float rounding. */
 static void test_white_furnace(void **state)
 {
     (void)state;

@@ -4,8 +4,8 @@
  * Irradiance E = ∫ L cosθ dω is estimated as the mean of L·max(0, n·wi)/pdf over a
  * jittered K×K grid of u (K = 512, fixed seed). Every integrand here is smooth in u (the
  * samplers are smooth maps of the square), so the stratified error is O(K^-2) to
- * O(K^-1.5) relative, ≤ 2e-5 measured; the issue's 1e-3 bound is therefore a bound on
- * bias, not on noise. */
+ * O(K^-1.5) relative, ≤ 2e-5 measured; the 1e-3 bound of docs/design.md §8 is therefore
+ * a bound on bias, not on noise. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>

@@ -1,9 +1,9 @@
-/* test_material.c — materials through the whole BSDF (issue 3): χ² of the BSDF's lobe-
- * mixing sampler for the specular-plus-diffuse mixtures and the rough dielectric and
- * conductor; the reflect/transmit split of FresnelSpecular; "no material with unit
- * parameters reflects more than 1.01 at any wo" for every material of DESIGN.md §4
- * (the Fourier material's bound is in test_fourier_bsdf, which owns the table writer);
- * ρ_hh against closed forms; dielectric roughness 1e-3 against smooth. */
+/* test_material.c — materials through the whole BSDF (docs/design.md §8): χ² of the
+ * BSDF's lobe-mixing sampler for the specular-plus-diffuse mixtures and the rough
+ * dielectric and conductor; the reflect/transmit split of FresnelSpecular; "no material
+ * with unit parameters reflects more than 1.01 at any wo" for every material of
+ * docs/design.md §4 (the Fourier material's bound is in test_fourier_bsdf, which owns
+ * the table writer); ρ_hh against closed forms; dielectric roughness 1e-3 against smooth. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -72,8 +72,8 @@ static ts_material conductor(ts_rgb eta, ts_rgb k, float alpha, ts_microfacet_ty
 
 /* Harness defaults: 10⁶ samples, significance 0.01 Šidák-corrected over
  * TS_CHI2_FAMILY_SIZE. ∫pdf must equal the fraction of continuous samples within the
- * issue's 1e-3 plus 4σ of that binomial fraction (the discrete/none bin is part of the
- * χ² too, this is the direct check). */
+ * required 1e-3 (docs/design.md §8) plus 4σ of that binomial fraction (the discrete/none
+ * bin is part of the χ² too, this is the direct check). */
 static void run_chi2(const char *name, ts_material m, ts_vec3 wo)
 {
     ts_chi2_bsdf c;
@@ -385,9 +385,10 @@ static void test_reciprocity(void **state)
 
 /* ------------------------------------------------------------ limits ---- */
 
-/* Acceptance 6 at the material level (the coupled plastic lobe is new here): every
- * material, α ∈ {0, 1e-7, 1e-4, 0.5}, η = 1 for the dielectric, wo and wi on and below
- * the horizon and at the poles, u = 1 − 2⁻²⁴: f, pdf and samples finite and ≥ 0. */
+/* Finiteness at the limits (docs/design.md §8) at the material level (the coupled plastic
+ * lobe is new here): every material, α ∈ {0, 1e-7, 1e-4, 0.5}, η = 1 for the dielectric,
+ * wo and wi on and below the horizon and at the poles, u = 1 − 2⁻²⁴: f, pdf and samples
+ * finite and ≥ 0. */
 static void test_no_nan(void **state)
 {
     (void)state;

@@ -14,7 +14,7 @@
 #include <time.h>
 #include <unistd.h>
 
-/* libpng by its versioned path: renderer/ (on the include path) has its own png.h. */
+/* libpng's own header: the renderer's encoder is image/png_encode.h, so <png.h> is libpng's. */
 #include <png.h>
 
 #include "image/image.h"

@@ -1,5 +1,5 @@
 /* test_render.c — the tile renderer: the film is bit-identical whatever the thread count
- * and however the sample range is split into passes (DESIGN.md §6). */
+ * and however the sample range is split into passes (docs/design.md §6). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>

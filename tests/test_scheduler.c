@@ -1,6 +1,6 @@
 /* test_scheduler.c — the shared render pool: same pixels as ts_render whatever the
  * threads and passes, progressive pass order, priorities, cancellation, time limit, and
- * resuming from a partial film (DESIGN.md §6, scheduler.h). */
+ * resuming from a partial film (docs/design.md §6, scheduler.h). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>

@@ -1,4 +1,4 @@
-/* test_server_faults.c — `tessera serve` under faults (issue 11, "Faults"), one group per
+/* test_server_faults.c — `tessera serve` under faults (disk, crash, clients), one group per
  * ctest entry (the first argument):
  *
  *   checkpoint  checkpoints into a full file system (a 1 MiB tmpfs) and into a read-only
@@ -305,7 +305,7 @@ static int run_checkpoint(void)
 
 static char kill_dir[64];
 
-/* The reference: `tessera render` of the same document (same pixels, DESIGN.md §1). */
+/* The reference: `tessera render` of the same document (same pixels, docs/design.md §1). */
 static ts_image reference(const char *doc)
 {
     char scene_path[128], out[128], log[128];

@@ -1,4 +1,4 @@
-/* test_server_security.c — issue 11 §5 against a real `tessera serve` on loopback:
+/* test_server_security.c — docs/security.md against a real `tessera serve` on loopback:
  * posted scenes read files only under --assets (a mesh there renders exactly like the same
  * mesh inline; absolute paths, `..`, symlinks and symlinked folders leading out, for
  * meshes, Fourier tables and environment maps, are 400 naming the JSON path, and no

@@ -1,6 +1,7 @@
 // Vite build of the web UI into dist/ (embedded in the tessera binary by CMake). The shipped
 // example scenes (../scenes/*.json, or TS_SCENES_DIR) are emitted as dist/scenes/*.json with
-// an index, leaving out scenes that reference files (HTTP jobs have no folder).
+// an index, leaving out scenes that reference files (a posted scene may read files only from
+// the server's --assets folder, which the UI cannot count on).
 import fs from 'node:fs';
 import path from 'node:path';
 

@@ -1,4 +1,4 @@
-/* accuracy.c — error against time for every integrator configuration (issue 8, part 1;
+/* accuracy.c — error against time for every integrator configuration (docs/design.md §8;
  * how to run it and read it: bench/README.md, results: docs/accuracy.md).
  *
  *   bench_accuracy [--width W] [--max-spp N] [--ref-spp N] [--threads T] [--cache DIR]

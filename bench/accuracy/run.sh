@@ -1,5 +1,5 @@
 #!/bin/sh
-# bench/accuracy/run.sh BUILD_DIR OUT_DIR — accuracy against time (issue 8, part 1): runs
+# bench/accuracy/run.sh BUILD_DIR OUT_DIR — accuracy against time (docs/design.md §8): runs
 # bench_accuracy on the benchmark scenes, then plots and tabulates (bench/README.md).
 #
 # Writes into OUT_DIR:

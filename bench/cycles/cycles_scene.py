@@ -24,7 +24,7 @@
 #   Cycles, as tessera's `emission`; a Diffuse BSDF of colour ρ and roughness 0 is
 #   Lambertian with albedo ρ. Colours are written as scene-linear (Rec.709) values.
 # - Camera: tessera's fov is the full angle along the shorter image axis (as pbrt), so the
-#   Blender sensor is fitted along that axis. right = forward × up (DESIGN.md §4).
+#   Blender sensor is fitted along that axis. right = forward × up (docs/design.md §4).
 # - Depth: tessera's max_depth D (pbrt-v3: up to D scattering events, light sampled at
 #   each) is Cycles' max_bounces D − 1: Cycles counts bounces after the first hit (0 =
 #   direct light only; Blender adds one internally). --bounces-offset changes the "− 1".

@@ -1,7 +1,7 @@
 #!/bin/sh
 # bench/cycles/run.sh BUILD_DIR OUT_DIR — tessera against Blender Cycles on the same scene
-# at equal RMSE (issue 8; the speed target: ≤ 1/2.5 of Cycles' time). bench/README.md,
-# "Against Blender Cycles", says how to read the output.
+# at equal RMSE (the speed target of docs/design.md §8: ≤ 1/2.5 of Cycles' time).
+# bench/README.md, "Against Blender Cycles", says how to read the output.
 #
 # Each renderer is measured against its own converged image (two halves with other seeds,
 # cached), so what is compared is how fast each converges to its own answer; the two

@@ -1,6 +1,6 @@
 #!/bin/sh
 # bench/load/run.sh [--light] BUILD_DIR [OUT_DIR] — `tessera serve` under HTTP load while two
-# jobs render (issue 11, item 3). `make bench` runs the full version through bench/run;
+# jobs render (docs/design.md §8). `make bench` runs the full version through bench/run;
 # ctest `load_light` runs --light, which also decides pass or fail.
 #
 # One server on loopback (port 0), then, with the same two jobs each time (the Cornell box

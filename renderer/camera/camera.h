@@ -1,6 +1,6 @@
 /* camera.h — perspective (with thin lens) and orthographic cameras of scene format v1.
  *
- * Design note: the camera is defined by from/to/up as DESIGN.md §4: forward = to − from,
+ * Design note: the camera is defined by from/to/up as docs/design.md §4: forward = to − from,
  * right = normalize(forward × up), and the true up = right × forward. Raster (0,0) is the
  * top-left corner of the top-left pixel and y grows downwards. `fov` is the full angle
  * along the shorter image axis (as pbrt); an orthographic camera's `height` is the screen

@@ -1,6 +1,6 @@
 /* arena.h — a bump allocator for per-scene and per-job memory.
  *
- * Design note: a scene is built once and freed whole (DESIGN.md §6), so its many small
+ * Design note: a scene is built once and freed whole (docs/design.md §6), so its many small
  * pieces come from one arena and teardown is ts_arena_fini. Blocks grow geometrically;
  * allocations are aligned to 16 bytes (or more if asked) and zeroed. Not thread-safe:
  * an arena is filled by one thread while a scene is built, then only read. */

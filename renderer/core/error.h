@@ -1,6 +1,6 @@
 /* error.h — how the renderer reports failure.
  *
- * Design note (STYLE.md): a function that can fail returns a ts_status (TS_OK == 0) and
+ * Design note (docs/style.md): a function that can fail returns a ts_status (TS_OK == 0) and
  * fills a caller-owned ts_error with one human sentence; for scene input the sentence
  * starts with the JSON path ("shapes[1].radius: expected a positive number, got -1").
  * Nothing below main() exits or aborts for anything a user can cause. The status codes

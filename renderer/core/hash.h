@@ -1,7 +1,7 @@
 /* hash.h — integer hashing and a small PCG32 generator.
  *
  * Design note: sample values must depend only on (seed, pixel, sample index, dimension)
- * (DESIGN.md §6), so randomness is derived by hashing those numbers, never from a
+ * (docs/design.md §6), so randomness is derived by hashing those numbers, never from a
  * generator whose state travels with a thread. PCG32 (O'Neill 2014) is used where a
  * stream is natural (tests, table building). Everything here is pure and thread-safe. */
 #ifndef TS_HASH_H

@@ -3,7 +3,7 @@
  * Design note: everything here is a plain struct passed by value with static inline
  * operations, so the hot path has no calls and no aliasing. Geometry that needs more
  * than float precision (analytic shape intersection, transforms) uses ts_dvec3.
- * Names follow STYLE.md: ts_<type>_<verb>. All functions are pure and thread-safe. */
+ * Names follow docs/style.md: ts_<type>_<verb>. All functions are pure and thread-safe. */
 #ifndef TS_VECMATH_H
 #define TS_VECMATH_H
 

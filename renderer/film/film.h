@@ -58,7 +58,7 @@ static inline ts_film_pixel *ts_film_pixel_at(const ts_film *f, int x, int y)
 
 /* Adds radiance L with filter weight `weight` to full-image pixel (x, y). Samples outside
  * the window are ignored. L and weight must be finite: the integrator rejects (and
- * counts) NaN/Inf before they reach the film (DESIGN.md §6). Hot path: no allocation,
+ * counts) NaN/Inf before they reach the film (docs/design.md §6). Hot path: no allocation,
  * no lock; one writer per pixel (see above). */
 static inline void ts_film_add_sample(ts_film *f, int x, int y, ts_rgb L, float weight)
 {

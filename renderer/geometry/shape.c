@@ -435,7 +435,7 @@ static void analytic_interaction(const ts_shape *s, const ts_ray *ray, const obj
     /* n_obj points along ∂p/∂u × ∂p/∂v in object space; in world space that cross product
      * is det(M)·M^-T·n_obj. pbrt-v3 takes it and flips it when the transform swaps
      * handedness, which is what flip_normal records: so the result is M^-T·n_obj, the
-     * front side of DESIGN.md §4 (outwards, or the disk's +z side). */
+     * front side of docs/design.md §4 (outwards, or the disk's +z side). */
     ts_dvec3 n_w = ts_dvec3_normalize(ts_xform_normal(X, n_obj));
     if ((det3(&X->m) < 0) != s->flip_normal) n_w = ts_dvec3_scale(n_w, -1);
     si->n = ts_dvec3_to_vec3(n_w);

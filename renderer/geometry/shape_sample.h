@@ -51,7 +51,7 @@ typedef struct ts_shape_sample_info {
 } ts_shape_sample_info;
 
 /* A point on a shape: world position with its error bound, unit normal on the shape's
- * front side (DESIGN.md §4), and its density (per area or per solid angle, as named by
+ * front side (docs/design.md §4), and its density (per area or per solid angle, as named by
  * the function that produced it). */
 typedef struct ts_shape_point {
     ts_vec3 p, p_error, n;

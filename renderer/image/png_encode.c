@@ -1,4 +1,4 @@
-/* png_encode.c — 8-bit sRGB PNG encoding with libpng's simplified write API; see png.h. */
+/* png_encode.c — 8-bit sRGB PNG encoding with libpng's simplified write API; see png_encode.h. */
 #include "image/png_encode.h"
 
 #include <math.h>

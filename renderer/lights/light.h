@@ -8,7 +8,7 @@
  * are immutable and shared read-only by all threads; every query below is pure,
  * allocation-free and thread-safe.
  *
- * Conventions (DESIGN.md §4): a mesh's emitting triangles are one TS_LIGHT_AREA each
+ * Conventions (docs/design.md §4): a mesh's emitting triangles are one TS_LIGHT_AREA each
  * (zero-area ones get power 0 and are never selected by the power distribution, and
  * sample nothing). Area lights emit `color` on the shape's front side unless two_sided.
  * Infinite lights: radiance `color` (constant), or color × map (color holds the scale),
@@ -108,7 +108,7 @@ ts_rgb ts_area_light_l(const ts_light *l, const ts_interaction *si, ts_vec3 w);
 /* Total emitted power Φ (needs ts_lights_prepare for area, distant, infinite lights). */
 ts_rgb ts_light_power(const ts_light *l, const ts_shape *shapes);
 
-/* Light selection for the integrators (DESIGN.md §4 `light_sampling`). */
+/* Light selection for the integrators (docs/design.md §4 `light_sampling`). */
 typedef enum ts_light_sampling {
     TS_LIGHT_SAMPLING_UNIFORM,
     TS_LIGHT_SAMPLING_POWER, /* ∝ luminance of ts_light_power; uniform if all powers are 0 */

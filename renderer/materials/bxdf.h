@@ -1,6 +1,6 @@
 /* bxdf.h — the BxDFs of pbrt-v3 ch. 8 as one tagged struct, in the local shading frame.
  *
- * Design note (STYLE.md, Cycles' closures): a ts_bxdf is a plain value with a type tag;
+ * Design note (docs/style.md, Cycles' closures): a ts_bxdf is a plain value with a type tag;
  * f / pdf / sample dispatch with a switch, so a BSDF is a fixed array of them with no
  * allocation and no function pointers. Directions are unit vectors in the shading frame
  * (+z the shading normal), both pointing away from the surface; wo is towards the viewer.

@@ -1,6 +1,6 @@
 /* fresnel.h — Fresnel reflectance of dielectric and conductor interfaces (pbrt-v3 §8.2).
  *
- * Design note: a ts_fresnel is a tagged value (STYLE.md: dispatch by switch, no function
+ * Design note: a ts_fresnel is a tagged value (docs/style.md: dispatch by switch, no function
  * pointers) evaluated at the cosine of the angle between the incident direction and the
  * (micro)surface normal. Results are always in [0, 1] and finite, for any cosine in
  * [−1, 1] (clamped) and any positive indices. Pure and thread-safe. */

@@ -3,9 +3,9 @@
  * Design note — plastic departs from pbrt-v3. pbrt-v3's PlasticMaterial adds a
  * Lambertian(kd) and a Fresnel-weighted specular lobe(ks) without coupling them, so with
  * kd = ks = 1 it reflects up to 1 + F: about 1.04 at normal incidence, ~2 at grazing.
- * Issue 3 requires that no material with unit parameters reflects more than 1.01 (the
- * lead's decision: that rule wins over pbrt-v3), so the diffuse lobe is the light that
- * passes the coat twice:
+ * The energy rule of docs/design.md §8 — no material with unit parameters reflects more
+ * than 1.01 — wins over pbrt-v3 (a decision, docs/design.md §4), so the diffuse lobe is
+ * the light that passes the coat twice:
  *     f_d(wo, wi) = kd/π · (1 − ks·F(|cosθo|)) · (1 − ks·F(|cosθi|)),
  * F the dielectric Fresnel from 1 into 1.5 the specular lobe uses (ts_bxdf_lambertian_
  * coupled). Why this form rather than 1 − the specular lobe's directional albedo E(wo):
@@ -17,7 +17,7 @@
  *    ≤ ks·F(o) + (1 − ks·F(o)) = 1, F̄ = 2∫F(μ)μ dμ, for kd, ks ≤ 1; for the rough coat
  *    the specular lobe reflects ≤ ks·F averaged over visible microfacets minus its
  *    shadowing loss, and test_material proves the 1.01 bound across roughness and wo.
- * It is not energy-*preserving*, which the issue does not ask for: light reflected back
+ * It is not energy-*preserving*, which the energy rule does not ask for: light reflected back
  * down by the coat is not re-added, so kd = ks = 1 smooth plastic reflects 0.91 at normal
  * incidence rising to ~1 at grazing, and rough plastic (whose microfacet lobe also loses
  * its shadowed energy) at most 0.89 (α = 1) to 0.99 (α → 0) (test_material prints them).

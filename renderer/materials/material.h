@@ -1,4 +1,4 @@
-/* material.h — the materials of scene format v1 (DESIGN.md §4) as parameters, and the
+/* material.h — the materials of scene format v1 (docs/design.md §4) as parameters, and the
  * mapping from a material at a hit to its BSDF.
  *
  * Design note: a material is plain data filled by the scene loader (which validates every

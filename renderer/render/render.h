@@ -56,7 +56,8 @@ typedef struct ts_render_stats {
 } ts_render_stats;
 
 /* Renders the request; adds its counters to *stats (which the caller zeroes once). Fails
- * only when threads cannot be started. */
+ * only when the tile list cannot be allocated (TS_ERR_NOMEM); when fewer worker threads
+ * (or none) can be started, those started, or the calling thread, render every tile. */
 ts_status ts_render(const ts_render_request *req, ts_render_stats *stats, ts_error *err);
 
 /* Renders sample indices [req->sample_begin, req->sample_end) of every pixel of the
@@ -67,8 +68,8 @@ ts_status ts_render(const ts_render_request *req, ts_render_stats *stats, ts_err
 void ts_render_tile(const ts_render_request *req, int x0, int y0, int w, int h, ts_counters *c);
 
 /* Relative RMS error estimate of the film's image: sqrt(mean over pixels of
- * Var[Y] / (Y² + 1e-3)) on luminance Y, from the per-pixel sample variance (see
- * proto/ for the definition). */
+ * Var[Y] / (Y² + 1e-3)) on luminance Y, from the per-pixel sample variance (definition:
+ * proto/error-estimate.md). */
 double ts_film_relative_error(const ts_film *f);
 
 /* Seconds on a monotonic clock. */

@@ -1,4 +1,4 @@
-/* shard.h — farm shards (DESIGN.md §7): sample ranges, shard metadata, checkpoints and
+/* shard.h — farm shards (docs/design.md §7): sample ranges, shard metadata, checkpoints and
  * the exact merge.
  *
  * Design note: shard I of N renders sample indices [⌊I·S/N⌋, ⌊(I+1)·S/N⌋) of every pixel

@@ -6,7 +6,7 @@
  * discrete selection with exactly stored probabilities (used for light selection).
  * Every sampler comes with its pdf and, for the continuous ones, its inverse.
  *
- * Memory: tables are allocated from a caller's arena (per-scene memory, DESIGN.md §6)
+ * Memory: tables are allocated from a caller's arena (per-scene memory, docs/design.md §6)
  * and are immutable after init, so all query functions are pure and thread-safe.
  * Construction is done in double precision; stored values are float. */
 #ifndef TS_DISTRIBUTION_H

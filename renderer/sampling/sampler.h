@@ -1,7 +1,7 @@
 /* sampler.h — deterministic sample values for pixel samples.
  *
  * Design note: a sample value is a pure function of (seed, pixel, sample index,
- * dimension) (DESIGN.md §6), so no generator state travels with a thread and any tile
+ * dimension) (docs/design.md §6), so no generator state travels with a thread and any tile
  * order gives bit-identical images. Dimensions are 2-D: dimension 0 is the film position,
  * 1 the lens, 2.. belong to the integrator. A 1-D draw takes the first component of its
  * dimension's 2-D value and consumes the whole dimension.

@@ -1,7 +1,7 @@
 /* sampling.h — warps from the unit square to disks, hemispheres, spheres, cones and
  * triangles, with their densities, and the multiple-importance weights.
  *
- * Design note: every warp takes its random numbers as a parameter u ∈ [0,1)² (STYLE.md:
+ * Design note: every warp takes its random numbers as a parameter u ∈ [0,1)² (docs/style.md:
  * random numbers are parameters, never drawn inside) and is paired with its pdf, so a
  * caller (or tests/chi2.h) can check one against the other. Directions are in a local
  * frame whose +z is the pole (the normal, or the cone axis). Densities are per unit solid

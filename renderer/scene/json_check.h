@@ -1,7 +1,7 @@
 /* json_check.h — typed access to cJSON documents with errors that name the JSON path.
  *
  * Design note: the scene loader validates the whole document before building anything
- * (DESIGN.md §4), and every complaint is one sentence starting with the path of the
+ * (docs/design.md §4), and every complaint is one sentence starting with the path of the
  * offending value, e.g. "shapes[3].radius: expected a positive number, got -1". These
  * helpers do that formatting in one place. A getter returns TS_OK and writes *out when
  * the key is present and valid, TS_OK leaving *out untouched when it is absent and not

@@ -1,7 +1,7 @@
 /* mesh_file.h — triangle meshes read from Wavefront OBJ and PLY files for `mesh` shapes.
  *
  * Design note: a mesh file is untrusted scene input. The path is confined to the scene's
- * folder (DESIGN.md §4) after every symlink is resolved (scene_path.h, the one
+ * folder (docs/design.md §4) after every symlink is resolved (scene_path.h, the one
  * confinement rule for every file a scene names); the whole file is read into
  * memory (bounded by max_file_bytes) and parsed in place; every count a header or a
  * pre-pass announces is checked against the limits and the file size before anything

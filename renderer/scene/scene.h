@@ -1,4 +1,4 @@
-/* scene.h — scene format v1 (DESIGN.md §4, proto/scene.schema.json): loading, validation
+/* scene.h — scene format v1 (docs/design.md §4, proto/scene.schema.json): loading, validation
  * and the immutable Scene every render thread reads.
  *
  * Design note: loading is two phases. Phase one walks the whole JSON document and checks
@@ -6,8 +6,8 @@
  * bad document is refused with one sentence naming its JSON path before anything is
  * built. Phase two builds: transforms, shapes, lights, the Embree accelerator. All of a
  * scene's memory comes from its arena (plus the accel, Fourier tables and environment
- * maps, which the scene owns), so ts_scene_destroy is the whole teardown. After
- * ts_scene_load returns, the scene is immutable and may be shared by any number of
+ * maps, which the scene owns), so ts_scene_destroy is the whole teardown. After a
+ * ts_scene_load_* function returns, the scene is immutable and may be shared by any number of
  * threads. */
 #ifndef TS_SCENE_H
 #define TS_SCENE_H

@@ -1,6 +1,6 @@
 /* scene_path.h — files a scene refers to: confinement to the scene's folder, reading.
  *
- * Design note: DESIGN.md §4 says paths inside a scene are relative to the scene file and
+ * Design note: docs/design.md §4 says paths inside a scene are relative to the scene file and
  * may not leave its folder. That rule is enforced here, once, for every kind of file a
  * scene names (meshes, Fourier tables, environment maps); for a scene posted to the
  * server the "folder" is the operator's asset folder (`tessera serve --assets DIR`), and

@@ -1,4 +1,4 @@
-// Browser tests of the web UI (issue 7): playwright-core drives Debian's chromium headless
+// Browser tests of the web UI: playwright-core drives Debian's chromium headless
 // against a real `tessera serve --port 0` on loopback started here. Run by run.sh (ctest
 // `browser_ui`), which installs playwright-core into the build folder and skips plainly
 // when chromium is missing. Screenshots go to $TS_ARTIFACTS.

@@ -1,4 +1,4 @@
-// k8s_check.mjs — the Kubernetes side of the farm tests (DESIGN.md §7, issue 10).
+// k8s_check.mjs — the Kubernetes side of the farm tests (docs/design.md §7).
 //   node k8s_check.mjs SOURCE_DIR WORK_DIR BIN_DIR COMPARE
 // 1. Every document of docker/k8s/*.yaml validates against the Kubernetes API schema
 //    (kubernetes-models), and wrong types for the Job fields we use are refused.

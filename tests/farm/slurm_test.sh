@@ -1,5 +1,5 @@
 #!/bin/bash
-# A real one-node Slurm (DESIGN.md §7, issue 10): installs Debian's slurm-wlm and munge if
+# A real one-node Slurm (docs/design.md §7): installs Debian's slurm-wlm and munge if
 # missing, starts munged, slurmctld and slurmd in a temporary folder on unprivileged ports,
 # submits docker/slurm/submit.sh for a small Cornell box as 4 array tasks plus the afterok
 # merge, waits with squeue/scontrol, compares the merged image with a single render, and

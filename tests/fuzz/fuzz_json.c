@@ -148,7 +148,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     /* Canonical text is a fixed point: parsing it and canonicalising again gives it back.
      * Not for documents with a number literal beyond double range (1e400): cJSON reads it
      * as inf, which the canonical form prints as `inf`, not JSON (scene_digest.c; such a
-     * scene is refused by validation anyway, reported in issue 11). */
+     * scene is refused by validation anyway; a known limit of the canonical form). */
     if (canon && !has_nonfinite(doc)) {
         cJSON *again = NULL;
         ts_error e2 = {0};

@@ -1,4 +1,4 @@
-// A small reader of the EXR files tessera serves (renderer/exr.c): single-part scan-line
+// A small reader of the EXR files tessera serves (renderer/image/exr.c): single-part scan-line
 // images with NONE, ZIPS or ZIP compression and HALF/FLOAT channels. It returns the R, G, B
 // channels as linear floats, so the preview's exposure works on the real radiance rather
 // than on an 8-bit sRGB PNG. Anything else throws (the caller then uses the PNG).

@@ -1,5 +1,5 @@
-// tessera web UI (issue 7): jobs, submit, live preview, accuracy-against-time plots.
-// Talks only to the public API v1 (DESIGN.md §5, proto/openapi.yaml).
+// tessera web UI: jobs, submit, live preview, accuracy-against-time plots.
+// Talks only to the public API v1 (docs/design.md §5, proto/openapi.yaml).
 import uPlot from 'uplot';
 import { decodeExr } from './exr.js';
 import 'uplot/dist/uPlot.min.css';
