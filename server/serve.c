@@ -228,7 +228,10 @@ void srv_server_stop(srv_server *srv, bool checkpoint)
     pthread_mutex_destroy(&srv->mu);
 }
 
-int srv_serve_main(int argc, char **argv)
+/* Fills cfg from the command line (defaults first); -1 to go ahead, else the exit status
+ * (usage errors, --help). *owned gets what cfg points into (the token read from
+ * --token-file, the resolved --assets folder): free both after the server stops. */
+static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *owned[2])
 {
     enum {
         OPT_BIND = 256, OPT_PORT, OPT_THREADS, OPT_DATA, OPT_TOKEN, OPT_MAX_RUNNING, OPT_HTTP_THREADS, OPT_MAX_BODY,
@@ -260,9 +263,7 @@ int srv_serve_main(int argc, char **argv)
         {"queue-builtin", no_argument, NULL, OPT_BUILTIN},
         {"help", no_argument, NULL, OPT_HELP},
         {NULL, 0, NULL, 0}};
-    srv_server srv_storage, *srv = &srv_storage;
-    memset(srv, 0, sizeof *srv);
-    srv_config *cfg = &srv->cfg;
+    memset(cfg, 0, sizeof *cfg);
     cfg->bind = "127.0.0.1";
     cfg->port = 8080;
     long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
@@ -369,26 +370,37 @@ int srv_serve_main(int argc, char **argv)
     }
     if (optind < argc) return usage_error("unexpected argument '%s'", argv[optind]);
     if (token_file && cfg->token) return usage_error("--token and --token-file: give one of them%s", "");
-    /* Owned copies, freed at the end (cfg holds pointers into them). */
-    char *token_buf = NULL, *assets_real = NULL;
+    owned[0] = owned[1] = NULL;
     if (token_file) {
         char msg[256];
-        if (!(token_buf = read_token_file(token_file, msg, sizeof msg))) {
+        if (!(owned[0] = read_token_file(token_file, msg, sizeof msg))) {
             fprintf(stderr, "tessera serve: --token-file %s: %s\n", token_file, msg);
             return 2;
         }
-        cfg->token = token_buf;
+        cfg->token = owned[0];
     }
     if (assets) {
         struct stat sb;
-        if (!(assets_real = realpath(assets, NULL)) || stat(assets_real, &sb) != 0 || !S_ISDIR(sb.st_mode)) {
+        if (!(owned[1] = realpath(assets, NULL)) || stat(owned[1], &sb) != 0 || !S_ISDIR(sb.st_mode)) {
             fprintf(stderr, "tessera serve: --assets %s: not a folder that can be opened\n", assets);
-            free(assets_real);
-            free(token_buf);
+            free(owned[1]);
+            free(owned[0]);
             return 2;
         }
-        cfg->assets_dir = assets_real;
+        cfg->assets_dir = owned[1];
     }
+    return -1;
+}
+
+int srv_serve_main(int argc, char **argv)
+{
+    srv_server srv_storage, *srv = &srv_storage;
+    memset(srv, 0, sizeof *srv);
+    srv_config *cfg = &srv->cfg;
+    char *owned[2];
+    int parsed = parse_serve_options(argc, argv, cfg, owned);
+    if (parsed >= 0) return parsed;
+
 
     /* Signals are taken by sigwait below; every thread started from here inherits the mask. */
     sigset_t sigs;
@@ -414,7 +426,7 @@ int srv_serve_main(int argc, char **argv)
     } else {
         fprintf(stderr, "tessera serve: %s\n", msg);
     }
-    free(assets_real);
-    free(token_buf);
+    free(owned[1]);
+    free(owned[0]);
     return rc;
 }
