@@ -53,6 +53,8 @@ static void parse_url(const char *url, parsed *p)
         p->id[n] = '\0';
         if (!slash || !slash[1]) p->route = SRV_ROUTE_JOB;
         else if (!strcmp(slash, "/events")) p->route = SRV_ROUTE_EVENTS;
+        else if (!strcmp(slash, "/history")) p->route = SRV_ROUTE_HISTORY;
+        else if (!strcmp(slash, "/cancel")) p->route = SRV_ROUTE_CANCEL;
         else if (parse_ext(slash, "/image", &p->png)) p->route = SRV_ROUTE_IMAGE;
         else if (!strncmp(slash, "/tiles/", 7)) {
             char ext[8] = "";
@@ -408,22 +410,41 @@ static int handle(srv_request *r)
         return list_jobs(r);
     default: break;
     }
-    bool is_job = p.route == SRV_ROUTE_JOB;
-    if (!(get || (is_job && !strcmp(m, "DELETE"))))
-        return srv_http_method_not_allowed(r, is_job ? "GET, HEAD, DELETE" : "GET, HEAD");
+    bool is_job = p.route == SRV_ROUTE_JOB, is_cancel = p.route == SRV_ROUTE_CANCEL;
+    if (is_cancel ? strcmp(m, "POST") != 0 : !(get || (is_job && !strcmp(m, "DELETE"))))
+        return srv_http_method_not_allowed(r, is_cancel ? "POST" : is_job ? "GET, HEAD, DELETE" : "GET, HEAD");
     srv_job *j = srv_store_get(cfg->store, p.id);
     if (!j) return srv_http_error(r, 404, "no job with id '%s'", p.id);
     switch (p.route) {
     case SRV_ROUTE_JOB: {
-        if (!strcmp(m, "DELETE") && (j->failure[0] || ts_job_state_finished(srv_job_state(j)))) {
-            /* A finished job is deleted: its slot (--max-jobs) and its files are freed. */
+        if (!strcmp(m, "DELETE")) {
+            /* Only a job that has ended is removed (its --max-jobs slot and its files are
+             * freed); cancelling is POST …/cancel, so a retried request never deletes. */
+            if (!j->failure[0] && !ts_job_state_finished(srv_job_state(j))) {
+                srv_job_release(j);
+                return srv_http_error(r, 409, "job '%s' has not ended; cancel it first (POST %s/%s/cancel)", p.id,
+                                      API_PREFIX, p.id);
+            }
             if (srv_store_remove(cfg->store, j) && cfg->data_dir) srv_persist_remove(cfg->data_dir, j);
             srv_job_release(j);
             return srv_http_reply(r, 204, NULL, "", 0);
         }
-        if (!strcmp(m, "DELETE") && j->sj) ts_sched_job_cancel(j->sj);
         cJSON *o = srv_job_status_json(j);
         srv_job_release(j);
+        return reply_cjson(r, 200, o);
+    }
+    case SRV_ROUTE_CANCEL: {
+        /* Idempotent: cancelling an ended job changes nothing; the answer is the job's
+         * state, "cancelling" while its last tiles finish, then "cancelled". */
+        if (j->sj) ts_sched_job_cancel(j->sj);
+        cJSON *o = srv_job_status_json(j);
+        srv_job_release(j);
+        return reply_cjson(r, 200, o);
+    }
+    case SRV_ROUTE_HISTORY: {
+        cJSON *o = srv_job_history_json(j);
+        srv_job_release(j);
+        if (!o) return srv_http_error(r, 500, "out of memory");
         return reply_cjson(r, 200, o);
     }
     case SRV_ROUTE_EVENTS: return get_events(r, j);

@@ -34,6 +34,8 @@ static void job_free(srv_job *j)
     srv_events_destroy(j->events);
     pthread_mutex_destroy(&j->ckpt_mu);
     pthread_mutex_destroy(&j->disk_mu);
+    pthread_mutex_destroy(&j->hist_mu);
+    free(j->hist);
     free(j->name);
     free(j->scene_text);
     free(j);
@@ -151,10 +153,95 @@ static void on_tile(void *user, ts_sched_job *sj, const ts_tile_event *ev)
     publish_json(j, "tile", srv_job_tile_json(j, ev));
 }
 
+/* ---------------------------------------------------------------- history */
+
+static void add_number_or_null(cJSON *o, const char *k, double v, bool known);
+
+static void history_add(srv_job *j, const srv_history_point *pt)
+{
+    pthread_mutex_lock(&j->hist_mu);
+    if (j->n_hist == SRV_HISTORY_MAX) { /* thin the ticks: keep pass ends, every other tick */
+        int k = 0;
+        bool keep = true;
+        for (int i = 0; i < j->n_hist; i++) {
+            if (j->hist[i].kind == 't') keep = !keep;
+            if (j->hist[i].kind != 't' || keep) j->hist[k++] = j->hist[i];
+        }
+        j->n_hist = k;
+    }
+    if (j->n_hist == j->cap_hist && j->n_hist < SRV_HISTORY_MAX) {
+        int cap = j->cap_hist ? 2 * j->cap_hist : 64;
+        if (cap > SRV_HISTORY_MAX) cap = SRV_HISTORY_MAX;
+        srv_history_point *h = realloc(j->hist, sizeof *h * (size_t)cap);
+        if (h) j->hist = h, j->cap_hist = cap;
+    }
+    if (j->n_hist < j->cap_hist) j->hist[j->n_hist++] = *pt; /* out of memory: the point is lost */
+    pthread_mutex_unlock(&j->hist_mu);
+}
+
+static void history_add_progress(srv_job *j, const ts_job_progress *p, char kind)
+{
+    srv_history_point pt = {p->elapsed_s, kind == 't' ? p->spp_fraction : p->spp_done, p->error_estimate,
+                            p->samples_per_s, kind};
+    history_add(j, &pt);
+}
+
+void srv_job_tick(srv_job *j)
+{
+    if (!j->sj) return;
+    ts_job_progress p;
+    ts_sched_job_progress(j->sj, &p);
+    if (p.state != TS_JOB_RUNNING) return;
+    history_add_progress(j, &p, 't');
+    publish_json(j, "progress", srv_job_progress_json(j, &p));
+}
+
+cJSON *srv_job_history_json(srv_job *j)
+{
+    cJSON *o = cJSON_CreateObject();
+    cJSON *a = cJSON_AddArrayToObject(o, "points");
+    cJSON_AddStringToObject(o, "id", j->id);
+    pthread_mutex_lock(&j->hist_mu);
+    for (int i = 0; a && i < j->n_hist; i++) {
+        const srv_history_point *pt = &j->hist[i];
+        cJSON *e = cJSON_CreateObject();
+        cJSON_AddNumberToObject(e, "elapsed_s", pt->elapsed_s);
+        cJSON_AddNumberToObject(e, "spp", pt->spp);
+        add_number_or_null(e, "error_estimate", pt->error_estimate, pt->error_estimate >= 0);
+        cJSON_AddNumberToObject(e, "samples_per_s", pt->samples_per_s);
+        cJSON_AddStringToObject(e, "kind", pt->kind == 'p' ? "pass" : pt->kind == 't' ? "tick" : "done");
+        cJSON_AddItemToArray(a, e);
+    }
+    pthread_mutex_unlock(&j->hist_mu);
+    if (!a || cJSON_GetArraySize(a) != j->n_hist) { /* out of memory */
+        cJSON_Delete(o);
+        return NULL;
+    }
+    return o;
+}
+
+/* Restores the series of a checkpoint (points that are not well-formed are skipped). */
+static void history_restore(srv_job *j, const cJSON *a)
+{
+    const cJSON *e;
+    cJSON_ArrayForEach(e, a)
+    {
+        const cJSON *t = cJSON_GetObjectItemCaseSensitive(e, "elapsed_s"), *n = cJSON_GetObjectItemCaseSensitive(e, "spp"),
+                    *er = cJSON_GetObjectItemCaseSensitive(e, "error_estimate"),
+                    *r = cJSON_GetObjectItemCaseSensitive(e, "samples_per_s"),
+                    *k = cJSON_GetObjectItemCaseSensitive(e, "kind");
+        if (!cJSON_IsNumber(t) || !cJSON_IsNumber(n) || !cJSON_IsNumber(r) || !cJSON_IsString(k)) continue;
+        srv_history_point pt = {t->valuedouble, n->valuedouble, cJSON_IsNumber(er) ? er->valuedouble : -1,
+                                r->valuedouble, k->valuestring[0] == 'p' ? 'p' : k->valuestring[0] == 't' ? 't' : 'd'};
+        history_add(j, &pt);
+    }
+}
+
 static void on_pass(void *user, ts_sched_job *sj, const ts_job_progress *p)
 {
     (void)sj;
     srv_job *j = user;
+    history_add_progress(j, p, 'p');
     publish_json(j, "progress", srv_job_progress_json(j, p));
 }
 
@@ -162,6 +249,7 @@ static void on_done(void *user, ts_sched_job *sj, const ts_job_progress *p)
 {
     (void)sj;
     srv_job *j = user;
+    history_add_progress(j, p, 'd');
     atomic_fetch_add(&j->version, 1);
     publish_json(j, "progress", srv_job_progress_json(j, p));
     publish_json(j, "done", srv_job_progress_json(j, p));
@@ -191,6 +279,7 @@ static srv_job *job_new(srv_store *st, const char *id, const char *text, size_t 
     atomic_init(&j->version, 1);
     pthread_mutex_init(&j->ckpt_mu, NULL);
     pthread_mutex_init(&j->disk_mu, NULL);
+    pthread_mutex_init(&j->hist_mu, NULL);
     j->store = st;
     j->events = srv_events_create();
     j->scene_text = malloc(len + 1);
@@ -344,6 +433,7 @@ srv_job *srv_store_restore(srv_store *st, const srv_restore *r, ts_error *err)
         return NULL;
     }
     if (r->failure) snprintf(j->failure, sizeof j->failure, "%s", r->failure);
+    if (r->history) history_restore(j, r->history);
     if (!r->scene && r->film) {
         j->full_w = r->film->full_width, j->full_h = r->film->full_height;
         j->x0 = r->film->x0, j->y0 = r->film->y0, j->w = r->film->width, j->h = r->film->height;
@@ -409,11 +499,18 @@ static void add_number_or_null(cJSON *o, const char *k, double v, bool known)
     else cJSON_AddNullToObject(o, k);
 }
 
+const char *srv_job_state_name(const srv_job *j, const ts_job_progress *p)
+{
+    if (j->failure[0]) return "failed";
+    if (p->cancelling) return "cancelling";
+    return ts_job_state_name(p->state);
+}
+
 cJSON *srv_job_progress_json(srv_job *j, const ts_job_progress *p)
 {
     cJSON *o = cJSON_CreateObject();
     cJSON_AddStringToObject(o, "id", j->id);
-    cJSON_AddStringToObject(o, "state", j->failure[0] ? "failed" : ts_job_state_name(p->state));
+    cJSON_AddStringToObject(o, "state", srv_job_state_name(j, p));
     cJSON_AddNumberToObject(o, "spp", p->spp_done);
     cJSON_AddNumberToObject(o, "spp_target", p->spp_target);
     cJSON_AddNumberToObject(o, "pass_spp", p->pass_end);
@@ -421,6 +518,8 @@ cJSON *srv_job_progress_json(srv_job *j, const ts_job_progress *p)
     cJSON_AddNumberToObject(o, "samples", (double)p->samples);
     cJSON_AddNumberToObject(o, "samples_per_s", p->samples_per_s);
     add_number_or_null(o, "error_estimate", p->error_estimate, p->error_estimate >= 0);
+    cJSON_AddNumberToObject(o, "progress", p->progress);
+    add_number_or_null(o, "eta_s", p->eta_s, p->eta_s >= 0);
     cJSON_AddStringToObject(o, "halt_reason", ts_halt_reason_name(p->halt));
     return o;
 }
@@ -435,7 +534,7 @@ cJSON *srv_job_status_json(srv_job *j)
     cJSON_AddStringToObject(o, "id", j->id);
     if (j->name) cJSON_AddStringToObject(o, "name", j->name);
     else cJSON_AddNullToObject(o, "name");
-    cJSON_AddStringToObject(o, "state", j->failure[0] ? "failed" : ts_job_state_name(p.state));
+    cJSON_AddStringToObject(o, "state", srv_job_state_name(j, &p));
     if (j->failure[0]) cJSON_AddStringToObject(o, "error", j->failure);
     pthread_mutex_lock(&j->ckpt_mu);
     if (j->checkpoint_error[0]) cJSON_AddStringToObject(o, "checkpoint_error", j->checkpoint_error);
@@ -450,6 +549,8 @@ cJSON *srv_job_status_json(srv_job *j)
     cJSON_AddNumberToObject(o, "samples", (double)p.samples);
     cJSON_AddNumberToObject(o, "samples_per_s", p.samples_per_s);
     add_number_or_null(o, "error_estimate", p.error_estimate, p.error_estimate >= 0);
+    cJSON_AddNumberToObject(o, "progress", p.progress);
+    add_number_or_null(o, "eta_s", p.eta_s, p.eta_s >= 0);
     cJSON_AddNumberToObject(o, "nonfinite_samples", (double)p.nonfinite);
     cJSON_AddNumberToObject(o, "camera_rays", (double)p.camera_rays);
     cJSON_AddNumberToObject(o, "other_rays", (double)p.other_rays);

@@ -46,6 +46,11 @@ typedef struct srv_job {
     /* atomic: bumped whenever the pixels or the state change */
     atomic_uint_fast64_t version;
     uint64_t saved_version;      /* maintenance thread only */
+    /* The convergence series (GET …/history): a point at every pass end, once a second
+     * while the job renders (srv_job_tick) and at the end; guarded by hist_mu. */
+    pthread_mutex_t hist_mu;
+    struct srv_history_point *hist;
+    int n_hist, cap_hist;
     struct srv_job *next;        /* guarded by the store's mutex */
 } srv_job;
 
@@ -87,6 +92,7 @@ typedef struct srv_restore {
     const uint32_t *tile_spp;
     ts_job_settings settings;    /* integrator: the scene's, or AO when there is none */
     const char *failure;         /* non-NULL: register as failed with this message */
+    const cJSON *history;        /* the checkpoint's "history" array, or NULL */
 } srv_restore;
 srv_job *srv_store_restore(srv_store *st, const srv_restore *r, ts_error *err);
 
@@ -102,6 +108,23 @@ void srv_job_release(srv_job *j);
 /* The job's status document (proto/job-status.schema.json). Caller deletes. */
 cJSON *srv_job_status_json(srv_job *j);
 /* The progress event document. Caller deletes. */
+/* One point of a job's convergence series. */
+typedef struct srv_history_point {
+    double elapsed_s, spp, error_estimate, samples_per_s; /* error < 0: unknown */
+    char kind;                   /* 'p' pass end, 't' tick, 'd' done */
+} srv_history_point;
+
+#define SRV_HISTORY_MAX 4096     /* beyond, every other tick point is dropped */
+
+/* Publishes a `progress` event and records a tick point if the job is running (the
+ * maintenance thread calls it once a second). */
+void srv_job_tick(srv_job *j);
+/* {"id", "points": [{"elapsed_s", "spp", "error_estimate", "samples_per_s", "kind"}]}. */
+cJSON *srv_job_history_json(srv_job *j);
+
+/* The state a client sees: "failed" for a failed job, "cancelling" while a cancelled job's
+ * last tiles finish, else the scheduler's ("queued", "running", "done", "cancelled"). */
+const char *srv_job_state_name(const srv_job *j, const ts_job_progress *p);
 cJSON *srv_job_progress_json(srv_job *j, const ts_job_progress *p);
 /* The tile event document ({tx, ty, x, y, w, h, spp, png, exr}). Caller deletes. */
 cJSON *srv_job_tile_json(const srv_job *j, const ts_tile_event *ev);

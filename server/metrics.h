@@ -18,6 +18,8 @@
     X(SRV_ROUTE_IMAGE, "/api/v1/jobs/{id}/image")  \
     X(SRV_ROUTE_TILE, "/api/v1/jobs/{id}/tiles/{tx}/{ty}") \
     X(SRV_ROUTE_EVENTS, "/api/v1/jobs/{id}/events") \
+    X(SRV_ROUTE_HISTORY, "/api/v1/jobs/{id}/history") \
+    X(SRV_ROUTE_CANCEL, "/api/v1/jobs/{id}/cancel") \
     X(SRV_ROUTE_OTHER, "other")
 
 typedef enum srv_route {

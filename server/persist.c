@@ -57,6 +57,9 @@ static ts_status save_files(const char *dir, srv_job *j, bool with_film, ts_erro
      * recorded as done has its whole film on disk); restoring takes the sample counts
      * from the film. */
     cJSON *o = srv_job_status_json(j);
+    cJSON *hist = o ? srv_job_history_json(j) : NULL;
+    if (hist) cJSON_AddItemToObject(o, "history", cJSON_DetachItemFromObjectCaseSensitive(hist, "points"));
+    cJSON_Delete(hist);
     if (!o) return ts_error_set(err, TS_ERR_NOMEM, "out of memory for a checkpoint");
     if (!j->sj) goto state; /* failed before rendering: no film */
     if (!with_film) {
@@ -279,6 +282,8 @@ static void restore_one(const char *dir, const char *id, srv_store *st, const ts
     r.created_unix = num(meta, "created_at", 0);
     r.elapsed_s = num(meta, "elapsed_s", 0);
     r.nonfinite = (uint64_t)num(meta, "nonfinite_samples", 0);
+    r.history = cJSON_GetObjectItemCaseSensitive(meta, "history");
+    if (!cJSON_IsArray(r.history)) r.history = NULL;
     r.settings.integrator = TS_INTEGRATOR_AO; /* the scene's, once it loads */
     r.settings.priority = (int)num(meta, "priority", 0);
     r.settings.spp = (uint32_t)num(meta, "spp_target", 1);

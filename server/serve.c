@@ -22,6 +22,7 @@
 #include "tessera.h"
 
 #define KEEPALIVE_S 15.0
+#define TICK_S 1.0 /* progress events and history points of running jobs */
 
 static void usage(FILE *f)
 {
@@ -95,6 +96,18 @@ static void keepalive_all(srv_store *st)
     free(jobs);
 }
 
+/* Running jobs: a progress event and a history point. */
+static void tick_all(srv_store *st)
+{
+    int n = 0;
+    srv_job **jobs = srv_store_list(st, &n);
+    for (int i = 0; jobs && i < n; i++) {
+        srv_job_tick(jobs[i]);
+        srv_job_release(jobs[i]);
+    }
+    free(jobs);
+}
+
 static void shutdown_streams(srv_store *st)
 {
     int n = 0;
@@ -112,10 +125,12 @@ static void *maintenance(void *arg)
 {
     srv_server *srv = arg;
     double next_ckpt = ts_now_seconds() + srv->cfg.checkpoint_interval_s, next_ka = ts_now_seconds() + KEEPALIVE_S;
+    double next_tick = ts_now_seconds() + TICK_S;
     pthread_mutex_lock(&srv->mu);
     while (!srv->stopping) {
         double now = ts_now_seconds();
         double until = srv->cfg.data_dir && next_ckpt < next_ka ? next_ckpt : next_ka;
+        if (next_tick < until) until = next_tick;
         if (!srv->kick && now < until) {
             struct timespec ts;
             clock_gettime(CLOCK_REALTIME, &ts);
@@ -137,6 +152,10 @@ static void *maintenance(void *arg)
         if (now >= next_ka) {
             keepalive_all(srv->store);
             next_ka = now + KEEPALIVE_S;
+        }
+        if (now >= next_tick) {
+            tick_all(srv->store);
+            next_tick = now + TICK_S;
         }
         pthread_mutex_lock(&srv->mu);
     }

@@ -4,7 +4,8 @@
  * (docs/design.md §6: no global mutable state outside the job store): the configuration
  * (immutable after start), the render scheduler, the job store, metrics, the encoder
  * pool and the HTTP daemon. srv_serve_main blocks SIGINT/SIGTERM and waits for them
- * with sigwait; a maintenance thread checkpoints (--data) and sends SSE keep-alives on a
+ * with sigwait; a maintenance thread checkpoints (--data) and sends SSE keep-alives and, once a second,
+ * running jobs' progress events and history points, on a
  * condition variable's timed wait. */
 #ifndef SRV_SERVE_H
 #define SRV_SERVE_H

@@ -173,13 +173,38 @@ static void test_submit_stream_and_images(void **state)
     free(doc);
 }
 
+/* POST …/cancel, twice (a retried cancel): both answer 200 with the job, which is
+ * "cancelling" or "cancelled", and neither deletes it. DELETE while it has not ended is 409. */
 static void cancel(const char *id)
 {
     char path[160];
     get_path(path, sizeof path, id, "");
     http_resp r;
     ts_http(&srv, "DELETE", path, NULL, 0, NULL, &r);
-    assert_int_equal(r.status, 200);
+    long status = r.status;
+    if (status == 409) assert_non_null(strstr(r.body, "cancel it first"));
+    else assert_int_equal(status, 204); /* only when it had ended already */
+    ts_http_free(&r);
+    if (status == 204) return;
+    const char *st = NULL;
+    cJSON *o;
+    get_path(path, sizeof path, id, "/cancel");
+    for (int i = 0; i < 2; i++) {
+        ts_http(&srv, "POST", path, NULL, 0, NULL, &r);
+        assert_int_equal(r.status, 200);
+        o = cJSON_Parse(r.body);
+        assert_non_null(o);
+        st = ts_json_str(o, "state");
+        if (strcmp(st, "cancelling") && strcmp(st, "cancelled")) fail_msg("cancel answered state '%s'", st);
+        cJSON_Delete(o);
+        ts_http_free(&r);
+    }
+    get_path(path, sizeof path, id, "");
+    o = ts_wait_done(&srv, id, 30);
+    assert_string_equal(ts_json_str(o, "state"), "cancelled");
+    cJSON_Delete(o);
+    ts_http(&srv, "GET", path, NULL, 0, NULL, &r);
+    assert_int_equal(r.status, 200); /* still there */
     ts_http_free(&r);
 }
 
@@ -242,7 +267,60 @@ static void test_time_limit_and_target_error(void **state)
     o = ts_wait_done(&srv, id, 30);
     assert_string_equal(ts_json_str(o, "halt_reason"), "target_error");
     assert_true(ts_json_num(o, "error_estimate") <= 0.05);
+    assert_true(ts_json_num(o, "progress") == 1); /* halted by its bound: done, not a 0.0004 bar */
     assert_true(ts_json_num(o, "spp_done") >= 4 && ts_json_num(o, "spp_done") < 1000000);
+    cJSON_Delete(o);
+    free(doc);
+}
+
+/* Progress and ETA while a job renders, 1 and 0 once it ends; the convergence series:
+ * one point per pass end (spp doubling), ticks in between, and a final one. */
+static void test_progress_eta_and_history(void **state)
+{
+    (void)state;
+    char *doc = scene(64, 64, 1024, NULL);
+    char id[32], path[160];
+    ts_submit(&srv, doc, id, sizeof id);
+    ts_wait_field(&srv, id, "spp_done", 4, 20);
+    get_path(path, sizeof path, id, "");
+    cJSON *o = ts_http_json(&srv, path, 200);
+    double progress = ts_json_num(o, "progress");
+    const cJSON *eta = cJSON_GetObjectItem(o, "eta_s");
+    /* 4 of 1024 spp: progress is the samples held (≥ 4/1024), ETA a positive guess. */
+    assert_true(progress >= 4.0 / 1024 && progress < 0.5);
+    assert_true(cJSON_IsNumber(eta) && eta->valuedouble > 0);
+    assert_true(cJSON_IsNumber(cJSON_GetObjectItem(o, "error_estimate")));
+    cJSON_Delete(o);
+    cJSON_Delete(ts_wait_done(&srv, id, 60));
+    o = ts_http_json(&srv, path, 200);
+    assert_true(ts_json_num(o, "progress") == 1);
+    assert_true(ts_json_num(o, "eta_s") == 0);
+    cJSON_Delete(o);
+    get_path(path, sizeof path, id, "/history");
+    o = ts_http_json(&srv, path, 200);
+    const cJSON *pts = cJSON_GetObjectItem(o, "points"), *pt;
+    double last_pass = 0, last_t = -1;
+    int passes = 0, done = 0;
+    cJSON_ArrayForEach(pt, pts)
+    {
+        const char *kind = ts_json_str(pt, "kind");
+        double spp = ts_json_num(pt, "spp"), t = ts_json_num(pt, "elapsed_s");
+        assert_true(t >= last_t);
+        last_t = t;
+        if (!strcmp(kind, "pass")) {
+            assert_true(spp == (last_pass ? 2 * last_pass : 1)); /* 1, 2, 4, … */
+            last_pass = spp;
+            passes++;
+            /* one sample gives no variance: no estimate at 1 spp */
+            if (spp == 1) assert_true(cJSON_IsNull(cJSON_GetObjectItem(pt, "error_estimate")));
+            else assert_true(ts_json_num(pt, "error_estimate") > 0);
+        } else if (!strcmp(kind, "done")) {
+            assert_true(spp == 1024);
+            done++;
+        }
+    }
+    assert_int_equal(passes, 10); /* pass ends 1 … 512; 1024 is the end */
+    assert_int_equal(done, 1);
     cJSON_Delete(o);
     free(doc);
 }
@@ -268,9 +346,10 @@ static void test_priority_order(void **state)
     cJSON *o = ts_http_json(&one, path, 200);
     assert_string_equal(ts_json_str(o, "state"), "queued");
     cJSON_Delete(o);
-    get_path(path, sizeof path, b, "");
+    get_path(path, sizeof path, b, "/cancel");
     http_resp r;
-    ts_http(&one, "DELETE", path, NULL, 0, NULL, &r);
+    ts_http(&one, "POST", path, NULL, 0, NULL, &r);
+    assert_int_equal(r.status, 200);
     ts_http_free(&r);
     cJSON *ol = ts_wait_done(&one, l, 30), *oh = ts_wait_done(&one, h, 30);
     /* Low was submitted first but waited longer: it started after high finished. */
@@ -506,6 +585,7 @@ int main(void)
         cmocka_unit_test(test_submit_stream_and_images),
         cmocka_unit_test(test_two_jobs_at_once_and_cancel),
         cmocka_unit_test(test_time_limit_and_target_error),
+        cmocka_unit_test(test_progress_eta_and_history),
         cmocka_unit_test(test_priority_order),
         cmocka_unit_test(test_bad_requests),
         cmocka_unit_test(test_auth),

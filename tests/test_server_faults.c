@@ -608,9 +608,9 @@ static void test_disconnects(void **state)
     }
     wait_fds(&s, baseline, 10, "after abandoned event streams");
     assert_true(healthz_ms(&s) < 1000);
-    snprintf(path, sizeof path, "/api/v1/jobs/%s", sid);
+    snprintf(path, sizeof path, "/api/v1/jobs/%s/cancel", sid);
     http_resp r;
-    ts_http(&s, "DELETE", path, NULL, 0, NULL, &r);
+    ts_http(&s, "POST", path, NULL, 0, NULL, &r);
     assert_int_equal(r.status, 200);
     ts_http_free(&r);
     assert_int_equal(ts_server_stop(&s, SIGTERM), 0);

@@ -88,6 +88,15 @@ static void test_restart_and_resume(void **state)
     /* Resumed from the checkpoint, not from zero (a 0.2 s interval at most was lost). */
     assert_true(resumed_at >= 8);
     assert_counts(&s, a, 40, 24, 16);
+    /* The finished job's convergence series came back with it: passes 1, 2, 4, 8, then done. */
+    snprintf(path, sizeof path, "/api/v1/jobs/%s/history", a);
+    o = ts_http_json(&s, path, 200);
+    const cJSON *pts = cJSON_GetObjectItem(o, "points");
+    int n_pts = cJSON_GetArraySize(pts);
+    assert_true(n_pts >= 5);
+    assert_string_equal(ts_json_str(cJSON_GetArrayItem(pts, n_pts - 1), "kind"), "done");
+    assert_true(ts_json_num(cJSON_GetArrayItem(pts, n_pts - 1), "spp") == 16);
+    cJSON_Delete(o);
     o = ts_wait_done(&s, b, 60);
     assert_string_equal(ts_json_str(o, "state"), "done");
     assert_int_equal((int)ts_json_num(o, "spp_done"), 1024);

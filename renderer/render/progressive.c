@@ -1,6 +1,8 @@
 /* progressive.c — the pass and halt policy; see progressive.h. */
 #include "render/progressive.h"
 
+#include <math.h>
+
 void ts_job_settings_from_scene(const ts_scene *s, ts_job_settings *out)
 {
     out->integrator = s->integrator.type;
@@ -67,4 +69,48 @@ uint32_t ts_progressive_next_pass_end(const ts_job_settings *js, const ts_pass_s
         }
     }
     return (uint32_t)end;
+}
+
+void ts_progressive_estimate(const ts_job_settings *js, const ts_progress_in *in, double *progress, double *eta_s)
+{
+    if (in->finished) {
+        *progress = 1;
+        *eta_s = 0;
+        return;
+    }
+    double seconds = in->elapsed_s - in->elapsed_before, rendered = in->spp_fraction - in->spp_before;
+    double rate = seconds > 0 && rendered > 0 ? rendered / seconds : -1; /* spp per second */
+    double spp = js->spp > 0 ? (double)js->spp : 1;
+    /* The sample target: always a bound. */
+    double p = in->spp_fraction / spp;
+    double eta = rate > 0 ? (spp - in->spp_fraction) / rate : -1;
+    if (js->time_limit_s > 0) {
+        double pt = in->elapsed_s / js->time_limit_s, et = js->time_limit_s - in->elapsed_s;
+        if (pt > p) p = pt;
+        if (et < 0) et = 0;
+        if (eta < 0 || et < eta) eta = et;
+    }
+    if (js->target_error > 0 && in->error > 0 && in->error_spp > 0) {
+        double slope = -0.5;
+        if (in->prev_error > 0 && in->prev_error_spp > 0 && in->prev_error_spp != in->error_spp) {
+            slope = log(in->error / in->prev_error) / log((double)in->error_spp / in->prev_error_spp);
+            if (!(slope <= -0.25)) slope = -0.25; /* also NaN: the error did not fall (yet) */
+            if (slope < -1) slope = -1;
+        }
+        /* error(n) = error · (n / error_spp)^slope reaches the target at n_target. */
+        double n_target = in->error <= js->target_error
+                              ? (double)in->error_spp
+                              : in->error_spp * pow(js->target_error / in->error, 1 / slope);
+        if (n_target > spp) n_target = spp;
+        if (n_target < TS_PROGRESSIVE_ERROR_MIN_SPP) n_target = TS_PROGRESSIVE_ERROR_MIN_SPP;
+        double pe = in->spp_fraction / n_target;
+        if (pe > p) p = pe;
+        if (rate > 0) {
+            double ee = (n_target - in->spp_fraction) / rate;
+            if (ee < 0) ee = 0;
+            if (eta < 0 || ee < eta) eta = ee;
+        }
+    }
+    *progress = p < 0 ? 0 : p > 1 ? 1 : p;
+    *eta_s = eta;
 }

@@ -69,4 +69,25 @@ ts_halt_reason ts_progressive_halt(const ts_job_settings *js, const ts_pass_stat
  * bound), but always at least one more sample. */
 uint32_t ts_progressive_next_pass_end(const ts_job_settings *js, const ts_pass_state *st, double max_pass_s);
 
+/* What a progress estimate reads: where the render stands between pass ends. */
+typedef struct ts_progress_in {
+    double spp_fraction;     /* pixel-samples every tile holds ÷ pixels: spp that grows as tiles finish */
+    double spp_before;       /* of it, held before this process rendered any (a resume) */
+    double elapsed_s;        /* rendering wall time, including elapsed_before */
+    double elapsed_before;
+    double error;            /* the last error estimate; < 0 when unknown */
+    uint32_t error_spp;      /* the spp it was made at */
+    double prev_error;       /* the estimate before it (for the convergence slope); < 0 when unknown */
+    uint32_t prev_error_spp;
+    bool finished;
+} ts_progress_in;
+
+/* Progress (0–1) towards whichever halting bound comes first and the seconds still to go
+ * (*eta_s < 0 while it cannot be estimated: no measured speed yet). The sample target
+ * counts samples held; a time limit counts time; a target error is turned into the spp
+ * expected to reach it from the convergence slope of the last two estimates (error ∝
+ * spp^slope, slope clamped to [-1, -0.25]; -0.5, Monte Carlo's, until two are known). A
+ * finished render is at 1 with 0 s to go. */
+void ts_progressive_estimate(const ts_job_settings *js, const ts_progress_in *in, double *progress, double *eta_s);
+
 #endif

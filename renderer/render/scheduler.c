@@ -43,7 +43,11 @@ struct ts_sched_job {
     uint64_t last_dispatch;
     double t_start, t_end, elapsed_before;
     uint64_t samples, nonfinite, camera_rays, other_rays;
-    double error;
+    double error;               /* the last error estimate, at error_spp; < 0 unknown */
+    uint32_t error_spp;
+    double prev_error;          /* the one before, at prev_error_spp (the convergence slope) */
+    uint32_t prev_error_spp;
+    double spp_before;          /* pixel-samples ÷ pixels held at submission */
     struct ts_sched_job *next;  /* s->jobs list (unfinished jobs, in priority order) */
 };
 
@@ -143,6 +147,14 @@ static void fill_progress(const ts_sched_job *j, ts_job_progress *p)
     p->other_rays = j->other_rays;
     p->samples_per_s = p->elapsed_s > 0 ? (double)j->samples / p->elapsed_s : 0;
     p->error_estimate = j->error;
+    uint64_t px_samples = 0;
+    for (int i = 0; i < j->n_tiles; i++) px_samples += (uint64_t)j->tiles[i].spp * (uint64_t)(j->tiles[i].w * j->tiles[i].h);
+    uint64_t pixels = (uint64_t)j->w * (uint64_t)j->h;
+    p->spp_fraction = pixels ? (double)px_samples / (double)pixels : 0;
+    ts_progress_in in = {p->spp_fraction, j->spp_before, p->elapsed_s, j->elapsed_before, j->error, j->error_spp,
+                         j->prev_error, j->prev_error_spp, ts_job_state_finished(j->state)};
+    ts_progressive_estimate(&j->settings, &in, &p->progress, &p->eta_s);
+    p->cancelling = j->cancel && !ts_job_state_finished(j->state);
 }
 
 /* Index (into tiles) of the job's next tile needing the current pass, advancing the cursor
@@ -191,12 +203,15 @@ static void close_pass(ts_scheduler *s, ts_sched_job *j)
 {
     uint32_t done = job_spp_done(j);
     pthread_mutex_unlock(&s->mu);
-    double error = done > 0 && j->film ? ts_film_relative_error(j->film) : -1;
+    /* One sample gives no variance: the estimate means something from two on. */
+    double error = done >= 2 && j->film ? ts_film_relative_error(j->film) : -1;
     pthread_mutex_lock(&s->mu);
-    if (done > 0) j->error = error;
+    if (error >= 0 && done != j->error_spp) {
+        j->prev_error = j->error, j->prev_error_spp = j->error_spp;
+        j->error = error, j->error_spp = done;
+    }
     double now = ts_now_seconds();
-    ts_pass_state ps = {done, j->done_before, job_elapsed(j, now), j->elapsed_before, done > 0 ? error : j->error,
-                        j->cancel};
+    ts_pass_state ps = {done, j->done_before, job_elapsed(j, now), j->elapsed_before, error, j->cancel};
     ts_halt_reason halt = ts_progressive_halt(&j->settings, &ps);
     bool finished = halt != TS_HALT_NONE;
     if (finished) {
@@ -411,7 +426,7 @@ ts_sched_job *ts_scheduler_submit(ts_scheduler *s, const ts_sched_job_desc *d, t
     j->sample_begin = d->sample_begin;
     j->max_pass_s = d->max_pass_s;
     j->cb = d->callbacks;
-    j->error = -1;
+    j->error = j->prev_error = -1;
     if (d->scene) {
         const ts_scene *sc = d->scene;
         j->full_w = sc->width, j->full_h = sc->height;
@@ -457,7 +472,9 @@ ts_sched_job *ts_scheduler_submit(ts_scheduler *s, const ts_sched_job_desc *d, t
     j->t_submit = ts_now_seconds();
     j->cursor = j->n_tiles; /* pass_end 0: the first close starts pass 1 */
     j->done_before = job_spp_done(j);
-    if (d->film && !finished) j->error = ts_film_relative_error(film);
+    for (int i = 0; i < j->n_tiles; i++)
+        j->spp_before += (double)j->tiles[i].spp * j->tiles[i].w * j->tiles[i].h / ((double)j->w * j->h);
+    if (d->film && !finished && j->done_before >= 2) j->error = ts_film_relative_error(film), j->error_spp = j->done_before;
 
     atomic_fetch_add(&s->refs, 1);
     j->s = s;
@@ -468,7 +485,7 @@ ts_sched_job *ts_scheduler_submit(ts_scheduler *s, const ts_sched_job_desc *d, t
         j->halt = TS_HALT_RESTORED;
         j->pass_end = job_spp_done(j);
         pthread_mutex_unlock(&s->mu);
-        if (j->film) j->error = ts_film_relative_error(j->film);
+        if (j->film && j->pass_end >= 2) j->error = ts_film_relative_error(j->film), j->error_spp = j->pass_end;
         return j;
     }
     j->state = TS_JOB_QUEUED;

@@ -90,7 +90,11 @@ typedef struct ts_job_progress {
     uint64_t nonfinite;     /* of them, dropped for NaN/∞/negative radiance */
     uint64_t camera_rays, other_rays;
     double samples_per_s;   /* samples / elapsed_s */
-    double error_estimate;  /* at the last pass end; < 0 when not yet known */
+    double error_estimate;  /* at the last pass end; < 0 when not yet known (fewer than 2 spp) */
+    double spp_fraction;    /* pixel-samples held ÷ pixels: grows as tiles finish, within a pass */
+    double progress;        /* 0–1 towards the first halting bound (progressive.h); 1 when finished */
+    double eta_s;           /* seconds still to go; < 0 while it cannot be estimated */
+    bool cancelling;        /* cancelled, and tiles still finishing */
 } ts_job_progress;
 
 typedef struct ts_job_callbacks {

@@ -176,7 +176,7 @@ async function removeJob(id) {
 }
 
 async function cancel(id) {
-  const r = await api('/api/v1/jobs/' + encodeURIComponent(id), { method: 'DELETE' });
+  const r = await api('/api/v1/jobs/' + encodeURIComponent(id) + '/cancel', { method: 'POST' });
   if (r.ok && r.body) jobs.set(id, r.body);
   renderJobs();
   poll();
