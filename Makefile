@@ -1,5 +1,5 @@
 # tessera — the README's two commands, set-up included.
-#   make run    install what is missing, build, render the built-in Cornell box, serve it
+#   make run    install what is missing, build, serve with the built-in Cornell box queued
 #   make test   install what is missing, build, run the whole suite through ctest
 # Also: make build, make deps, make test-asan, make test-tsan, make fuzz, make bench (+ bench-deps), make clean.
 
@@ -58,13 +58,12 @@ $(BUILD)/CMakeCache.txt: | deps
 build: deps $(BUILD)/CMakeCache.txt
 	cmake --build $(BUILD) -j $(JOBS)
 
-# The main job: render the built-in Cornell box to files, then serve it: `tessera serve`
-# on $(BIND):$(PORT) with the Cornell box queued as its first job (Ctrl-C stops it).
+# The main job: `tessera serve` on $(BIND):$(PORT) at once, with the built-in Cornell box
+# queued as its first job; the server prints the URL to watch it and where its image will
+# be (Ctrl-C stops it). `tessera render -o cornell.exr` renders it to a file instead.
 BIND ?= 127.0.0.1
 PORT ?= 8080
 run: build
-	$(BUILD)/tessera render -o cornell.exr -o cornell.png
-	@echo "run: wrote $(CURDIR)/cornell.exr and $(CURDIR)/cornell.png"
 	@echo "run: serving; open http://$(BIND):$(PORT)/ in a browser (Ctrl-C to stop)"
 	$(BUILD)/tessera serve --bind $(BIND) --port $(PORT) --queue-builtin
 

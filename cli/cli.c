@@ -9,6 +9,7 @@
 
 #include <getopt.h>
 #include <limits.h>
+#include <math.h>
 #include <pthread.h>
 #include <signal.h>
 #include <stdatomic.h>
@@ -26,14 +27,45 @@
 
 static void usage(FILE *f)
 {
-    fprintf(f, "usage:\n"
-               "  tessera render [SCENE] [-o OUT.exr] [-o OUT.png] [--spp N] [--threads N] [--seed N]\n"
-               "                 [--time-limit SECONDS] [--target-error E] [--quiet]\n"
-               "                 [--shard I/N|auto [--shard-count N]] [--checkpoint FILE [--checkpoint-interval S]]\n"
-               "  tessera merge  SHARD.exr... [-o OUT.exr] [-o OUT.png] [--allow-partial]\n"
-               "  tessera serve  [--bind 127.0.0.1] [--port 8080] [--threads N] [--data DIR] [--token TOKEN]\n"
-               "  tessera --version\n"
-               "With no SCENE, `render` renders the built-in Cornell box.\n");
+    fprintf(f, "usage: tessera COMMAND [OPTIONS]\n"
+               "  render [SCENE]   render a scene (.json; none: the built-in Cornell box) to EXR/PNG\n"
+               "  merge SHARD...   add farm shards (EXR) into one image\n"
+               "  serve            the render server: HTTP API and web UI\n"
+               "  help [COMMAND]   this text, or a command's options with their units and defaults\n"
+               "  --version        tessera's version\n"
+               "`tessera COMMAND --help` lists the command's options.\n");
+}
+
+static void render_usage(FILE *f)
+{
+    fprintf(f,
+            "usage: tessera render [SCENE] [OPTIONS]\n"
+            "Renders SCENE (a scene document, .json; without one the built-in Cornell box) in progressive\n"
+            "passes of 1, 1, 2, 4, ... samples per pixel until the first of --spp, --time-limit and\n"
+            "--target-error is reached.\n"
+            "  -o, --output FILE         write FILE; .exr (colour, per-pixel variance, sample count) or .png;\n"
+            "                            may repeat (at most 8). Default: NAME.exr in this folder, NAME from\n"
+            "                            the scene (its \"name\", else its file name)\n"
+            "  --spp N                   samples per pixel, 1 to 16777216 (default: the scene's job.spp, else\n"
+            "                            its sampler.spp)\n"
+            "  --time-limit SECONDS      stop after this much rendering time (default: the scene's\n"
+            "                            job.time_limit_s, else none)\n"
+            "  --target-error E          stop at this relative error estimate, as 0.01 or 1%%, below 1\n"
+            "                            (default: the scene's job.target_error, else none)\n"
+            "  --threads N               render threads, 1 to 1024 (default: one per core)\n"
+            "  --seed N                  the sampler's seed, 0 to 4294967295 (default: the scene's)\n"
+            "  --quiet                   no progress bar and no summary\n"
+            "Farm nodes (docs/design.md section 7):\n"
+            "  --shard I/N | auto        render shard I of N: samples [I*S/N, (I+1)*S/N) of every pixel;\n"
+            "                            auto takes I and N from JOB_COMPLETION_INDEX and --shard-count\n"
+            "                            (Kubernetes) or SLURM_ARRAY_TASK_ID/_COUNT (Slurm). Needs an .exr\n"
+            "                            output (default: NAME.shard-I-of-N.exr), which tessera merge adds\n"
+            "  --shard-count N           N for --shard auto under Kubernetes, 1 to 1000000\n"
+            "  --checkpoint FILE.exr     save the shard's progress to FILE periodically and on SIGTERM or\n"
+            "                            SIGINT, and resume from it when it exists\n"
+            "  --checkpoint-interval S   seconds between checkpoints (default 60)\n"
+            "Exit status: 0 done, 1 bad input or a failed output, 2 usage error, 128+signal when stopped\n"
+            "by a signal with --checkpoint (the checkpoint saved).\n");
 }
 
 static int usage_error(const char *fmt, const char *arg)
@@ -43,6 +75,26 @@ static int usage_error(const char *fmt, const char *arg)
     fprintf(stderr, "\n");
     usage(stderr);
     return 2;
+}
+
+static int render_usage_error(const char *fmt, const char *arg)
+{
+    fprintf(stderr, "tessera render: ");
+    fprintf(stderr, fmt, arg);
+    fprintf(stderr, "\n(tessera render --help lists the options)\n");
+    return 2;
+}
+
+/* A relative error as "0.01" or "1%": in (0, 1). */
+static bool parse_relative_error(const char *s, double *out)
+{
+    char *end;
+    double v = strtod(s, &end);
+    if (end == s) return false;
+    if (*end == '%' && end[1] == '\0') v /= 100, end++;
+    if (*end || !(v > 0) || !(v < 1) || !isfinite(v)) return false;
+    *out = v;
+    return true;
 }
 
 static bool parse_uint(const char *s, unsigned long long max, unsigned long long *out)
@@ -97,52 +149,60 @@ static int parse_render_options(int argc, char **argv, render_opts *o)
     while ((c = getopt_long(argc, argv, ":o:", opts, NULL)) != -1) {
         switch (c) {
         case 'o':
-            if (!cli_outputs_add(&o->outputs, optarg)) return usage_error("at most %s outputs", "8");
+            if (!cli_outputs_add(&o->outputs, optarg)) return render_usage_error("at most %s outputs", "8");
             break;
         case OPT_SPP:
             if (!parse_uint(optarg, 1u << 24, &o->spp) || o->spp == 0)
-                return usage_error("--spp: expected a whole number from 1 to 16777216, got '%s'", optarg);
+                return render_usage_error("--spp: expected a whole number from 1 to 16777216, got '%s'", optarg);
             break;
         case OPT_THREADS:
             if (!parse_uint(optarg, 1024, &o->threads) || o->threads == 0)
-                return usage_error("--threads: expected a whole number from 1 to 1024, got '%s'", optarg);
+                return render_usage_error("--threads: expected a whole number from 1 to 1024, got '%s'", optarg);
             break;
         case OPT_SEED:
             if (!parse_uint(optarg, UINT32_MAX, &o->seed))
-                return usage_error("--seed: expected a whole number from 0 to 4294967295, got '%s'", optarg);
+                return render_usage_error("--seed: expected a whole number from 0 to 4294967295, got '%s'", optarg);
             o->have_seed = true;
             break;
         case OPT_TIME:
             if (!parse_positive(optarg, &o->time_limit))
-                return usage_error("--time-limit: expected a positive number of seconds, got '%s'", optarg);
+                return render_usage_error("--time-limit: expected a positive number of seconds, got '%s'", optarg);
             break;
         case OPT_TARGET:
-            if (!parse_positive(optarg, &o->target_error))
-                return usage_error("--target-error: expected a positive relative error, got '%s'", optarg);
+            if (!parse_relative_error(optarg, &o->target_error))
+                return render_usage_error("--target-error: expected a relative error above 0 and below 1, as 0.01 or 1%%, "
+                                          "got '%s'", optarg);
             break;
         case OPT_QUIET: o->quiet = true; break;
-        case OPT_HELP: usage(stdout); return 0;
+        case OPT_HELP: render_usage(stdout); return 0;
         case OPT_SHARD: o->shard_text = optarg; break;
         case OPT_SHARD_COUNT:
             if (!parse_uint(optarg, 1000000, &o->shard_count) || o->shard_count == 0)
-                return usage_error("--shard-count: expected a whole number from 1 to 1000000, got '%s'", optarg);
+                return render_usage_error("--shard-count: expected a whole number from 1 to 1000000, got '%s'", optarg);
             break;
         case OPT_CHECKPOINT: o->checkpoint = optarg; break;
         case OPT_CHECKPOINT_INTERVAL:
             if (!parse_positive(optarg, &o->checkpoint_interval))
-                return usage_error("--checkpoint-interval: expected a positive number of seconds, got '%s'", optarg);
+                return render_usage_error("--checkpoint-interval: expected a positive number of seconds, got '%s'", optarg);
             break;
-        case ':': return usage_error("option '%s' needs a value", argv[optind - 1]);
-        default: return usage_error("unknown option '%s'", argv[optind - 1]);
+        case ':': return render_usage_error("option '%s' needs a value", argv[optind - 1]);
+        default: return render_usage_error("unknown option '%s'", argv[optind - 1]);
         }
     }
-    if (argc - optind > 1) return usage_error("render takes at most one scene file, got another: '%s'", argv[optind + 1]);
+    if (argc - optind > 1) return render_usage_error("render takes at most one scene file, got another: '%s'", argv[optind + 1]);
     o->scene_path = optind < argc ? argv[optind] : NULL;
     const char *unsupported = cli_outputs_unsupported(&o->outputs);
-    if (unsupported) return usage_error("-o %s: the extension must be .exr or .png", unsupported);
-    if (o->shard_count && !o->shard_text) return usage_error("%s", "--shard-count goes with --shard auto");
+    if (unsupported) return render_usage_error("-o %s: the extension must be .exr or .png", unsupported);
+    if (o->shard_count && !o->shard_text) return render_usage_error("%s", "--shard-count goes with --shard auto");
+    if (o->shard_text && o->outputs.n > 0) {
+        bool exr = false;
+        for (int i = 0; i < o->outputs.n; i++) exr = exr || cli_output_is_exr(o->outputs.path[i]);
+        if (!exr)
+            return render_usage_error("--shard: a shard is merged from its EXR; add -o %s.exr (a PNG alone cannot be "
+                                      "merged)", "SHARD");
+    }
     if (o->checkpoint && !cli_output_is_exr(o->checkpoint))
-        return usage_error("--checkpoint %s: the checkpoint is an EXR file; give it the .exr extension", o->checkpoint);
+        return render_usage_error("--checkpoint %s: the checkpoint is an EXR file; give it the .exr extension", o->checkpoint);
     return -1;
 }
 
@@ -172,8 +232,8 @@ typedef struct render_run {
     bool finished;
     ts_job_progress final;
     bool bar;
-    uint64_t total, done_px;    /* pixel-samples this process renders; of them, done */
-    uint32_t *tile_spp;         /* per tile, for the bar */
+    uint64_t done_px;           /* pixel-samples this process rendered */
+    uint32_t *tile_spp;         /* per tile, what it holds */
     int last_permille;
     double t0;
     /* checkpoints: only on_pass (one at a time per job) and, after the job, main */
@@ -184,22 +244,34 @@ typedef struct render_run {
     ts_error ckpt_err;
 } render_run;
 
+/* "42 s", "3 min 20 s", "2 h 05 min". */
+static void format_duration(double s, char *out, size_t len)
+{
+    if (s < 60) snprintf(out, len, "%.0f s", s);
+    else if (s < 3600) snprintf(out, len, "%d min %02d s", (int)(s / 60), (int)fmod(s, 60));
+    else snprintf(out, len, "%d h %02d min", (int)(s / 3600), (int)fmod(s / 60, 60));
+}
+
 static void on_tile(void *user, ts_sched_job *job, const ts_tile_event *ev)
 {
-    (void)job;
     render_run *r = user;
+    ts_job_progress p;
+    if (r->bar) ts_sched_job_progress(job, &p); /* takes the scheduler's lock: before ours */
     pthread_mutex_lock(&r->mu);
     uint32_t *held = &r->tile_spp[ev->ty * r->nx + ev->tx];
     r->done_px += (uint64_t)ev->w * (uint64_t)ev->h * (ev->spp - *held);
     *held = ev->spp;
-    int permille = r->total ? (int)(1000 * r->done_px / r->total) : 1000;
+    int permille = (int)(1000 * p.progress);
     if (r->bar && permille != r->last_permille) {
         r->last_permille = permille;
         int bars = permille * 30 / 1000;
-        char bar[31];
+        char bar[31], eta[32] = "?", error[32] = "n/a";
         for (int i = 0; i < 30; i++) bar[i] = i < bars ? '#' : '.';
         bar[30] = '\0';
-        fprintf(stderr, "\rrendering [%s] %5.1f%%  %.1f s ", bar, permille / 10.0, ts_now_seconds() - r->t0);
+        if (p.eta_s >= 0) format_duration(p.eta_s, eta, sizeof eta);
+        if (p.error_estimate >= 0) snprintf(error, sizeof error, "%.2g%%", 100 * p.error_estimate);
+        fprintf(stderr, "\rrendering [%s] %5.1f%%  %u/%u spp  error %s  %.2f Msamples/s  %.1f s, ETA %s   ", bar,
+                permille / 10.0, p.spp_done, r->span, error, p.samples_per_s / 1e6, ts_now_seconds() - r->t0, eta);
         fflush(stderr);
     }
     pthread_mutex_unlock(&r->mu);
@@ -297,7 +369,7 @@ static ts_status write_outputs(const render_run *r, const ts_film *film, const c
 /* Loads the scene and settles what to render: the settings (scene, then options), the
  * shard's sample range. Returns -1 to go ahead, else the exit status. */
 static int prepare_render(const render_opts *o, ts_scene **scene_out, ts_job_settings *js, ts_sample_range *range,
-                          char *shard_how, size_t shard_how_len)
+                          char *shard_how, size_t shard_how_len, uint32_t *shard_i_out, uint32_t *shard_n_out)
 {
     /* Which shard (docs/design.md §7): I/N given, or from the scheduler's environment. */
     uint32_t shard_i = 0, shard_n = 1;
@@ -334,6 +406,7 @@ static int prepare_render(const render_opts *o, ts_scene **scene_out, ts_job_set
         return 1;
     }
     *range = ts_shard_range(shard_i, shard_n, js->spp);
+    *shard_i_out = shard_i, *shard_n_out = shard_n;
     if (!ts_integrator_available(js->integrator)) {
         fprintf(stderr, "tessera: note: the '%s' integrator is not implemented yet; rendering the 'ao' debugging view\n",
                 ts_integrator_name(js->integrator));
@@ -347,6 +420,25 @@ static int prepare_render(const render_opts *o, ts_scene **scene_out, ts_job_set
     }
     *scene_out = scene;
     return -1;
+}
+
+/* The output when no -o is given: NAME.exr in the working folder (NAME.shard-I-of-N.exr
+ * for a shard), NAME the scene's name with anything but letters, digits, '.', '_' and '-'
+ * made '-', at most 100 characters ("render" when nothing is left). */
+static void default_output(const char *scene_name, bool shard, uint32_t i, uint32_t n, char *out, size_t len)
+{
+    char name[101];
+    size_t k = 0;
+    for (const char *s = scene_name ? scene_name : ""; *s && k < sizeof name - 1; s++) {
+        char ch = *s;
+        bool ok = (ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') || (ch >= '0' && ch <= '9') || ch == '_' ||
+                  ch == '-' || (ch == '.' && k > 0);
+        name[k++] = ok ? ch : '-';
+    }
+    name[k] = '\0';
+    if (!k) snprintf(name, sizeof name, "render");
+    if (shard) snprintf(out, len, "%s.shard-%u-of-%u.exr", name, i, n);
+    else snprintf(out, len, "%s.exr", name);
 }
 
 static ts_film *film_copy(const ts_film *f, ts_error *err)
@@ -364,9 +456,15 @@ static int cmd_render(int argc, char **argv)
     ts_scene *scene = NULL;
     ts_job_settings js;
     ts_sample_range range;
-    char shard_how[256] = "";
-    rc = prepare_render(&o, &scene, &js, &range, shard_how, sizeof shard_how);
+    char shard_how[256] = "", default_out[160];
+    uint32_t shard_i, shard_n;
+    rc = prepare_render(&o, &scene, &js, &range, shard_how, sizeof shard_how, &shard_i, &shard_n);
     if (rc >= 0) return rc;
+    if (o.outputs.n == 0) {
+        default_output(scene->name, o.shard_text != NULL, shard_i, shard_n, default_out, sizeof default_out);
+        cli_outputs_add(&o.outputs, default_out);
+        if (!o.quiet) fprintf(stderr, "tessera: no -o given: the image goes to %s\n", default_out);
+    }
     int n_threads = o.threads ? (int)o.threads : (int)sysconf(_SC_NPROCESSORS_ONLN);
     if (n_threads < 1) n_threads = 1;
 
@@ -416,7 +514,6 @@ static int cmd_render(int argc, char **argv)
         fprintf(stderr, "tessera: %s: samples [%u,%u) of %u\n", shard_how, range.begin, range.end, js.spp);
     for (int i = 0; i < r.nx * r.ny; i++) r.tile_spp[i] = done;
     r.bar = !o.quiet && isatty(STDERR_FILENO);
-    r.total = (uint64_t)film->width * (uint64_t)film->height * (r.span - done);
     r.t0 = r.last_checkpoint = ts_now_seconds();
 
     /* Taken by sigwait in wait_for_job; blocked before the render threads start, so they
@@ -471,13 +568,15 @@ static int cmd_render(int argc, char **argv)
     if (st) goto fail;
     if (o.checkpoint && done == r.span) unlink(o.checkpoint); /* finished: the outputs hold everything it did */
     if (!o.quiet) {
+        char error_text[48] = "unavailable (fewer than 2 samples per pixel)";
+        if (done >= 2) snprintf(error_text, sizeof error_text, "%.3g%%", 100 * error);
         double seconds = r.final.elapsed_s;
         double msps = seconds > 0 ? r.final.samples / seconds / 1e6 : 0;
         fprintf(stderr,
                 "tessera: %s: %d×%d, %u spp (%s), %s integrator, %d threads, %.2f s, %.2f Msamples/s, "
-                "error estimate %.3g%%, %llu non-finite samples dropped\n",
+                "error estimate %s, %llu non-finite samples dropped\n",
                 r.scene->name, film->width, film->height, done, ts_halt_reason_phrase(r.final.halt), r.integrator,
-                n_threads, seconds, msps, 100 * error, (unsigned long long)r.final.nonfinite);
+                n_threads, seconds, msps, error_text, (unsigned long long)r.final.nonfinite);
         for (int i = 0; i < o.outputs.n; i++) fprintf(stderr, "tessera: wrote %s\n", o.outputs.path[i]);
     }
     rc = 0;
@@ -510,6 +609,13 @@ int cli_main(int argc, char **argv)
         return 0;
     }
     if (strcmp(cmd, "--help") == 0 || strcmp(cmd, "-h") == 0 || strcmp(cmd, "help") == 0) {
+        if (argc > 2 && strcmp(cmd, "help") == 0) { /* tessera help COMMAND: COMMAND --help */
+            char *help_argv[] = {argv[2], "--help", NULL};
+            if (!strcmp(argv[2], "render")) return cmd_render(2, help_argv);
+            if (!strcmp(argv[2], "merge")) return cli_merge(2, help_argv);
+            if (!strcmp(argv[2], "serve")) return srv_serve_main(2, help_argv);
+            return usage_error("help: no command '%s'", argv[2]);
+        }
         usage(stdout);
         return 0;
     }

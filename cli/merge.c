@@ -14,9 +14,13 @@
 
 static void usage(FILE *f)
 {
-    fprintf(f, "usage: tessera merge SHARD.exr... [-o OUT.exr] [-o OUT.png] [--allow-partial] [--quiet]\n"
+    fprintf(f, "usage: tessera merge SHARD.exr... -o OUT.exr|OUT.png [-o ...] [--allow-partial] [--quiet]\n"
                "Adds the shards' samples exactly; refuses shards of different scenes, seeds or overlapping\n"
-               "sample ranges; names missing ranges (and merges anyway with --allow-partial).\n");
+               "sample ranges; names missing ranges (and merges anyway with --allow-partial).\n"
+               "  -o, --output FILE   write FILE (required; may repeat, at most 8): .exr keeps the shard\n"
+               "                      layout, so a merge can be merged again; .png is a colour view\n"
+               "  --allow-partial     merge even when sample ranges are missing (names them as a warning)\n"
+               "  --quiet             no summary\n");
 }
 
 static int usage_error(const char *fmt, const char *arg)
@@ -54,6 +58,8 @@ int cli_merge(int argc, char **argv)
         }
     }
     if (optind >= argc) return usage_error("%s", "no shard files given");
+    if (outputs.n == 0)
+        return usage_error("%s", "no output: give -o MERGED.exr (mergeable again) and/or -o MERGED.png");
     const char *unsupported = cli_outputs_unsupported(&outputs);
     if (unsupported) return usage_error("-o %s: the extension must be .exr or .png", unsupported);
 

@@ -197,7 +197,7 @@ bool srv_server_start(srv_server *srv, int *port_out, char *err, size_t err_len)
         int status;
         srv_job *j = srv_store_submit(srv->store, text, len, &status, &e);
         if (!j) fprintf(stderr, "tessera serve: the built-in scene was not queued: %s\n", e.message);
-        else fprintf(stderr, "tessera serve: queued the built-in Cornell box as job %s\n", j->id);
+        else snprintf(srv->builtin_job, sizeof srv->builtin_job, "%s", j->id);
         srv_job_release(j);
     }
     if (pthread_create(&srv->maint, NULL, maintenance, srv) != 0) {
@@ -433,10 +433,16 @@ int srv_serve_main(int argc, char **argv)
     char msg[TS_ERROR_MAX];
     int port = 0;
     if (srv_server_start(srv, &port, msg, sizeof msg)) {
-        const char *host = strchr(cfg->bind, ':') ? NULL : cfg->bind;
-        if (host) printf("tessera: listening on http://%s:%d/\n", host, port);
-        else printf("tessera: listening on http://[%s]:%d/\n", cfg->bind, port);
+        char url[128];
+        if (!strchr(cfg->bind, ':')) snprintf(url, sizeof url, "http://%s:%d", cfg->bind, port);
+        else snprintf(url, sizeof url, "http://[%s]:%d", cfg->bind, port);
+        printf("tessera: listening on %s/\n", url);
         fflush(stdout);
+        if (srv->builtin_job[0])
+            fprintf(stderr,
+                    "tessera serve: the built-in Cornell box renders as job %s; watch it at %s/, and once it is done\n"
+                    "tessera serve: its image is at %s/api/v1/jobs/%s/image.exr (and image.png)\n",
+                    srv->builtin_job, url, url, srv->builtin_job);
         int sig = 0;
         sigwait(&sigs, &sig);
         fprintf(stderr, "tessera serve: %s, shutting down\n", sig == SIGINT ? "interrupted" : "terminated");

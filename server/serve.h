@@ -48,6 +48,7 @@ typedef struct srv_server {
     srv_offload *offload;
     srv_http *http;
     srv_api api;                    /* what the routes read; immutable after start */
+    char builtin_job[24];           /* the id of the queued built-in scene (--queue-builtin), or "" */
     /* maintenance thread */
     pthread_t maint;
     bool maint_started;

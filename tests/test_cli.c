@@ -117,6 +117,59 @@ static void test_usage_errors_exit_2(void **state)
     assert_int_equal(run(a5), 2);
 }
 
+/* What a new user meets: no -o writes NAME.exr and says so; merge needs -o; a shard needs
+ * an EXR; --target-error takes 0.01 or 1% and refuses 1 or more; --help lists every option. */
+static void test_honest_command_line(void **state)
+{
+    (void)state;
+    char scene[512], cwd[512], out[512];
+    path_in_tmp(scene, sizeof scene, "my scene.json"); /* the name gets a '-' for the space */
+    write_file(scene, small_scene);
+    assert_non_null(getcwd(cwd, sizeof cwd));
+    assert_int_equal(chdir(tmpdir), 0);
+    const char *noout[] = {"render", scene, "--spp", "2", NULL};
+    int rc = run(noout);
+    assert_int_equal(chdir(cwd), 0);
+    assert_int_equal(rc, 0);
+    path_in_tmp(out, sizeof out, "my-scene.exr");
+    assert_true(exists(out));
+    assert_non_null(strstr(read_log(), "the image goes to my-scene.exr"));
+
+    const char *te_big[] = {"render", scene, "--target-error", "10", "-o", out, NULL};
+    assert_int_equal(run(te_big), 2);
+    assert_non_null(strstr(read_log(), "below 1"));
+    const char *te_one[] = {"render", scene, "--target-error", "1", "-o", out, NULL};
+    assert_int_equal(run(te_one), 2);
+    const char *te_pct[] = {"render", scene, "--spp", "4096", "--target-error", "50%", "-o", out, NULL};
+    assert_int_equal(run(te_pct), 0);
+    assert_non_null(strstr(read_log(), "target error reached"));
+
+    char png[512];
+    path_in_tmp(png, sizeof png, "shard.png");
+    const char *shard_png[] = {"render", scene, "--shard", "0/2", "-o", png, NULL};
+    assert_int_equal(run(shard_png), 2);
+    assert_non_null(strstr(read_log(), "EXR"));
+    assert_false(exists(png));
+    const char *merge_noout[] = {"merge", out, NULL};
+    assert_int_equal(run(merge_noout), 2);
+    assert_non_null(strstr(read_log(), "no output"));
+
+    /* Every long option of render, with its unit or default. */
+    const char *help[] = {"help", "render", NULL};
+    char helplog[600];
+    snprintf(helplog, sizeof helplog, "%s/help.txt", tmpdir);
+    char cmd[1400];
+    snprintf(cmd, sizeof cmd, "'%s' help render > '%s'", getenv("TS_BINARY"), helplog);
+    assert_int_equal(system(cmd), 0);
+    (void)help;
+    const char *text = cli_read_log(helplog);
+    const char *opts[] = {"--output", "--spp", "--time-limit SECONDS", "--target-error", "--threads", "--seed",
+                          "--quiet", "--shard I/N", "--shard-count", "--checkpoint FILE", "--checkpoint-interval S",
+                          "default 60", "1%"};
+    for (size_t k = 0; k < sizeof opts / sizeof *opts; k++)
+        if (!strstr(text, opts[k])) fail_msg("tessera help render does not mention '%s'", opts[k]);
+}
+
 static void test_builtin_default(void **state)
 {
     (void)state;
@@ -134,6 +187,7 @@ int main(void)
         cmocka_unit_test(test_threads_give_identical_exr),
         cmocka_unit_test(test_bad_scene_exit_1_and_nothing_written),
         cmocka_unit_test(test_usage_errors_exit_2),
+        cmocka_unit_test(test_honest_command_line),
         cmocka_unit_test(test_builtin_default),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
