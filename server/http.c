@@ -9,8 +9,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
+#include "log.h"
 #include "offload.h"
 
 struct srv_http {
@@ -185,6 +187,13 @@ static enum MHD_Result handler(void *cls, struct MHD_Connection *conn, const cha
         r->http = h;
         r->app = h->handlers.app;
         r->conn = conn;
+        if (srv_log_enabled(h->cfg.log, SRV_LOG_DEBUG)) {
+            struct timespec t;
+            clock_gettime(CLOCK_MONOTONIC, &t);
+            r->t_start = (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+            snprintf(r->log_method, sizeof r->log_method, "%s", method);
+            snprintf(r->log_url, sizeof r->log_url, "%s", url);
+        }
         r->route = h->handlers.route(url);
         *con_cls = r;
         const char *cl = MHD_lookup_connection_value(conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH);
@@ -230,11 +239,20 @@ static enum MHD_Result handler(void *cls, struct MHD_Connection *conn, const cha
 
 static void completed(void *cls, struct MHD_Connection *conn, void **con_cls, enum MHD_RequestTerminationCode toe)
 {
-    (void)conn, (void)toe;
+    (void)conn;
     srv_http *h = cls;
     srv_request *r = *con_cls;
     if (!r) return;
     if (h->handlers.done) h->handlers.done(r);
+    if (srv_log_enabled(h->cfg.log, SRV_LOG_DEBUG)) {
+        struct timespec t;
+        clock_gettime(CLOCK_MONOTONIC, &t);
+        double ms = 1e3 * ((double)t.tv_sec + 1e-9 * (double)t.tv_nsec - r->t_start);
+        srv_log_field f[] = {SRV_LOG_STR("method", r->log_method), SRV_LOG_STR("url", r->log_url),
+                             SRV_LOG_NUM("status", r->status), SRV_LOG_NUM("ms", ms),
+                             SRV_LOG_STR("end", toe == MHD_REQUEST_TERMINATED_COMPLETED_OK ? "ok" : "aborted")};
+        srv_log_event(h->cfg.log, SRV_LOG_DEBUG, "http.request", f, sizeof f / sizeof *f);
+    }
     free(r->body);
     free(r->reply_body);
     free(r);

@@ -35,6 +35,9 @@ typedef struct srv_request {
     bool body_too_large;
     srv_route route;
     unsigned status;          /* answered status, for metrics */
+    double t_start;           /* monotonic seconds at its first call, for the log */
+    char log_method[8];       /* kept for the completion log line */
+    char log_url[160];
     /* deferred work: set by the task before srv_http_complete */
     bool deferred, completed;
     unsigned reply_status;
@@ -56,6 +59,7 @@ typedef struct srv_http_config {
     const char *cors_origin;     /* NULL = no CORS headers */
     struct srv_metrics *metrics; /* every answer is counted here */
     struct srv_offload *offload; /* the pool srv_http_defer runs tasks on */
+    struct srv_log *log;         /* every request at debug level (method, URL, status, time); NULL: none */
 } srv_http_config;
 
 /* The routes: `route` names a URL's route (for metrics) on a request's first call,

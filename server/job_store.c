@@ -151,6 +151,31 @@ static void on_tile(void *user, ts_sched_job *sj, const ts_tile_event *ev)
     srv_job *j = user;
     atomic_fetch_add(&j->version, 1);
     publish_json(j, "tile", srv_job_tile_json(j, ev));
+    if (!atomic_exchange(&j->started_logged, true) && srv_log_enabled(j->store->cfg.log, SRV_LOG_INFO)) {
+        ts_job_progress p;
+        ts_sched_job_progress(sj, &p);
+        srv_log_field f[] = {SRV_LOG_STR("id", j->id), SRV_LOG_NUM("queued_s", p.queued_s)};
+        srv_log_event(j->store->cfg.log, SRV_LOG_INFO, "job.started", f, 2);
+    }
+}
+
+/* ---------------------------------------------------------------- log */
+
+static void log_progress(srv_job *j, const char *event, const ts_job_progress *p)
+{
+    srv_log *l = j->store->cfg.log;
+    if (!srv_log_enabled(l, SRV_LOG_INFO)) return;
+    srv_log_field f[] = {SRV_LOG_STR("id", j->id),
+                         SRV_LOG_STR("state", srv_job_state_name(j, p)),
+                         SRV_LOG_STR("halt", ts_halt_reason_name(p->halt)),
+                         SRV_LOG_NUM("spp", p->spp_done),
+                         SRV_LOG_NUM("spp_target", p->spp_target),
+                         SRV_LOG_NUM("elapsed_s", p->elapsed_s),
+                         SRV_LOG_NUM_OR_NULL("error_estimate", p->error_estimate),
+                         SRV_LOG_NUM("samples_per_s", p->samples_per_s),
+                         SRV_LOG_NUM_OR_NULL("eta_s", p->eta_s),
+                         SRV_LOG_NUM("nonfinite_samples", (double)p->nonfinite)};
+    srv_log_event(l, SRV_LOG_INFO, event, f, sizeof f / sizeof *f);
 }
 
 /* ---------------------------------------------------------------- history */
@@ -243,6 +268,7 @@ static void on_pass(void *user, ts_sched_job *sj, const ts_job_progress *p)
     srv_job *j = user;
     history_add_progress(j, p, 'p');
     publish_json(j, "progress", srv_job_progress_json(j, p));
+    log_progress(j, "job.pass", p);
 }
 
 static void on_done(void *user, ts_sched_job *sj, const ts_job_progress *p)
@@ -250,6 +276,7 @@ static void on_done(void *user, ts_sched_job *sj, const ts_job_progress *p)
     (void)sj;
     srv_job *j = user;
     history_add_progress(j, p, 'd');
+    log_progress(j, p->state == TS_JOB_CANCELLED ? "job.cancelled" : p->state == TS_JOB_FAILED ? "job.failed" : "job.finished", p);
     atomic_fetch_add(&j->version, 1);
     publish_json(j, "progress", srv_job_progress_json(j, p));
     publish_json(j, "done", srv_job_progress_json(j, p));
@@ -412,6 +439,13 @@ static srv_job *submit(srv_store *st, const char *text, size_t len, int *http_st
     }
     store_add(st, j);
     *http_status = 201;
+    if (srv_log_enabled(cfg->log, SRV_LOG_INFO)) {
+        srv_log_field f[] = {SRV_LOG_STR("id", j->id),         SRV_LOG_STR("name", j->name ? j->name : ""),
+                             SRV_LOG_STR("integrator", j->integrator), SRV_LOG_NUM("width", j->w),
+                             SRV_LOG_NUM("height", j->h),       SRV_LOG_NUM("spp_target", js.spp),
+                             SRV_LOG_NUM("priority", js.priority)};
+        srv_log_event(cfg->log, SRV_LOG_INFO, "job.submitted", f, sizeof f / sizeof *f);
+    }
     return j;
 fail_scene:
     ts_scene_destroy(s);

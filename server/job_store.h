@@ -17,6 +17,7 @@
 #include <stdint.h>
 
 #include "events.h"
+#include "log.h"
 #include "tessera.h"
 
 typedef struct srv_job {
@@ -45,6 +46,7 @@ typedef struct srv_job {
     bool removed;
     /* atomic: bumped whenever the pixels or the state change */
     atomic_uint_fast64_t version;
+    atomic_bool started_logged;  /* the job.started line is written once */
     uint64_t saved_version;      /* maintenance thread only */
     /* The convergence series (GET …/history): a point at every pass end, once a second
      * while the job renders (srv_job_tick) and at the end; guarded by hist_mu. */
@@ -66,6 +68,7 @@ typedef struct srv_store_config {
      * checkpoint can follow soon. Must be quick. */
     void (*on_job_finished)(void *user);
     void *user;
+    srv_log *log;             /* job events (submitted, started, pass, finished, restored); NULL: none */
 } srv_store_config;
 
 /* NULL when out of memory. */

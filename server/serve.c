@@ -27,12 +27,33 @@
 static void usage(FILE *f)
 {
     fprintf(f,
-            "usage: tessera serve [--bind 127.0.0.1] [--port 8080] [--threads N] [--data DIR] [--token TOKEN]\n"
-            "                     [--token-file FILE] [--assets DIR] [--max-asset-bytes BYTES] [--max-jobs N]\n"
-            "                     [--max-running N] [--http-threads N] [--max-body BYTES] [--max-pixels N]\n"
-            "                     [--max-resolution N] [--max-spp N] [--max-triangles N] [--max-shapes N]\n"
-            "                     [--checkpoint-interval SECONDS] [--cors-origin ORIGIN] [--queue-builtin]\n"
-            "                     [--client-timeout SECONDS] [--max-client-connections N]\n");
+            "usage: tessera serve [OPTIONS]\n"
+            "The render server: HTTP API v1 (proto/openapi.yaml) and the web UI at /. Runs until SIGINT/SIGTERM.\n"
+            "  --bind ADDRESS              numeric IPv4/IPv6 address to listen on (default 127.0.0.1)\n"
+            "  --port N                    TCP port, 0 for any free one (default 8080)\n"
+            "  --threads N                 render threads, 1 to 1024 (default: one per core)\n"
+            "  --max-running N             jobs rendering at once, 1 to 1024 (default 4)\n"
+            "  --http-threads N            HTTP threads, 1 to 64 (default 4)\n"
+            "  --data DIR                  checkpoint jobs to DIR and resume them after a restart (default: none)\n"
+            "  --checkpoint-interval S     seconds between checkpoints with --data (default 30)\n"
+            "  --token TOKEN               require 'Authorization: Bearer TOKEN' (default: no token)\n"
+            "  --token-file FILE           the same, the token read from FILE's first line (kept out of ps)\n"
+            "  --cors-origin ORIGIN        answer CORS requests from ORIGIN (default: none)\n"
+            "  --assets DIR                the only folder posted scenes may read files from (default: none)\n"
+            "  --max-asset-bytes BYTES     largest file a scene may read under --assets (default 268435456)\n"
+            "  --max-jobs N                jobs held at once, any state; a POST beyond gets 503 (default 1000)\n"
+            "  --max-body BYTES            largest request body, 64 to 4294967296 (default 16777216)\n"
+            "  --max-resolution N          largest film width or height in pixels, to 16384 (default 8192)\n"
+            "  --max-pixels N              largest film area in pixels (default 16777216)\n"
+            "  --max-spp N                 most samples per pixel a job may ask (default 65536)\n"
+            "  --max-triangles N           most triangles in a posted scene (default 5242880)\n"
+            "  --max-shapes N              most shapes in a posted scene (default 65536)\n"
+            "  --client-timeout S          close a connection idle this many seconds (default 60)\n"
+            "  --max-client-connections N  connections one address may hold, to 4000 (default 1024)\n"
+            "  --log-format text|json      job events as text lines or JSON lines on stderr (default text)\n"
+            "  --log-level LEVEL           error, warn, info (job events; default) or debug (and every request)\n"
+            "  --queue-builtin             queue the built-in Cornell box as the first job (make run)\n"
+            "docs/security.md has the threat model and every limit.\n");
 }
 
 static int usage_error(const char *fmt, const char *arg)
@@ -171,10 +192,11 @@ bool srv_server_start(srv_server *srv, int *port_out, char *err, size_t err_len)
     ts_error e = {0};
     pthread_mutex_init(&srv->mu, NULL);
     pthread_cond_init(&srv->cv, NULL);
+    srv_log_init(&srv->log, cfg->log_format, cfg->log_level, stderr);
     srv->metrics = srv_metrics_create();
     srv->offload = srv_offload_create(2);
     srv->sched = ts_scheduler_create(cfg->threads, cfg->max_running, &e);
-    srv_store_config sc = {cfg->limits, cfg->assets_dir, cfg->max_jobs, srv->sched, on_job_finished, srv};
+    srv_store_config sc = {cfg->limits, cfg->assets_dir, cfg->max_jobs, srv->sched, on_job_finished, srv, &srv->log};
     srv->store = srv->sched ? srv_store_create(&sc) : NULL;
     if (!srv->metrics || !srv->store || !srv->offload || !srv->sched) {
         snprintf(err, err_len, "%s", e.message[0] ? e.message : "out of memory");
@@ -208,7 +230,7 @@ bool srv_server_start(srv_server *srv, int *port_out, char *err, size_t err_len)
     srv->api = (srv_api){cfg->token, cfg->data_dir, cfg->cors_origin, srv->store, srv->sched, srv->metrics};
     srv_http_config hc = {cfg->bind,       cfg->port,        cfg->http_threads, cfg->client_timeout_s,
                           cfg->max_client_conns, cfg->max_body, cfg->cors_origin, srv->metrics,
-                          srv->offload};
+                          srv->offload, &srv->log};
     srv_http_handlers handlers = srv_api_handlers(&srv->api);
     srv->http = srv_http_start(&hc, &handlers, port_out, err, err_len);
     if (!srv->http) goto fail;
@@ -243,6 +265,7 @@ void srv_server_stop(srv_server *srv, bool checkpoint)
     ts_scheduler_destroy(srv->sched);
     srv_metrics_destroy(srv->metrics);
     srv->http = NULL, srv->offload = NULL, srv->store = NULL, srv->sched = NULL, srv->metrics = NULL;
+    srv_log_fini(&srv->log);
     pthread_cond_destroy(&srv->cv);
     pthread_mutex_destroy(&srv->mu);
 }
@@ -255,7 +278,8 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
     enum {
         OPT_BIND = 256, OPT_PORT, OPT_THREADS, OPT_DATA, OPT_TOKEN, OPT_MAX_RUNNING, OPT_HTTP_THREADS, OPT_MAX_BODY,
         OPT_MAX_PIXELS, OPT_MAX_RES, OPT_MAX_SPP, OPT_MAX_TRIS, OPT_MAX_SHAPES, OPT_CKPT, OPT_CORS, OPT_BUILTIN, OPT_HELP,
-        OPT_TOKEN_FILE, OPT_ASSETS, OPT_MAX_ASSET_BYTES, OPT_MAX_JOBS, OPT_CLIENT_TIMEOUT, OPT_MAX_CLIENT_CONNS
+        OPT_TOKEN_FILE, OPT_ASSETS, OPT_MAX_ASSET_BYTES, OPT_MAX_JOBS, OPT_CLIENT_TIMEOUT, OPT_MAX_CLIENT_CONNS,
+        OPT_LOG_FORMAT, OPT_LOG_LEVEL
     };
     static const struct option opts[] = {
         {"bind", required_argument, NULL, OPT_BIND},
@@ -280,6 +304,8 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
         {"checkpoint-interval", required_argument, NULL, OPT_CKPT},
         {"cors-origin", required_argument, NULL, OPT_CORS},
         {"queue-builtin", no_argument, NULL, OPT_BUILTIN},
+        {"log-format", required_argument, NULL, OPT_LOG_FORMAT},
+        {"log-level", required_argument, NULL, OPT_LOG_LEVEL},
         {"help", no_argument, NULL, OPT_HELP},
         {NULL, 0, NULL, 0}};
     memset(cfg, 0, sizeof *cfg);
@@ -293,6 +319,8 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
     cfg->max_client_conns = 1024;
     cfg->max_body = 16u << 20;
     cfg->checkpoint_interval_s = 30;
+    cfg->log_format = SRV_LOG_TEXT;
+    cfg->log_level = SRV_LOG_INFO;
     ts_scene_limits_default(&cfg->limits);
     cfg->limits.max_width = cfg->limits.max_height = 8192;
     cfg->limits.max_pixels = 4096ull * 4096;
@@ -382,6 +410,14 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
             break;
         }
         case OPT_BUILTIN: cfg->queue_builtin = true; break;
+        case OPT_LOG_FORMAT:
+            if (!srv_log_parse_format(optarg, &cfg->log_format))
+                return usage_error("--log-format: expected text or json, got '%s'", optarg);
+            break;
+        case OPT_LOG_LEVEL:
+            if (!srv_log_parse_level(optarg, &cfg->log_level))
+                return usage_error("--log-level: expected error, warn, info or debug, got '%s'", optarg);
+            break;
         case OPT_HELP: usage(stdout); return 0;
         case ':': return usage_error("option '%s' needs a value", argv[optind - 1]);
         default: return usage_error("unknown option '%s'", argv[optind - 1]);

@@ -17,6 +17,7 @@
 #include "api.h"
 #include "http.h"
 #include "job_store.h"
+#include "log.h"
 #include "metrics.h"
 #include "offload.h"
 #include "tessera.h"
@@ -38,6 +39,8 @@ typedef struct srv_config {
     double checkpoint_interval_s;
     ts_scene_limits limits;      /* resolution, spp, scene size; max_file_bytes: --max-asset-bytes */
     bool queue_builtin;          /* queue the Cornell box at start (make run) */
+    srv_log_format log_format;   /* --log-format text|json */
+    srv_log_level log_level;     /* --log-level: info (job events) by default, debug adds requests */
 } srv_config;
 
 typedef struct srv_server {
@@ -48,6 +51,7 @@ typedef struct srv_server {
     srv_offload *offload;
     srv_http *http;
     srv_api api;                    /* what the routes read; immutable after start */
+    srv_log log;                    /* job events and (at debug) requests, to stderr */
     char builtin_job[24];           /* the id of the queued built-in scene (--queue-builtin), or "" */
     /* maintenance thread */
     pthread_t maint;

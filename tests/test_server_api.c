@@ -325,6 +325,68 @@ static void test_progress_eta_and_history(void **state)
     free(doc);
 }
 
+/* One log line per job event, as JSON lines with --log-format json, and every request at
+ * --log-level debug; the default text format names the same events. */
+static void test_job_event_log(void **state)
+{
+    (void)state;
+    test_server one;
+    const char *args[] = {"--threads", "2", "--log-format", "json", "--log-level", "debug", NULL};
+    ts_server_start(&one, args);
+    char *doc = scene(32, 32, 8, "\"name\":\"log \\\"test\\\"\\nline\"");
+    char id[32];
+    ts_submit(&one, doc, id, sizeof id);
+    cJSON_Delete(ts_wait_done(&one, id, 20));
+    /* The job shows done just before its on_done writes job.finished: wait for the line. */
+    char line[4096];
+    bool seen = false;
+    for (int k = 0; k < 500 && !seen; k++) {
+        FILE *f = fopen(one.log, "r");
+        assert_non_null(f);
+        while (!seen && fgets(line, sizeof line, f)) seen = strstr(line, "\"job.finished\"") != NULL;
+        fclose(f);
+        if (!seen) ts_sleep_ms(10);
+    }
+    assert_true(seen);
+    FILE *f = fopen(one.log, "r");
+    assert_non_null(f);
+    int submitted = 0, started = 0, passes = 0, finished = 0, requests = 0;
+    while (fgets(line, sizeof line, f)) {
+        if (strncmp(line, "{", 1)) continue; /* start-up notes are plain sentences */
+        cJSON *o = cJSON_Parse(line);
+        if (!o) fail_msg("not a JSON line: %s", line);
+        const char *ev = ts_json_str(o, "event");
+        assert_non_null(cJSON_GetObjectItem(o, "time"));
+        const cJSON *jid = cJSON_GetObjectItem(o, "id");
+        bool mine = cJSON_IsString(jid) && !strcmp(jid->valuestring, id);
+        if (!strcmp(ev, "job.submitted") && mine) {
+            submitted++;
+            assert_string_equal(ts_json_str(o, "name"), "log \"test\"\nline"); /* escaped, one line */
+        }
+        if (!strcmp(ev, "job.started") && mine) started++;
+        if (!strcmp(ev, "job.pass") && mine) passes++;
+        if (!strcmp(ev, "job.finished") && mine) {
+            finished++;
+            assert_true(ts_json_num(o, "spp") == 8);
+            assert_string_equal(ts_json_str(o, "halt"), "spp");
+            assert_true(cJSON_IsNumber(cJSON_GetObjectItem(o, "error_estimate")));
+        }
+        if (!strcmp(ev, "http.request")) {
+            requests++;
+            assert_true(ts_json_num(o, "status") >= 200);
+        }
+        cJSON_Delete(o);
+    }
+    fclose(f);
+    assert_int_equal(ts_server_stop(&one, SIGTERM), 0);
+    assert_int_equal(submitted, 1);
+    assert_int_equal(started, 1);
+    assert_int_equal(passes, 3); /* pass ends 1, 2, 4; 8 is the end */
+    assert_int_equal(finished, 1);
+    assert_true(requests >= 2); /* the POST and the status polls */
+    free(doc);
+}
+
 /* Priority, then arrival: with one running slot, a blocker runs; then a low-priority job
  * and a high-priority one queue; the high one starts first although it came later. */
 static void test_priority_order(void **state)
@@ -586,6 +648,7 @@ int main(void)
         cmocka_unit_test(test_two_jobs_at_once_and_cancel),
         cmocka_unit_test(test_time_limit_and_target_error),
         cmocka_unit_test(test_progress_eta_and_history),
+        cmocka_unit_test(test_job_event_log),
         cmocka_unit_test(test_priority_order),
         cmocka_unit_test(test_bad_requests),
         cmocka_unit_test(test_auth),
