@@ -200,10 +200,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     take_string(&r, j->effects, sizeof j->effects - 1);
     bool utf8 = utf8_valid(j->id) && (!has_name || utf8_valid(name)) && utf8_valid(j->failure) &&
                 utf8_valid(j->integrator);
-    j->priority = (int)take_bits(&r, 4);
-    j->spp_target = (uint32_t)take_bits(&r, 4);
-    j->time_limit_s = take_double(&r);
-    j->target_error = take_double(&r);
+    j->settings.priority = (int)take_bits(&r, 4);
+    j->settings.spp = (uint32_t)take_bits(&r, 4);
+    j->settings.time_limit_s = take_double(&r);
+    j->settings.target_error = take_double(&r);
     j->created_unix = take_double(&r);
     int *dims[] = {&j->full_w, &j->full_h, &j->x0, &j->y0, &j->w, &j->h, &j->nx, &j->ny};
     for (size_t i = 0; i < sizeof dims / sizeof dims[0]; i++)
@@ -223,11 +223,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     else
         FUZZ_CHECK(!cJSON_GetObjectItemCaseSensitive(st, "error"));
     check_string(st, "integrator", j->integrator);
-    check_number(st, "priority", j->priority);
-    check_number(st, "spp_target", j->spp_target);
+    check_number(st, "priority", j->settings.priority);
+    check_number(st, "spp_target", j->settings.spp);
     check_number(st, "created_at", j->created_unix);
-    check_number_or_null(st, "time_limit_s", j->time_limit_s, j->time_limit_s > 0);
-    check_number_or_null(st, "target_error", j->target_error, j->target_error > 0);
+    check_number_or_null(st, "time_limit_s", j->settings.time_limit_s, j->settings.time_limit_s > 0);
+    check_number_or_null(st, "target_error", j->settings.target_error, j->settings.target_error > 0);
     check_number_or_null(st, "error_estimate", -1, false);
     const cJSON *film = cJSON_GetObjectItemCaseSensitive(st, "film");
     FUZZ_CHECK(cJSON_IsObject(film));
