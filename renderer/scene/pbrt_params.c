@@ -20,11 +20,12 @@ static const struct {
     {"string", TS_PBRT_PARAM_STRING},   {"texture", TS_PBRT_PARAM_TEXTURE},
 };
 
-bool ts_pbrt_param_type_from_name(const char *type_name, ts_pbrt_param_type *out)
+bool ts_pbrt_param_type_from_name(const char *type_name, ts_pbrt_param_type *out, const char **spelling)
 {
     for (size_t i = 0; i < sizeof type_names / sizeof type_names[0]; i++)
         if (strcmp(type_name, type_names[i].name) == 0) {
             *out = type_names[i].type;
+            if (spelling) *spelling = type_names[i].name;
             return true;
         }
     return false;
@@ -72,8 +73,9 @@ ts_status ts_pbrt_param_error(const ts_pbrt_params *ps, const ts_pbrt_param *p, 
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
-    ts_error_set(err, st, "%s:%u:%u: %s: \"%s %s\" %s", p->loc.file, p->loc.line, p->loc.column,
-                 ps->directive ? ps->directive : "parameter list", p->type_name, p->name, msg);
+    ts_error_set(err, st, "%s:%u:%u: %s \"%s\": \"%s %s\" %s", p->loc.file, p->loc.line, p->loc.column,
+                 ps->directive ? ps->directive : "parameter list", ps->directive_arg ? ps->directive_arg : "",
+                 p->type_name, p->name, msg);
     if (err) ts_pbrt_sanitize_utf8(err->message);
     return st;
 }

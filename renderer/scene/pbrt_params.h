@@ -80,11 +80,13 @@ typedef struct ts_pbrt_param {
 typedef struct ts_pbrt_params {
     ts_pbrt_param *items;
     size_t count;
-    const char *directive; /* for messages: "Shape \"sphere\"", "Camera \"perspective\"" */
+    const char *directive;     /* for messages: "Shape", "Camera", "MakeNamedMaterial" */
+    const char *directive_arg; /* its first argument: "sphere", "perspective", the material's name */
 } ts_pbrt_params;
 
-/* The type of a type name as pbrt-v3 spells it ("point" → POINT3); false if unknown. */
-bool ts_pbrt_param_type_from_name(const char *type_name, ts_pbrt_param_type *out);
+/* The type of a type name as pbrt-v3 spells it ("point" → POINT3); false if unknown.
+ * *spelling (if not NULL) gets a static copy of the name. */
+bool ts_pbrt_param_type_from_name(const char *type_name, ts_pbrt_param_type *out, const char **spelling);
 /* pbrt-v3's canonical name of a type ("point3", "rgb", …). */
 const char *ts_pbrt_param_type_name(ts_pbrt_param_type type);
 /* Scalars per value: 3 for point3/vector3/normal3/rgb/xyz, 2 for point2/vector2 and the
@@ -127,7 +129,7 @@ ts_status ts_pbrt_find_strings(ts_pbrt_params *ps, const char *name, const char 
  * there is none left. */
 const ts_pbrt_param *ts_pbrt_params_next_unused(const ts_pbrt_params *ps, size_t *cursor);
 
-/* Fills err with "<loc>: <directive>: \"<type> <name>\" <printf text>" and returns st. */
+/* Fills err with "<loc>: <directive> \"<arg>\": \"<type> <name>\" <printf text>" and returns st. */
 ts_status ts_pbrt_param_error(const ts_pbrt_params *ps, const ts_pbrt_param *p, ts_error *err, ts_status st,
                               const char *fmt, ...) __attribute__((format(printf, 5, 6)));
 

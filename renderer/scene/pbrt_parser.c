@@ -183,17 +183,6 @@ static char *astrdup(parser *p, const char *s)
     return ts_arena_strdup(&p->s->arena, s);
 }
 
-static char *aprintf(parser *p, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static char *aprintf(parser *p, const char *fmt, ...)
-{
-    char buf[TS_ERROR_MAX];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(buf, sizeof buf, fmt, ap);
-    va_end(ap);
-    return astrdup(p, buf);
-}
-
 static ts_status warn(parser *p, ts_pbrt_loc loc, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 static ts_status warn(parser *p, ts_pbrt_loc loc, const char *fmt, ...)
 {
@@ -360,9 +349,9 @@ static ts_status expect_string(parser *p, const char *directive, const char *wha
 
 /* ---- parameter lists ---- */
 
-static ts_status param_fail(parser *p, ts_pbrt_loc loc, const char *directive, const char *decl, ts_status st,
+static ts_status param_fail(parser *p, ts_pbrt_loc loc, const ts_pbrt_params *ps, const char *decl, ts_status st,
                             const char *fmt, ...) __attribute__((format(printf, 6, 7)));
-static ts_status param_fail(parser *p, ts_pbrt_loc loc, const char *directive, const char *decl, ts_status st,
+static ts_status param_fail(parser *p, ts_pbrt_loc loc, const ts_pbrt_params *ps, const char *decl, ts_status st,
                             const char *fmt, ...)
 {
     char msg[TS_ERROR_MAX];
@@ -370,16 +359,16 @@ static ts_status param_fail(parser *p, ts_pbrt_loc loc, const char *directive, c
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
-    return perr(p, loc, st, "%s: \"%.80s\" %s", directive, decl, msg);
+    return perr(p, loc, st, "%s \"%.100s\": \"%.80s\" %s", ps->directive, ps->directive_arg, decl, msg);
 }
 
 /* Reads a .spd file (wavelength-value pairs, # comments) into p->floats. */
-static ts_status read_spd(parser *p, const char *directive, const char *decl, ts_pbrt_loc loc, const char *file)
+static ts_status read_spd(parser *p, const ts_pbrt_params *ps, const char *decl, ts_pbrt_loc loc, const char *file)
 {
     char *text = NULL;
     size_t len = 0;
     ts_status st = ts_scene_path_read(p->root, file, "spectrum file", p->lim.max_file_bytes, &text, &len, p->err);
-    if (st) return param_fail(p, loc, directive, decl, st, "%s", p->err->message);
+    if (st) return param_fail(p, loc, ps, decl, st, "%s", p->err->message);
     ts_pbrt_lexer *lx = NULL;
     char *display = astrdup(p, file);
     if (!display) {
@@ -395,13 +384,13 @@ static ts_status read_spd(parser *p, const char *directive, const char *decl, ts
         if (st) {
             char inner[TS_ERROR_MAX];
             memcpy(inner, p->err->message, sizeof inner);
-            st = param_fail(p, loc, directive, decl, st, "%s", inner);
+            st = param_fail(p, loc, ps, decl, st, "%s", inner);
             goto fail_lexer;
         }
         if (t.kind == TS_PBRT_TOKEN_EOF) break;
         if (t.kind != TS_PBRT_TOKEN_NUMBER || fabs(t.number) > FLT_MAX) {
             char d[96];
-            st = param_fail(p, loc, directive, decl, TS_ERR_INVALID, "%s:%u:%u: expected a number, got %s", display,
+            st = param_fail(p, loc, ps, decl, TS_ERR_INVALID, "%s:%u:%u: expected a number, got %s", display,
                             t.loc.line, t.loc.column, ts_pbrt_token_describe(&t, d, sizeof d));
             goto fail_lexer;
         }
@@ -413,7 +402,7 @@ static ts_status read_spd(parser *p, const char *directive, const char *decl, ts
         *f = (float)t.number;
     }
     if (p->floats.n < 2 || p->floats.n % 2)
-        st = param_fail(p, loc, directive, decl, TS_ERR_INVALID,
+        st = param_fail(p, loc, ps, decl, TS_ERR_INVALID,
                         "spectrum file '%s' holds %zu numbers; it needs (wavelength, value) pairs", file, p->floats.n);
 fail_lexer:
     ts_pbrt_lexer_destroy(lx);
@@ -437,7 +426,7 @@ static bool is_numeric_type(ts_pbrt_param_type t)
 }
 
 /* Adds the current token (a value) to the scratch arrays for a parameter of type t. */
-static ts_status add_value(parser *p, ts_pbrt_param_type t, const char *directive, const char *decl,
+static ts_status add_value(parser *p, ts_pbrt_param_type t, const ts_pbrt_params *ps, const char *decl,
                            bool *numbers, bool *strings)
 {
     ts_pbrt_token *k = &p->tok;
@@ -446,7 +435,7 @@ static ts_status add_value(parser *p, ts_pbrt_param_type t, const char *directiv
         const char *w = NULL;
         if (k->kind == TS_PBRT_TOKEN_STRING || k->kind == TS_PBRT_TOKEN_WORD) w = k->text;
         if (!w || (strcmp(w, "true") != 0 && strcmp(w, "false") != 0))
-            return param_fail(p, k->loc, directive, decl, TS_ERR_INVALID, "expects true or false, got %s",
+            return param_fail(p, k->loc, ps, decl, TS_ERR_INVALID, "expects true or false, got %s",
                               describe(p, d, sizeof d));
         bool *b = vec_push(p, &p->bools, sizeof(bool));
         if (!b) return nomem(p);
@@ -455,22 +444,22 @@ static ts_status add_value(parser *p, ts_pbrt_param_type t, const char *directiv
     }
     if (k->kind == TS_PBRT_TOKEN_NUMBER) {
         if (t == TS_PBRT_PARAM_STRING || t == TS_PBRT_PARAM_TEXTURE)
-            return param_fail(p, k->loc, directive, decl, TS_ERR_INVALID, "expects a quoted string, got %s",
+            return param_fail(p, k->loc, ps, decl, TS_ERR_INVALID, "expects a quoted string, got %s",
                               describe(p, d, sizeof d));
         if (*strings)
-            return param_fail(p, k->loc, directive, decl, TS_ERR_INVALID, "mixes strings and numbers");
+            return param_fail(p, k->loc, ps, decl, TS_ERR_INVALID, "mixes strings and numbers");
         *numbers = true;
         double v = k->number;
         if (t == TS_PBRT_PARAM_INTEGER) {
             if (v != floor(v) || v < INT32_MIN || v > INT32_MAX)
-                return param_fail(p, k->loc, directive, decl, TS_ERR_INVALID, "expects integers, got %.17g", v);
+                return param_fail(p, k->loc, ps, decl, TS_ERR_INVALID, "expects integers, got %.17g", v);
             int32_t *i = vec_push(p, &p->ints, sizeof(int32_t));
             if (!i) return nomem(p);
             *i = (int32_t)v;
             return TS_OK;
         }
         if (fabs(v) > FLT_MAX)
-            return param_fail(p, k->loc, directive, decl, TS_ERR_INVALID, "value %.9g is out of range for a float",
+            return param_fail(p, k->loc, ps, decl, TS_ERR_INVALID, "value %.9g is out of range for a float",
                               v);
         if (!vec_reserve(p, &p->floats, sizeof(float), p->floats.n + 1)) return nomem(p);
         VEC_AT(p->floats, float, p->floats.n++) = (float)v;
@@ -478,9 +467,9 @@ static ts_status add_value(parser *p, ts_pbrt_param_type t, const char *directiv
     }
     if (k->kind == TS_PBRT_TOKEN_STRING) {
         if (is_numeric_type(t))
-            return param_fail(p, k->loc, directive, decl, TS_ERR_INVALID, "expects numbers, got %s",
+            return param_fail(p, k->loc, ps, decl, TS_ERR_INVALID, "expects numbers, got %s",
                               describe(p, d, sizeof d));
-        if (*numbers) return param_fail(p, k->loc, directive, decl, TS_ERR_INVALID, "mixes strings and numbers");
+        if (*numbers) return param_fail(p, k->loc, ps, decl, TS_ERR_INVALID, "mixes strings and numbers");
         *strings = true;
         const char **s = vec_push(p, &p->strings, sizeof(char *));
         if (!s) return nomem(p);
@@ -488,11 +477,11 @@ static ts_status add_value(parser *p, ts_pbrt_param_type t, const char *directiv
         if (!*s) return nomem(p);
         return TS_OK;
     }
-    return param_fail(p, k->loc, directive, decl, TS_ERR_INVALID, "expects a value, got %s", describe(p, d, sizeof d));
+    return param_fail(p, k->loc, ps, decl, TS_ERR_INVALID, "expects a value, got %s", describe(p, d, sizeof d));
 }
 
 /* Splits "type name" into its two words (copied into the arena). */
-static ts_status split_decl(parser *p, const char *directive, const char *decl, ts_pbrt_loc loc, ts_pbrt_param *par)
+static ts_status split_decl(parser *p, const ts_pbrt_params *ps, const char *decl, ts_pbrt_loc loc, ts_pbrt_param *par)
 {
     const char *s = decl;
     while (*s == ' ' || *s == '\t') s++;
@@ -505,50 +494,51 @@ static ts_status split_decl(parser *p, const char *directive, const char *decl, 
     const char *rest = ne;
     while (*rest == ' ' || *rest == '\t') rest++;
     if (te == s || ne == n || *rest)
-        return param_fail(p, loc, directive, decl, TS_ERR_INVALID,
+        return param_fail(p, loc, ps, decl, TS_ERR_INVALID,
                           "is not a parameter declaration (expected \"type name\")");
     char type[32];
     if ((size_t)(te - s) >= sizeof type)
-        return param_fail(p, loc, directive, decl, TS_ERR_INVALID, "has an unknown parameter type");
+        return param_fail(p, loc, ps, decl, TS_ERR_INVALID, "has an unknown parameter type");
     memcpy(type, s, (size_t)(te - s));
     type[te - s] = '\0';
-    if (!ts_pbrt_param_type_from_name(type, &par->type))
-        return param_fail(p, loc, directive, decl, TS_ERR_INVALID, "has an unknown parameter type \"%s\"", type);
-    char *tn = astrdup(p, type);
+    if (!ts_pbrt_param_type_from_name(type, &par->type, &par->type_name))
+        return param_fail(p, loc, ps, decl, TS_ERR_INVALID, "has an unknown parameter type \"%s\"", type);
     char *nm = ts_arena_alloc(&p->s->arena, (size_t)(ne - n) + 1, 1);
-    if (!tn || !nm) return nomem(p);
+    if (!nm) return nomem(p);
     memcpy(nm, n, (size_t)(ne - n));
-    par->type_name = tn;
     par->name = nm;
     par->loc = loc;
     return TS_OK;
 }
 
 /* Resolves a texture parameter's name in the scope in force. */
-static ts_status resolve_texture(parser *p, const char *directive, const char *decl, ts_pbrt_param *par)
+static ts_status resolve_texture(parser *p, const ts_pbrt_params *ps, const char *decl, ts_pbrt_param *par)
 {
     par->texture_float = name_lookup(p, NS_FLOAT_TEX, par->strings[0]);
     par->texture_spectrum = name_lookup(p, NS_SPECTRUM_TEX, par->strings[0]);
     if (par->texture_float < 0 && par->texture_spectrum < 0)
-        return param_fail(p, par->loc, directive, decl, TS_ERR_INVALID, "names texture \"%s\", which is not defined here",
+        return param_fail(p, par->loc, ps, decl, TS_ERR_INVALID, "names texture \"%s\", which is not defined here",
                           par->strings[0]);
     return TS_OK;
 }
 
 /* Reads the parameter list that follows a directive (every "type name" value pair up to
  * the next token that is not a quoted string) into *out. */
-static ts_status read_params(parser *p, const char *directive, ts_pbrt_params *out)
+static ts_status read_params(parser *p, const char *directive, const char *directive_arg, ts_pbrt_params *ps)
 {
     ts_status st;
     p->items.n = 0;
-    out->directive = directive;
+    ps->directive = directive;
+    ps->directive_arg = directive_arg;
     while (p->tok.kind == TS_PBRT_TOKEN_STRING) {
         ts_pbrt_param par;
         memset(&par, 0, sizeof par);
         par.texture_float = par.texture_spectrum = -1;
-        char *decl = astrdup(p, p->tok.text);
-        if (!decl) return nomem(p);
-        if ((st = split_decl(p, directive, decl, p->tok.loc, &par))) return st;
+        char decl[128]; /* as written, for messages */
+        size_t dl = p->tok.len < sizeof decl - 1 ? p->tok.len : sizeof decl - 1;
+        memcpy(decl, p->tok.text, dl);
+        decl[dl] = '\0';
+        if ((st = split_decl(p, ps, p->tok.text, p->tok.loc, &par))) return st;
         if ((st = advance(p))) return st;
         p->floats.n = p->ints.n = p->bools.n = p->strings.n = 0;
         bool numbers = false, strings = false;
@@ -558,12 +548,12 @@ static ts_status read_params(parser *p, const char *directive, ts_pbrt_params *o
             if ((st = advance(p))) return st;
             while (p->tok.kind != TS_PBRT_TOKEN_RBRACKET) {
                 if (p->tok.kind == TS_PBRT_TOKEN_EOF)
-                    return param_fail(p, open, directive, decl, TS_ERR_INVALID,
+                    return param_fail(p, open, ps, decl, TS_ERR_INVALID,
                                       "has a '[' that is never closed (the file ends first)");
                 if (p->tok.kind == TS_PBRT_TOKEN_LBRACKET ||
                     (p->tok.kind == TS_PBRT_TOKEN_WORD && par.type != TS_PBRT_PARAM_BOOL)) {
                     char d[96];
-                    return param_fail(p, open, directive, decl, TS_ERR_INVALID,
+                    return param_fail(p, open, ps, decl, TS_ERR_INVALID,
                                       "has a '[' that is never closed (found %s at %u:%u)", describe(p, d, sizeof d),
                                       p->tok.loc.line, p->tok.loc.column);
                 }
@@ -581,7 +571,7 @@ static ts_status read_params(parser *p, const char *directive, ts_pbrt_params *o
                         return nomem(p);
                     VEC_AT(p->ints, int32_t, p->ints.n++) = (int32_t)p->tok.number;
                     numbers = true;
-                } else if ((st = add_value(p, par.type, directive, decl, &numbers, &strings))) {
+                } else if ((st = add_value(p, par.type, ps, decl, &numbers, &strings))) {
                     return st;
                 }
                 values++;
@@ -592,14 +582,14 @@ static ts_status read_params(parser *p, const char *directive, ts_pbrt_params *o
             if (p->tok.kind == TS_PBRT_TOKEN_EOF || p->tok.kind == TS_PBRT_TOKEN_RBRACKET ||
                 (p->tok.kind == TS_PBRT_TOKEN_WORD && par.type != TS_PBRT_PARAM_BOOL)) {
                 char d[96];
-                return param_fail(p, par.loc, directive, decl, TS_ERR_INVALID, "has no value (found %s)",
+                return param_fail(p, par.loc, ps, decl, TS_ERR_INVALID, "has no value (found %s)",
                                   describe(p, d, sizeof d));
             }
-            if ((st = add_value(p, par.type, directive, decl, &numbers, &strings))) return st;
+            if ((st = add_value(p, par.type, ps, decl, &numbers, &strings))) return st;
             values = 1;
             if ((st = advance(p))) return st;
         }
-        if (values == 0) return param_fail(p, par.loc, directive, decl, TS_ERR_INVALID, "has no values");
+        if (values == 0) return param_fail(p, par.loc, ps, decl, TS_ERR_INVALID, "has no values");
         /* Counts per type, then the values into the arena. */
         size_t arity = ts_pbrt_param_arity(par.type);
         switch (par.type) {
@@ -616,23 +606,23 @@ static ts_status read_params(parser *p, const char *directive, ts_pbrt_params *o
         case TS_PBRT_PARAM_STRING:
         case TS_PBRT_PARAM_TEXTURE:
             if (par.type == TS_PBRT_PARAM_TEXTURE && p->strings.n != 1)
-                return param_fail(p, par.loc, directive, decl, TS_ERR_INVALID, "expects 1 texture name, got %zu",
+                return param_fail(p, par.loc, ps, decl, TS_ERR_INVALID, "expects 1 texture name, got %zu",
                                   p->strings.n);
             par.n = p->strings.n;
             par.strings = arena_copy(p, p->strings.data, p->strings.n, sizeof(char *));
             if (!par.strings) return nomem(p);
-            if (par.type == TS_PBRT_PARAM_TEXTURE && (st = resolve_texture(p, directive, decl, &par))) return st;
+            if (par.type == TS_PBRT_PARAM_TEXTURE && (st = resolve_texture(p, ps, decl, &par))) return st;
             break;
         case TS_PBRT_PARAM_SPECTRUM:
             if (strings) {
                 if (p->strings.n != 1)
-                    return param_fail(p, par.loc, directive, decl, TS_ERR_INVALID,
+                    return param_fail(p, par.loc, ps, decl, TS_ERR_INVALID,
                                       "expects 1 spectrum file name, got %zu", p->strings.n);
                 par.strings = arena_copy(p, p->strings.data, 1, sizeof(char *));
                 if (!par.strings) return nomem(p);
-                if ((st = read_spd(p, directive, decl, par.loc, par.strings[0]))) return st;
+                if ((st = read_spd(p, ps, decl, par.loc, par.strings[0]))) return st;
             } else if (p->floats.n % 2) {
-                return param_fail(p, par.loc, directive, decl, TS_ERR_INVALID,
+                return param_fail(p, par.loc, ps, decl, TS_ERR_INVALID,
                                   "expects (wavelength, value) pairs, got %zu values", p->floats.n);
             }
             par.n = p->floats.n;
@@ -641,12 +631,12 @@ static ts_status read_params(parser *p, const char *directive, ts_pbrt_params *o
             break;
         case TS_PBRT_PARAM_BLACKBODY:
             if (p->floats.n != 1 && p->floats.n != 2)
-                return param_fail(p, par.loc, directive, decl, TS_ERR_INVALID,
+                return param_fail(p, par.loc, ps, decl, TS_ERR_INVALID,
                                   "expects 1 or 2 values (temperature [scale]), got %zu", p->floats.n);
             /* fall through */
         default:
             if (p->floats.n % arity)
-                return param_fail(p, par.loc, directive, decl, TS_ERR_INVALID,
+                return param_fail(p, par.loc, ps, decl, TS_ERR_INVALID,
                                   "expects a multiple of %zu values, got %zu", arity, p->floats.n);
             par.n = p->floats.n;
             par.floats = arena_copy(p, p->floats.data, p->floats.n, sizeof(float));
@@ -658,8 +648,8 @@ static ts_status read_params(parser *p, const char *directive, ts_pbrt_params *o
         for (size_t i = 0; i < p->items.n; i++) {
             ts_pbrt_param *old = &VEC_AT(p->items, ts_pbrt_param, i);
             if (strcmp(old->name, par.name) == 0) {
-                if ((st = warn(p, par.loc, "%s: parameter \"%s\" is given twice; the last one counts", directive,
-                               par.name)))
+                if ((st = warn(p, par.loc, "%s \"%s\": parameter \"%s\" is given twice; the last one counts",
+                               ps->directive, ps->directive_arg, par.name)))
                     return st;
                 *old = par;
                 replaced = true;
@@ -672,9 +662,9 @@ static ts_status read_params(parser *p, const char *directive, ts_pbrt_params *o
             *slot = par;
         }
     }
-    out->count = p->items.n;
-    out->items = arena_copy(p, p->items.data, p->items.n, sizeof(ts_pbrt_param));
-    if (!out->items) return nomem(p);
+    ps->count = p->items.n;
+    ps->items = arena_copy(p, p->items.data, p->items.n, sizeof(ts_pbrt_param));
+    if (!ps->items) return nomem(p);
     return TS_OK;
 }
 
@@ -909,22 +899,14 @@ static const struct {
     {"WorldEnd", DIR_WORLD_END, D_WORLD},
 };
 
-/* "<Directive> \"<type>\"" for parameter messages. */
-static const char *describe_directive(parser *p, const char *directive, const char *type)
-{
-    return aprintf(p, "%s \"%.100s\"", directive, type);
-}
-
 /* Directives of the form  Name "type" params  into an option slot. */
 static ts_status option_directive(parser *p, const char *name, ts_pbrt_loc loc, ts_pbrt_option *opt)
 {
     const char *type;
     ts_status st = expect_string(p, name, "a type", &type, NULL);
     if (st) return st;
-    const char *desc = describe_directive(p, name, type);
-    if (!desc) return nomem(p);
     ts_pbrt_option o = {.type = type, .loc = loc};
-    if ((st = read_params(p, desc, &o.params))) return st;
+    if ((st = read_params(p, name, type, &o.params))) return st;
     *opt = o;
     return TS_OK;
 }
@@ -939,7 +921,9 @@ static ts_status add_material(parser *p, const char *name, const char *type, ts_
             const char *ref;
             ts_status st = ts_pbrt_find_string(params, keys[i], NULL, &ref, p->err);
             if (st) return st;
-            if (!ref) return perr(p, loc, TS_ERR_INVALID, "%s: a mix material needs \"string %s\"", params->directive, keys[i]);
+            if (!ref)
+                return perr(p, loc, TS_ERR_INVALID, "%s \"%s\": a mix material needs \"string %s\"", params->directive,
+                            params->directive_arg, keys[i]);
             m.mix[i] = name_lookup(p, NS_MATERIAL, ref);
             if (m.mix[i] < 0) {
                 ts_pbrt_param *par = ts_pbrt_params_get(params, keys[i]);
@@ -967,7 +951,7 @@ static ts_status directive(parser *p)
     dir_block where = D_ANY;
     const char *name = NULL;
     for (size_t i = 0; i < sizeof directives / sizeof directives[0]; i++)
-        if (strcmp(p->tok.text, directives[i].name) == 0) {
+        if (directives[i].name[0] == p->tok.text[0] && strcmp(p->tok.text, directives[i].name) == 0) {
             id = directives[i].id;
             where = directives[i].where;
             name = directives[i].name;
@@ -1188,10 +1172,8 @@ static ts_status directive(parser *p)
     case DIR_MATERIAL: {
         const char *type;
         if ((st = expect_string(p, name, "a material type", &type, NULL))) return st;
-        const char *desc = describe_directive(p, name, type);
-        if (!desc) return nomem(p);
         ts_pbrt_params ps;
-        if ((st = read_params(p, desc, &ps))) return st;
+        if ((st = read_params(p, name, type, &ps))) return st;
         int32_t idx;
         if ((st = add_material(p, NULL, type, &ps, loc, &idx))) return st;
         p->gs.material = idx;
@@ -1201,17 +1183,15 @@ static ts_status directive(parser *p)
     case DIR_MAKE_NAMED_MATERIAL: {
         const char *mn;
         if ((st = expect_string(p, name, "a material name", &mn, NULL))) return st;
-        const char *desc = describe_directive(p, name, mn);
-        if (!desc) return nomem(p);
         ts_pbrt_params ps;
-        if ((st = read_params(p, desc, &ps))) return st;
+        if ((st = read_params(p, name, mn, &ps))) return st;
         const char *type;
         if ((st = ts_pbrt_find_string(&ps, "type", NULL, &type, p->err))) return st;
-        if (!type) return perr(p, loc, TS_ERR_INVALID, "%s has no \"string type\" parameter", desc);
+        if (!type) return perr(p, loc, TS_ERR_INVALID, "%s \"%s\" has no \"string type\" parameter", name, mn);
         int32_t idx, prev;
         if ((st = add_material(p, mn, type, &ps, loc, &idx))) return st;
         if ((st = name_define(p, NS_MATERIAL, mn, idx, true, &prev))) return st;
-        if (prev >= 0) return warn(p, loc, "%s redefines the named material \"%s\"", desc, mn);
+        if (prev >= 0) return warn(p, loc, "%s \"%s\" redefines the named material \"%s\"", name, mn, mn);
         return TS_OK;
     }
     case DIR_NAMED_MATERIAL: {
@@ -1233,10 +1213,8 @@ static ts_status directive(parser *p)
             return perr(p, type_loc, TS_ERR_INVALID, "Texture \"%s\": the type must be \"float\", \"color\" or \"spectrum\", got \"%s\"",
                         tn, ttype);
         if ((st = expect_string(p, name, "a texture class", &tclass, NULL))) return st;
-        const char *desc = aprintf(p, "Texture \"%.100s\"", tn);
-        if (!desc) return nomem(p);
         ts_pbrt_texture t = {.name = tn, .is_float = is_float, .class_name = tclass, .loc = loc};
-        if ((st = read_params(p, desc, &t.params))) return st;
+        if ((st = read_params(p, name, tn, &t.params))) return st;
         t.texture_to_world = ctm_ptr(p);
         if (!t.texture_to_world || p->textures.n >= INT32_MAX) return nomem(p);
         ts_pbrt_texture *slot = vec_push(p, &p->textures, sizeof t);
@@ -1245,15 +1223,14 @@ static ts_status directive(parser *p)
         int32_t prev;
         if ((st = name_define(p, is_float ? NS_FLOAT_TEX : NS_SPECTRUM_TEX, tn, (int32_t)(p->textures.n - 1), true, &prev)))
             return st;
-        if (prev >= 0) return warn(p, loc, "%s redefines the %s texture \"%s\"", desc, is_float ? "float" : "spectrum", tn);
+        if (prev >= 0)
+            return warn(p, loc, "Texture \"%s\" redefines the %s texture \"%s\"", tn, is_float ? "float" : "spectrum", tn);
         return TS_OK;
     }
     case DIR_AREA_LIGHT: {
         ts_pbrt_area_light a = {.loc = loc};
         if ((st = expect_string(p, name, "an area light type", &a.type, NULL))) return st;
-        const char *desc = describe_directive(p, name, a.type);
-        if (!desc) return nomem(p);
-        if ((st = read_params(p, desc, &a.params))) return st;
+        if ((st = read_params(p, name, a.type, &a.params))) return st;
         ts_pbrt_area_light *slot = vec_push(p, &p->area_lights, sizeof a);
         if (!slot || p->area_lights.n > INT32_MAX) return nomem(p);
         *slot = a;
@@ -1263,9 +1240,7 @@ static ts_status directive(parser *p)
     case DIR_LIGHT: {
         ts_pbrt_light l = {.loc = loc};
         if ((st = expect_string(p, name, "a light type", &l.type, NULL))) return st;
-        const char *desc = describe_directive(p, name, l.type);
-        if (!desc) return nomem(p);
-        if ((st = read_params(p, desc, &l.params))) return st;
+        if ((st = read_params(p, name, l.type, &l.params))) return st;
         l.light_to_world = ctm_ptr(p);
         l.inside_medium = p->gs.inside_medium;
         l.outside_medium = p->gs.outside_medium;
@@ -1277,9 +1252,7 @@ static ts_status directive(parser *p)
     case DIR_SHAPE: {
         ts_pbrt_shape sh = {.loc = loc, .area_light = -1, .object = p->current_object};
         if ((st = expect_string(p, name, "a shape type", &sh.type, NULL))) return st;
-        const char *desc = describe_directive(p, name, sh.type);
-        if (!desc) return nomem(p);
-        if ((st = read_params(p, desc, &sh.params))) return st;
+        if ((st = read_params(p, name, sh.type, &sh.params))) return st;
         sh.object_to_world = ctm_ptr(p);
         if (!sh.object_to_world) return nomem(p);
         sh.reverse_orientation = p->gs.reverse_orientation;
@@ -1288,15 +1261,16 @@ static ts_status directive(parser *p)
             sh.material = name_lookup(p, NS_MATERIAL, p->gs.named_material);
             if (sh.material < 0) {
                 ts_pbrt_loc nl = p->gs.named_material_loc;
-                return perr(p, loc, TS_ERR_INVALID, "%s: the NamedMaterial \"%s\" in force (%s:%u:%u) is not defined here",
-                            desc, p->gs.named_material, nl.file, nl.line, nl.column);
+                return perr(p, loc, TS_ERR_INVALID,
+                            "Shape \"%s\": the NamedMaterial \"%s\" in force (%s:%u:%u) is not defined here", sh.type,
+                            p->gs.named_material, nl.file, nl.line, nl.column);
             }
         }
         if (p->gs.area_light >= 0) {
             if (p->current_object >= 0) {
-                if ((st = warn(p, loc, "%s: area lights are not supported inside object definitions; the shape is not "
-                                       "emissive (as in pbrt-v3)",
-                               desc)))
+                if ((st = warn(p, loc, "Shape \"%s\": area lights are not supported inside object definitions; the "
+                                       "shape is not emissive (as in pbrt-v3)",
+                               sh.type)))
                     return st;
             } else {
                 sh.area_light = p->gs.area_light;
@@ -1313,16 +1287,16 @@ static ts_status directive(parser *p)
     case DIR_MAKE_NAMED_MEDIUM: {
         ts_pbrt_medium m = {.loc = loc};
         if ((st = expect_string(p, name, "a medium name", &m.name, NULL))) return st;
-        const char *desc = describe_directive(p, name, m.name);
-        if (!desc) return nomem(p);
-        if ((st = read_params(p, desc, &m.params))) return st;
+        if ((st = read_params(p, name, m.name, &m.params))) return st;
         if ((st = ts_pbrt_find_string(&m.params, "type", NULL, &m.type, p->err))) return st;
-        if (!m.type) return perr(p, loc, TS_ERR_INVALID, "%s has no \"string type\" parameter", desc);
+        if (!m.type) return perr(p, loc, TS_ERR_INVALID, "MakeNamedMedium \"%s\" has no \"string type\" parameter", m.name);
         m.medium_to_world = ctm_ptr(p);
         ts_pbrt_medium *slot = vec_push(p, &p->media, sizeof m);
         if (!slot || !m.medium_to_world) return nomem(p);
         *slot = m;
-        return warn(p, loc, "%s: participating media are not supported; the medium is recorded and not rendered", desc);
+        return warn(p, loc, "MakeNamedMedium \"%s\": participating media are not supported; the medium is recorded and "
+                            "not rendered",
+                    m.name);
     }
     case DIR_MEDIUM_INTERFACE: {
         const char *in, *out;
