@@ -20,7 +20,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "error.h"
+#include "core/error.h"
 
 /* Longest single token (a string or a number) the lexer accepts. */
 #define TS_PBRT_TOKEN_MAX (16u << 20)

@@ -39,9 +39,9 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "error.h"
+#include "core/error.h"
 #include "scene/pbrt_lexer.h"
-#include "vecmath.h"
+#include "core/vecmath.h"
 
 typedef enum ts_pbrt_param_type {
     TS_PBRT_PARAM_INTEGER,

@@ -23,7 +23,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "scene_path.h"
+#include "scene/scene_path.h"
 
 /* ---- growable heap vectors ---- */
 
@@ -336,6 +336,7 @@ static ts_status expect_numbers(parser *p, const char *directive, double *v, int
 static ts_status expect_string(parser *p, const char *directive, const char *what, const char **out,
                                ts_pbrt_loc *loc)
 {
+    *out = NULL;
     if (p->tok.kind != TS_PBRT_TOKEN_STRING) {
         char d[96];
         return perr(p, p->tok.loc, TS_ERR_INVALID, "%s: expected %s in quotes, got %s", directive, what,
@@ -902,7 +903,7 @@ static const struct {
 /* Directives of the form  Name "type" params  into an option slot. */
 static ts_status option_directive(parser *p, const char *name, ts_pbrt_loc loc, ts_pbrt_option *opt)
 {
-    const char *type;
+    const char *type = NULL;
     ts_status st = expect_string(p, name, "a type", &type, NULL);
     if (st) return st;
     ts_pbrt_option o = {.type = type, .loc = loc};
@@ -918,7 +919,7 @@ static ts_status add_material(parser *p, const char *name, const char *type, ts_
     if (strcmp(type, "mix") == 0) {
         static const char *keys[2] = {"namedmaterial1", "namedmaterial2"};
         for (int i = 0; i < 2; i++) {
-            const char *ref;
+            const char *ref = NULL;
             ts_status st = ts_pbrt_find_string(params, keys[i], NULL, &ref, p->err);
             if (st) return st;
             if (!ref)
@@ -1024,7 +1025,7 @@ static ts_status directive(parser *p)
     }
     case DIR_COORDINATE_SYSTEM:
     case DIR_COORD_SYS_TRANSFORM: {
-        const char *cs;
+        const char *cs = NULL;
         if ((st = expect_string(p, name, "a coordinate system name", &cs, NULL))) return st;
         int32_t idx = name_lookup(p, NS_COORDSYS, cs);
         if (id == DIR_COORDINATE_SYSTEM) {
@@ -1120,7 +1121,7 @@ static ts_status directive(parser *p)
     case DIR_TRANSFORM_BEGIN: return push_block(p, BLOCK_TRANSFORM, loc, NULL);
     case DIR_TRANSFORM_END: return pop_block(p, BLOCK_TRANSFORM, loc);
     case DIR_OBJECT_BEGIN: {
-        const char *on;
+        const char *on = NULL;
         if ((st = expect_string(p, name, "an object name", &on, NULL))) return st;
         if (p->current_object >= 0) {
             const ts_pbrt_object *o = &VEC_AT(p->objects, ts_pbrt_object, p->current_object);
@@ -1151,7 +1152,7 @@ static ts_status directive(parser *p)
         return TS_OK;
     }
     case DIR_OBJECT_INSTANCE: {
-        const char *on;
+        const char *on = NULL;
         if ((st = expect_string(p, name, "an object name", &on, NULL))) return st;
         if (p->current_object >= 0)
             return perr(p, loc, TS_ERR_INVALID, "ObjectInstance \"%s\" inside the definition of object \"%s\"", on,
@@ -1170,7 +1171,7 @@ static ts_status directive(parser *p)
     /* --- attributes --- */
     case DIR_REVERSE_ORIENTATION: p->gs.reverse_orientation = !p->gs.reverse_orientation; return TS_OK;
     case DIR_MATERIAL: {
-        const char *type;
+        const char *type = NULL;
         if ((st = expect_string(p, name, "a material type", &type, NULL))) return st;
         ts_pbrt_params ps;
         if ((st = read_params(p, name, type, &ps))) return st;
@@ -1181,11 +1182,11 @@ static ts_status directive(parser *p)
         return TS_OK;
     }
     case DIR_MAKE_NAMED_MATERIAL: {
-        const char *mn;
+        const char *mn = NULL;
         if ((st = expect_string(p, name, "a material name", &mn, NULL))) return st;
         ts_pbrt_params ps;
         if ((st = read_params(p, name, mn, &ps))) return st;
-        const char *type;
+        const char *type = NULL;
         if ((st = ts_pbrt_find_string(&ps, "type", NULL, &type, p->err))) return st;
         if (!type) return perr(p, loc, TS_ERR_INVALID, "%s \"%s\" has no \"string type\" parameter", name, mn);
         int32_t idx, prev;
@@ -1195,7 +1196,7 @@ static ts_status directive(parser *p)
         return TS_OK;
     }
     case DIR_NAMED_MATERIAL: {
-        const char *mn;
+        const char *mn = NULL;
         if ((st = expect_string(p, name, "a material name", &mn, NULL))) return st;
         p->gs.named_material = mn;
         p->gs.named_material_loc = loc;
@@ -1203,7 +1204,7 @@ static ts_status directive(parser *p)
         return TS_OK;
     }
     case DIR_TEXTURE: {
-        const char *tn, *ttype, *tclass;
+        const char *tn = NULL, *ttype = NULL, *tclass = NULL;
         ts_pbrt_loc type_loc;
         if ((st = expect_string(p, name, "a texture name", &tn, NULL))) return st;
         if ((st = expect_string(p, name, "a texture type (\"float\", \"color\" or \"spectrum\")", &ttype, &type_loc)))
@@ -1299,7 +1300,7 @@ static ts_status directive(parser *p)
                     m.name);
     }
     case DIR_MEDIUM_INTERFACE: {
-        const char *in, *out;
+        const char *in = NULL, *out = NULL;
         if ((st = expect_string(p, name, "a medium name", &in, NULL))) return st;
         out = in;
         if (p->tok.kind == TS_PBRT_TOKEN_STRING && (st = expect_string(p, name, "a medium name", &out, NULL))) return st;
@@ -1312,7 +1313,7 @@ static ts_status directive(parser *p)
         return TS_OK;
     }
     case DIR_INCLUDE: {
-        const char *rel;
+        const char *rel = NULL;
         ts_pbrt_loc rloc;
         if (p->tok.kind != TS_PBRT_TOKEN_STRING)
             return perr(p, p->tok.loc, TS_ERR_INVALID, "Include: expected a file name in quotes, got %s",

@@ -55,11 +55,11 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "arena.h"
-#include "error.h"
+#include "core/arena.h"
+#include "core/error.h"
 #include "scene/pbrt_lexer.h"
 #include "scene/pbrt_params.h"
-#include "transform.h"
+#include "core/transform.h"
 
 typedef struct ts_pbrt_limits {
     uint64_t max_file_bytes; /* each file: the scene, an Include, a .spd; 0 = no limit */
