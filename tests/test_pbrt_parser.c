@@ -224,7 +224,7 @@ static void test_lexer_streaming_file(void **state)
     assert_int_equal(fclose(f), 0);
     ts_pbrt_lexer *lx;
     ts_error err = {0};
-    assert_int_equal(ts_pbrt_lexer_open(path, "big.pbrt", 0, &lx, &err), TS_OK);
+    assert_int_equal(ts_pbrt_lexer_open(path, true, "big.pbrt", 0, &lx, &err), TS_OK);
     ts_pbrt_token t;
     for (int i = 0; i < n; i++) {
         assert_int_equal(ts_pbrt_lexer_next(lx, &t, &err), TS_OK);
@@ -633,6 +633,19 @@ static void test_include(void **state)
     assert_true(m.x == 1);
     assert_non_null(strstr(s->base_dir, "inc"));
     ts_pbrt_scene_destroy(s);
+
+    /* the top-level file is the user's: a symbolic link to it is followed, and its folder
+     * is the target's (pbrt-v3 takes the folder of the file's real path); a missing file
+     * is named as given */
+    char target[512], link[512];
+    snprintf(target, sizeof target, "%s/inc/main.pbrt", tmp_dir);
+    snprintf(link, sizeof link, "%s/link.pbrt", tmp_dir);
+    assert_int_equal(symlink(target, link), 0);
+    assert_int_equal(parse_file("link.pbrt", NULL, &s, &err), TS_OK);
+    assert_int_equal(s->shape_count, 3); /* its Includes resolve in inc/, the target's folder */
+    ts_pbrt_scene_destroy(s);
+    assert_int_equal(parse_file("nope.pbrt", NULL, &s, &err), TS_ERR_IO);
+    assert_non_null(strstr(err.message, "nope.pbrt': cannot open (no such file or directory)"));
 
     /* errors inside an included file name it */
     write_file("inc/bad.pbrt", "WorldBegin\nInclude \"geo/c.pbrt\"\nWorldEnd\n");

@@ -64,11 +64,11 @@ static ts_pbrt_lexer *lexer_alloc(const char *display)
     return lx;
 }
 
-ts_status ts_pbrt_lexer_open(const char *path, const char *display, uint64_t max_bytes, ts_pbrt_lexer **out,
-                             ts_error *err)
+ts_status ts_pbrt_lexer_open(const char *path, bool resolved, const char *display, uint64_t max_bytes,
+                             ts_pbrt_lexer **out, ts_error *err)
 {
     *out = NULL;
-    int fd = open(path, O_RDONLY | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK);
+    int fd = open(path, O_RDONLY | O_CLOEXEC | O_NONBLOCK | (resolved ? O_NOFOLLOW : 0));
     if (fd < 0) {
         int e = errno;
         return ts_error_set(err, e == ENOMEM ? TS_ERR_NOMEM : TS_ERR_IO, "'%s': cannot open (%s)", display,

@@ -52,12 +52,14 @@ typedef struct ts_pbrt_token {
 
 typedef struct ts_pbrt_lexer ts_pbrt_lexer;
 
-/* Opens the file at path (already resolved and confined by the caller; opened with
- * O_NOFOLLOW | O_NONBLOCK and refused unless it is a regular file) for reading. display
- * names the file in token positions and messages and must outlive the lexer. max_bytes
- * (0 = none) bounds the file's size (TS_ERR_LIMIT). Errors say "'<display>': <problem>". */
-ts_status ts_pbrt_lexer_open(const char *path, const char *display, uint64_t max_bytes, ts_pbrt_lexer **out,
-                             ts_error *err);
+/* Opens the file at path for reading, with O_NONBLOCK, refused unless it is a regular
+ * file. resolved: path was resolved and confined by the caller (scene_path.h), so it is
+ * opened with O_NOFOLLOW too; a file the user named (false) may be a symbolic link.
+ * display names the file in token positions and messages and must outlive the lexer.
+ * max_bytes (0 = none) bounds the file's size (TS_ERR_LIMIT). Errors say
+ * "'<display>': <problem>". */
+ts_status ts_pbrt_lexer_open(const char *path, bool resolved, const char *display, uint64_t max_bytes,
+                             ts_pbrt_lexer **out, ts_error *err);
 
 /* A lexer over text[0, len) (not copied: it must outlive the lexer; NUL bytes in it are
  * errors like any other stray byte). */

@@ -827,7 +827,7 @@ static ts_status push_file(parser *p, const char *rel, ts_pbrt_loc loc)
         return nomem(p);
     }
     ts_pbrt_lexer *lx;
-    st = ts_pbrt_lexer_open(real, display, p->lim.max_file_bytes, &lx, p->err);
+    st = ts_pbrt_lexer_open(real, true, display, p->lim.max_file_bytes, &lx, p->err);
     if (st) {
         char inner[TS_ERROR_MAX];
         memcpy(inner, p->err->message, sizeof inner);
@@ -1451,12 +1451,13 @@ static ts_status parse(const char *path, const char *text, size_t len, const cha
         goto fail;
     }
     if (path) {
-        if (!base_dir) {
-            ts_scene_path_split(path, dir, sizeof dir, stem, sizeof stem);
+        p->files[0].real_path = realpath(path, NULL); /* NULL if missing: the open says why */
+        if (!base_dir) { /* the folder of the file itself, symbolic links followed (pbrt-v3) */
+            ts_scene_path_split(p->files[0].real_path ? p->files[0].real_path : path, dir, sizeof dir, stem,
+                                sizeof stem);
             base_dir = dir;
         }
-        p->files[0].real_path = realpath(path, NULL); /* NULL if missing: the open says why */
-        st = ts_pbrt_lexer_open(path, display, p->lim.max_file_bytes, &p->files[0].lx, err);
+        st = ts_pbrt_lexer_open(path, false, display, p->lim.max_file_bytes, &p->files[0].lx, err);
     } else {
         st = ts_pbrt_lexer_from_memory(text, len, display, &p->files[0].lx, err);
     }

@@ -185,9 +185,9 @@ typedef struct ts_pbrt_scene {
     uint64_t bytes_parsed;   /* of every file read, for reports */
 } ts_pbrt_scene;
 
-/* Parses the pbrt-v3 file at path (named by the user: not confined itself) and what it
- * includes; files it names are confined to base_dir, or, if base_dir is NULL, to the
- * file's own folder. Positions name the top-level file as path is written. lim NULL:
+/* Parses the pbrt-v3 file at path (named by the user: not confined itself, and it may be
+ * a symbolic link) and what it includes; files it names are confined to base_dir, or, if
+ * base_dir is NULL, to the folder of the file's real path (as pbrt-v3 takes it). Positions name the top-level file as path is written. lim NULL:
  * ts_pbrt_limits_default. On success *out owns the scene. */
 ts_status ts_pbrt_parse_file(const char *path, const char *base_dir, const ts_pbrt_limits *lim,
                              ts_pbrt_scene **out, ts_error *err);
