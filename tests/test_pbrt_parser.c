@@ -3,7 +3,8 @@
  * lookup API, the transform conventions checked numerically against pbrt-v3's
  * definitions, attribute and name scoping, object instancing, Include (relative paths,
  * cycles, depth, confinement), motion and media warnings, every error sentence, and the
- * pbrt-v3 scenes of ../shared/scenes/pbrt-v3 (skipped where that folder is absent).
+ * published pbrt-v3 scenes of the shared scene collection beside the source tree (found
+ * through TS_SOURCE_DIR; skipped where it is absent; never copied into the repository).
  * Scenes are written inline; the files Include and .spd need go to a temporary folder. */
 #ifndef _XOPEN_SOURCE
 #define _XOPEN_SOURCE 700 /* mkdtemp, nftw */
