@@ -225,6 +225,7 @@ typedef struct render_run {
     uint32_t target_spp, span;  /* the render's spp; samples per pixel this process must hold */
     int nx, ny;
     const char *checkpoint;     /* NULL: no checkpoints, no signal handling */
+    bool keep_complete;         /* keep the last complete pass (checkpoints; a shard with a time limit) */
     double checkpoint_interval;
     pthread_t main_thread;
     pthread_mutex_t mu;         /* guards everything below, and stderr writes of the bar */
@@ -288,7 +289,7 @@ static ts_status write_checkpoint(render_run *r, const ts_film *film, uint32_t s
 static void on_pass(void *user, ts_sched_job *job, const ts_job_progress *p)
 {
     render_run *r = user;
-    if (!r->checkpoint || r->ckpt_status) return;
+    if (!r->keep_complete || r->ckpt_status) return;
     ts_error err = {0};
     ts_film *film = ts_sched_job_film(job, NULL, &err);
     ts_status st = film ? TS_OK : err.status;
@@ -296,7 +297,7 @@ static void on_pass(void *user, ts_sched_job *job, const ts_job_progress *p)
         ts_film_destroy(r->complete);
         r->complete = film;
         r->complete_spp = p->spp_done;
-        if (p->spp_done < r->span && ts_now_seconds() - r->last_checkpoint >= r->checkpoint_interval) {
+        if (r->checkpoint && p->spp_done < r->span && ts_now_seconds() - r->last_checkpoint >= r->checkpoint_interval) {
             st = write_checkpoint(r, film, p->spp_done, p->elapsed_s, &err);
             r->last_checkpoint = ts_now_seconds();
         }
@@ -476,6 +477,10 @@ static int cmd_render(int argc, char **argv)
     r.span = range.end - range.begin;
     r.checkpoint = o.checkpoint;
     r.checkpoint_interval = o.checkpoint_interval;
+    /* A time limit stops a pass part-way (render/scheduler.h), leaving tiles one pass
+     * apart; a shard must hold one sample range in every pixel, so it keeps the last
+     * complete pass to write instead. */
+    r.keep_complete = o.checkpoint || (o.shard_text && js.time_limit_s > 0);
     r.main_thread = pthread_self();
     pthread_mutex_init(&r.mu, NULL);
     pthread_cond_init(&r.cv, NULL);
@@ -507,6 +512,8 @@ static int cmd_render(int argc, char **argv)
                 fprintf(stderr, "tessera: resuming from checkpoint %s: samples [%u,%u) of [%u,%u) already done\n",
                         o.checkpoint, range.begin, at, range.begin, range.end);
         }
+    }
+    if (r.keep_complete) {
         if (!(r.complete = film_copy(film, &err))) goto fail;
         r.complete_spp = done;
     }
@@ -543,8 +550,10 @@ static int cmd_render(int argc, char **argv)
         st = r.ckpt_status;
         goto fail;
     }
-    if (!(film = ts_sched_job_film(job, NULL, &err))) goto fail;
+    if (!(film = ts_sched_job_film(job, r.tile_spp, &err))) goto fail;
     done = r.final.spp_done;
+    bool uniform = true; /* every tile holds `done` samples per pixel */
+    for (int i = 0; i < r.nx * r.ny; i++) uniform = uniform && r.tile_spp[i] == done;
     if (stop_signal) { /* stopped by SIGTERM/SIGINT: save, then exit as the signal would */
         const ts_film *keep = r.final.halt == TS_HALT_SPP ? film : r.complete;
         uint32_t keep_spp = r.final.halt == TS_HALT_SPP ? done : r.complete_spp;
@@ -555,6 +564,11 @@ static int cmd_render(int argc, char **argv)
                     strsignal(stop_signal), range.begin, range.begin + keep_spp, o.checkpoint);
         rc = 128 + stop_signal;
         goto out;
+    }
+    if (o.shard_text && !uniform) { /* stopped part-way through a pass: the last whole one */
+        ts_film_destroy(film);
+        if (!(film = film_copy(r.complete, &err))) goto fail;
+        done = r.complete_spp;
     }
     double error = ts_film_relative_error(film);
     if (o.shard_text) {

@@ -409,6 +409,16 @@ static srv_job *submit(srv_store *st, const char *text, size_t len, int *http_st
                      ts_integrator_name(s->integrator.type));
         goto fail_scene;
     }
+    /* The work a job may ask for: an upper bound on the rays it traces. */
+    double rays = ts_integrator_rays_per_sample(s, js.integrator, s->effects);
+    double work = rays * (double)spp * (double)pixels;
+    if (cfg->max_work > 0 && work > cfg->max_work) {
+        ts_error_set(err, TS_ERR_LIMIT,
+                     "this job may trace up to %.3g rays (%.0f a sample × %u spp × %llu pixels), more than this "
+                     "server accepts (--max-work %.3g): lower the depth, the samples or the resolution",
+                     work, rays, spp, (unsigned long long)pixels, cfg->max_work);
+        goto fail_scene;
+    }
     *http_status = 500;
     srv_job *j = job_new(st, NULL, text, len);
     if (!j || !describe_scene(j, s)) {

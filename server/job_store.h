@@ -63,6 +63,8 @@ typedef struct srv_store_config {
     ts_scene_limits limits;   /* posted scenes: resolution and spp → 422, scene size → 413 */
     const char *assets_dir;   /* the only folder posted scenes may read files from; NULL = none */
     int max_jobs;             /* jobs held at once (any state); 0 = no limit */
+    double max_work;          /* rays a job may ask for (ts_integrator_rays_per_sample × spp ×
+                               * pixels) → 422 beyond; 0 = no limit */
     ts_scheduler *sched;      /* where jobs render */
     /* Optional: called (on a render thread, no lock held) when a job has finished, so a
      * checkpoint can follow soon. Must be quick. */

@@ -50,6 +50,7 @@ static void usage(FILE *f)
             "  --max-shapes N              most shapes in a posted scene (default 65536)\n"
             "  --client-timeout S          close a connection idle this many seconds (default 60)\n"
             "  --max-client-connections N  connections one address may hold, to 4000 (default 1024)\n"
+            "  --max-work RAYS             most rays one job may ask for: rays a sample x spp x pixels (default 1e13)\n"
             "  --log-format text|json      job events as text lines or JSON lines on stderr (default text)\n"
             "  --log-level LEVEL           error, warn, info (job events; default) or debug (and every request)\n"
             "  --queue-builtin             queue the built-in Cornell box as the first job (make run)\n"
@@ -196,7 +197,7 @@ bool srv_server_start(srv_server *srv, int *port_out, char *err, size_t err_len)
     srv->metrics = srv_metrics_create();
     srv->offload = srv_offload_create(2);
     srv->sched = ts_scheduler_create(cfg->threads, cfg->max_running, &e);
-    srv_store_config sc = {cfg->limits, cfg->assets_dir, cfg->max_jobs, srv->sched, on_job_finished, srv, &srv->log};
+    srv_store_config sc = {cfg->limits, cfg->assets_dir, cfg->max_jobs, cfg->max_work, srv->sched, on_job_finished, srv, &srv->log};
     srv->store = srv->sched ? srv_store_create(&sc) : NULL;
     if (!srv->metrics || !srv->store || !srv->offload || !srv->sched) {
         snprintf(err, err_len, "%s", e.message[0] ? e.message : "out of memory");
@@ -279,7 +280,7 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
         OPT_BIND = 256, OPT_PORT, OPT_THREADS, OPT_DATA, OPT_TOKEN, OPT_MAX_RUNNING, OPT_HTTP_THREADS, OPT_MAX_BODY,
         OPT_MAX_PIXELS, OPT_MAX_RES, OPT_MAX_SPP, OPT_MAX_TRIS, OPT_MAX_SHAPES, OPT_CKPT, OPT_CORS, OPT_BUILTIN, OPT_HELP,
         OPT_TOKEN_FILE, OPT_ASSETS, OPT_MAX_ASSET_BYTES, OPT_MAX_JOBS, OPT_CLIENT_TIMEOUT, OPT_MAX_CLIENT_CONNS,
-        OPT_LOG_FORMAT, OPT_LOG_LEVEL
+        OPT_LOG_FORMAT, OPT_LOG_LEVEL, OPT_MAX_WORK
     };
     static const struct option opts[] = {
         {"bind", required_argument, NULL, OPT_BIND},
@@ -291,6 +292,7 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
         {"assets", required_argument, NULL, OPT_ASSETS},
         {"max-asset-bytes", required_argument, NULL, OPT_MAX_ASSET_BYTES},
         {"max-jobs", required_argument, NULL, OPT_MAX_JOBS},
+        {"max-work", required_argument, NULL, OPT_MAX_WORK},
         {"client-timeout", required_argument, NULL, OPT_CLIENT_TIMEOUT},
         {"max-client-connections", required_argument, NULL, OPT_MAX_CLIENT_CONNS},
         {"max-running", required_argument, NULL, OPT_MAX_RUNNING},
@@ -329,6 +331,7 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
     cfg->limits.max_shapes = 1u << 16;
     cfg->limits.max_file_bytes = 256ull << 20; /* each asset file (only read with --assets) */
     cfg->max_jobs = 1000;
+    cfg->max_work = 1e13;
     const char *token_file = NULL, *assets = NULL;
     cfg->limits.max_memory = 2ull << 30;
     unsigned long long v;
@@ -402,6 +405,14 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
             if (!parse_u64(optarg, 1, 1u << 24, &v)) return usage_error("--max-shapes: expected a positive count, got '%s'", optarg);
             cfg->limits.max_shapes = (uint32_t)v;
             break;
+        case OPT_MAX_WORK: {
+            char *end;
+            double w = strtod(optarg, &end);
+            if (end == optarg || *end || !(w >= 1) || !isfinite(w))
+                return usage_error("--max-work: expected a number of rays (at least 1, e.g. 1e12), got '%s'", optarg);
+            cfg->max_work = w;
+            break;
+        }
         case OPT_CKPT: {
             char *end;
             double s = strtod(optarg, &end);

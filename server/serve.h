@@ -34,6 +34,7 @@ typedef struct srv_config {
     const char *token;           /* NULL = no auth; never printed or logged */
     const char *assets_dir;      /* --assets: the only folder posted scenes may read; NULL = none */
     int max_jobs;                /* jobs held in the store (any state); a POST beyond: 503 */
+    double max_work;             /* rays one job may ask for; a POST beyond: 422 */
     const char *cors_origin;     /* NULL = no CORS headers */
     size_t max_body;             /* request body cap, bytes */
     double checkpoint_interval_s;

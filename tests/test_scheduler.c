@@ -1,6 +1,9 @@
 /* test_scheduler.c — the shared render pool: same pixels as ts_render whatever the
  * threads and passes, progressive pass order, priorities, cancellation, time limit, and
- * resuming from a partial film (docs/design.md §6, scheduler.h). */
+ * resuming from a partial film (docs/design.md §6, scheduler.h); cancel, time limit and
+ * stop take effect inside a tile, even inside one sample of a mirror sphere seen from
+ * within (65535 bounces a sample), and an interrupted tile publishes nothing: every
+ * tile's pixels hold whole passes, and resuming gives the uninterrupted film bit for bit. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -9,6 +12,7 @@
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "render/scheduler.h"
 
@@ -242,6 +246,188 @@ static void test_time_limit(void **state)
     ts_scheduler_destroy(sch);
 }
 
+/* A two-sided mirror sphere with the camera inside: every sample bounces max_depth (65535)
+ * times, about 0.1 s of one core per sample here — a tile pass of it takes minutes. */
+static ts_scene *mirror_sphere(void)
+{
+    static const char doc[] =
+        "{\"tessera\":1,\"camera\":{\"from\":[0,0,0],\"to\":[0,0,-1],\"fov\":60},"
+        "\"film\":{\"width\":16,\"height\":16},\"sampler\":{\"spp\":16},"
+        "\"integrator\":{\"type\":\"path\",\"max_depth\":65535,\"rr_depth\":65535},"
+        "\"materials\":{\"m\":{\"type\":\"mirror\"}},"
+        "\"shapes\":[{\"type\":\"sphere\",\"radius\":10,\"material\":\"m\",\"two_sided\":true}],"
+        "\"lights\":[{\"type\":\"point\",\"position\":[0,1,0],\"intensity\":1}]}";
+    ts_scene *s = NULL;
+    ts_error err = {0};
+    if (ts_scene_load_text(doc, sizeof doc - 1, NULL, "mirror", NULL, &s, &err)) fail_msg("%s", err.message);
+    return s;
+}
+
+static ts_sched_job *submit_mirror(ts_scheduler *sch, double time_limit_s, recorder *r)
+{
+    ts_error err = {0};
+    ts_sched_job_desc d = {0};
+    d.scene = mirror_sphere();
+    ts_job_settings_from_scene(d.scene, &d.settings);
+    d.settings.time_limit_s = time_limit_s;
+    d.callbacks = (ts_job_callbacks){on_tile, on_pass, on_done, r};
+    ts_sched_job *j = ts_scheduler_submit(sch, &d, &err);
+    assert_non_null(j);
+    return j;
+}
+
+/* Waits until the job's first tile is being rendered (it is "running") plus 50 ms. */
+static void wait_running(ts_sched_job *j)
+{
+    for (;;) {
+        ts_job_progress p;
+        ts_sched_job_progress(j, &p);
+        if (p.state == TS_JOB_RUNNING) break;
+        struct timespec t = {0, 1000000};
+        nanosleep(&t, NULL);
+    }
+    struct timespec t = {0, 50000000};
+    nanosleep(&t, NULL);
+}
+
+/* Nothing of an interrupted tile pass is visible: no snapshot, an empty film. */
+static void assert_nothing_published(ts_sched_job *j)
+{
+    ts_error err = {0};
+    assert_null(ts_sched_job_tile(j, 0, 0));
+    uint32_t spp = 99;
+    ts_film *f = ts_sched_job_film(j, &spp, &err);
+    assert_non_null(f);
+    assert_int_equal(spp, 0);
+    for (int i = 0; i < f->width * f->height; i++) assert_int_equal(f->pixels[i].count, 0);
+    ts_film_destroy(f);
+}
+
+/* The bound on how long a stop may take: the target is 100 ms; the assertion allows 1 s for
+ * a loaded 2-core machine (without stops inside tiles it takes minutes). */
+#define STOP_BOUND_S 1.0
+
+static void test_cancel_inside_a_sample(void **state)
+{
+    (void)state;
+    ts_error err = {0};
+    ts_scheduler *sch = ts_scheduler_create(2, 2, &err);
+    recorder r;
+    rec_init(&r);
+    ts_sched_job *j = submit_mirror(sch, 0, &r);
+    wait_running(j);
+    double t0 = ts_now_seconds();
+    assert_true(ts_sched_job_cancel(j));
+    wait_done(&r);
+    double took = ts_now_seconds() - t0;
+    if (took > STOP_BOUND_S) fail_msg("cancel took %.3f s", took);
+    ts_job_progress p;
+    ts_sched_job_progress(j, &p);
+    assert_int_equal(p.state, TS_JOB_CANCELLED);
+    assert_int_equal(p.spp_done, 0);
+    assert_int_equal(p.samples, 0); /* an interrupted tile's samples do not count */
+    assert_int_equal(r.tiles, 0);
+    assert_nothing_published(j);
+    ts_sched_job_release(j);
+    ts_scheduler_destroy(sch);
+}
+
+static void test_time_limit_inside_a_sample(void **state)
+{
+    (void)state;
+    ts_error err = {0};
+    ts_scheduler *sch = ts_scheduler_create(2, 2, &err);
+    recorder r;
+    rec_init(&r);
+    double t0 = ts_now_seconds();
+    ts_sched_job *j = submit_mirror(sch, 0.3, &r);
+    wait_done(&r);
+    double took = ts_now_seconds() - t0;
+    if (took < 0.3 || took > 0.3 + STOP_BOUND_S) fail_msg("a 0.3 s time limit stopped after %.3f s", took);
+    ts_job_progress p;
+    ts_sched_job_progress(j, &p);
+    assert_int_equal(p.state, TS_JOB_DONE);
+    assert_int_equal(p.halt, TS_HALT_TIME);
+    assert_int_equal(p.spp_done, 0);
+    assert_nothing_published(j);
+    ts_sched_job_release(j);
+    ts_scheduler_destroy(sch);
+}
+
+static void test_stop_inside_a_sample(void **state)
+{
+    (void)state;
+    ts_error err = {0};
+    ts_scheduler *sch = ts_scheduler_create(2, 2, &err);
+    recorder r;
+    rec_init(&r);
+    ts_sched_job *j = submit_mirror(sch, 0, &r);
+    wait_running(j);
+    double t0 = ts_now_seconds();
+    ts_scheduler_stop(sch);
+    double took = ts_now_seconds() - t0;
+    if (took > STOP_BOUND_S) fail_msg("stopping the scheduler took %.3f s", took);
+    ts_job_progress p;
+    ts_sched_job_progress(j, &p);
+    assert_int_equal(p.state, TS_JOB_RUNNING); /* a stop changes no job's state */
+    assert_int_equal(r.done, 0);
+    assert_nothing_published(j);
+    ts_sched_job_release(j);
+    ts_scheduler_destroy(sch);
+}
+
+/* Cancelling mid-pass interrupts tiles; what is left is whole passes per tile (each pixel's
+ * count is its tile's spp), and resuming from it gives the film of an uninterrupted render
+ * bit for bit. Cancelled at several moments, so some cancel lands inside tile passes. */
+static void test_interrupted_tiles_resume_bit_identical(void **state)
+{
+    (void)state;
+    ts_error err = {0};
+    ts_scheduler *sch = ts_scheduler_create(2, 2, &err);
+    const uint32_t target = 16;
+    ts_film *ref = reference(target);
+    for (int k = 0; k < 4; k++) {
+        recorder r;
+        rec_init(&r);
+        ts_sched_job *j = submit(sch, load(100, 230, 200, 290), target, 0, &r);
+        struct timespec t = {0, 1000000L + 2500000L * k};
+        nanosleep(&t, NULL);
+        ts_sched_job_cancel(j);
+        wait_done(&r);
+        int nx, ny;
+        ts_sched_job_grid(j, &nx, &ny);
+        uint32_t *tile_spp = calloc((size_t)(nx * ny), sizeof *tile_spp);
+        ts_film *partial = ts_sched_job_film(j, tile_spp, &err);
+        for (int ty = 0; ty < ny; ty++)
+            for (int tx = 0; tx < nx; tx++) {
+                ts_tile_rect tr = ts_tile_grid_rect(100, 200, 130, 90, tx, ty);
+                for (int y = tr.y; y < tr.y + tr.h; y++)
+                    for (int x = tr.x; x < tr.x + tr.w; x++)
+                        assert_int_equal(ts_film_pixel_at(partial, x, y)->count, tile_spp[ty * nx + tx]);
+            }
+        ts_sched_job_release(j);
+        recorder r2;
+        rec_init(&r2);
+        ts_sched_job_desc d = {0};
+        d.scene = load(100, 230, 200, 290);
+        d.settings.integrator = TS_INTEGRATOR_AO;
+        d.settings.spp = target;
+        d.film = partial;
+        d.tile_spp = tile_spp;
+        d.callbacks = (ts_job_callbacks){on_tile, on_pass, on_done, &r2};
+        j = ts_scheduler_submit(sch, &d, &err);
+        assert_non_null(j);
+        wait_done(&r2);
+        ts_film *f = ts_sched_job_film(j, NULL, &err);
+        assert_same_film(f, ref);
+        ts_film_destroy(f);
+        free(tile_spp);
+        ts_sched_job_release(j);
+    }
+    ts_film_destroy(ref);
+    ts_scheduler_destroy(sch);
+}
+
 static void test_resume_from_partial_film(void **state)
 {
     (void)state;
@@ -292,6 +478,10 @@ int main(void)
         cmocka_unit_test(test_cancel_keeps_pixels),
         cmocka_unit_test(test_time_limit),
         cmocka_unit_test(test_resume_from_partial_film),
+        cmocka_unit_test(test_cancel_inside_a_sample),
+        cmocka_unit_test(test_time_limit_inside_a_sample),
+        cmocka_unit_test(test_stop_inside_a_sample),
+        cmocka_unit_test(test_interrupted_tiles_resume_bit_identical),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -387,6 +387,110 @@ static void test_job_event_log(void **state)
     free(doc);
 }
 
+/* A two-sided mirror sphere seen from inside: every sample bounces 65535 times (about 0.1
+ * s of one core each here), so one tile pass takes minutes. */
+static void expect(const test_server *s, const char *method, const char *path, const char *body, long status,
+                   const char *in_body);
+
+static char *mirror_scene(int w, int h, int spp, const char *job)
+{
+    char *s = malloc(1024);
+    snprintf(s, 1024,
+             "{\"tessera\":1,\"name\":\"mirror\",\"camera\":{\"from\":[0,0,0],\"to\":[0,0,-1],\"fov\":60},"
+             "\"film\":{\"width\":%d,\"height\":%d},\"sampler\":{\"spp\":%d},"
+             "\"integrator\":{\"type\":\"path\",\"max_depth\":65535,\"rr_depth\":65535},"
+             "\"materials\":{\"m\":{\"type\":\"mirror\"}},"
+             "\"shapes\":[{\"type\":\"sphere\",\"radius\":10,\"material\":\"m\",\"two_sided\":true}],"
+             "\"lights\":[{\"type\":\"point\",\"position\":[0,1,0],\"intensity\":1}]%s%s%s}",
+             w, h, spp, job ? ",\"job\":{" : "", job ? job : "", job ? "}" : "");
+    return s;
+}
+
+static double mono_s(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* Until the job's state is `state` (polled every 2 ms); returns the seconds it took. */
+static double wait_state(const test_server *s, const char *id, const char *state, double timeout_s)
+{
+    char path[160];
+    get_path(path, sizeof path, id, "");
+    double t0 = mono_s();
+    for (;;) {
+        cJSON *o = ts_http_json(s, path, 200);
+        bool there = !strcmp(ts_json_str(o, "state"), state);
+        cJSON_Delete(o);
+        if (there) return mono_s() - t0;
+        if (mono_s() - t0 > timeout_s) fail_msg("job %s: not %s after %g s", id, state, timeout_s);
+        ts_sleep_ms(2);
+    }
+}
+
+/* The target for a cancel, a time limit or a shutdown to take effect is 100 ms; the
+ * assertions allow 1 s for a loaded 2-core machine (before stops inside tiles, the mirror
+ * sphere's cancel took 55–110 s). */
+#define STOP_BOUND_S 1.0
+
+/* Cancel, the time limit and SIGTERM take effect inside a tile (even inside one sample),
+ * and nothing of the interrupted tile is published; --max-work refuses a job asking for
+ * more rays than it allows. */
+static void test_stops_inside_a_sample_and_max_work(void **state)
+{
+    (void)state;
+    char *doc = mirror_scene(64, 32, 16, NULL), id[32], path[160];
+    ts_submit(&srv, doc, id, sizeof id);
+    free(doc);
+    wait_state(&srv, id, "running", 10);
+    ts_sleep_ms(100);
+    double t0 = mono_s();
+    cancel(id);
+    wait_state(&srv, id, "cancelled", 30);
+    double took = mono_s() - t0;
+    if (took > STOP_BOUND_S) fail_msg("cancelling the mirror sphere took %.3f s", took);
+    get_path(path, sizeof path, id, "");
+    cJSON *o = ts_http_json(&srv, path, 200);
+    assert_int_equal((int)ts_json_num(o, "spp_done"), 0);
+    assert_int_equal((int)ts_json_num(o, "samples"), 0);
+    cJSON_Delete(o);
+    http_resp r;
+    get_path(path, sizeof path, id, "/image.exr");
+    ts_http(&srv, "GET", path, NULL, 0, NULL, &r);
+    ts_image img;
+    decode_exr(&r, &img);
+    ts_http_free(&r);
+    int cc = ts_image_channel(&img, "count");
+    for (int i = 0; i < 64 * 32; i++) assert_true(img.data[i * img.n_channels + cc] == 0);
+    ts_image_fini(&img);
+
+    doc = mirror_scene(64, 32, 16, "\"time_limit_s\":0.3");
+    ts_submit(&srv, doc, id, sizeof id);
+    free(doc);
+    o = ts_wait_done(&srv, id, 30);
+    assert_string_equal(ts_json_str(o, "halt_reason"), "time_limit");
+    assert_true(ts_json_num(o, "elapsed_s") >= 0.3 && ts_json_num(o, "elapsed_s") < 0.3 + STOP_BOUND_S);
+    cJSON_Delete(o);
+
+    /* --max-work: 64 × 32 pixels × 16 spp × 131071 rays a sample is 4.3e9 rays. */
+    test_server small;
+    const char *args[] = {"--threads", "2", "--max-work", "1e8", NULL};
+    ts_server_start(&small, args);
+    doc = mirror_scene(64, 32, 16, NULL);
+    expect(&small, "POST", "/api/v1/jobs", doc, 422, "--max-work");
+    free(doc);
+    doc = mirror_scene(8, 8, 1, NULL); /* 8.4e6 rays: accepted */
+    ts_submit(&small, doc, id, sizeof id);
+    free(doc);
+    wait_state(&small, id, "running", 10);
+    ts_sleep_ms(100);
+    t0 = mono_s();
+    assert_int_equal(ts_server_stop(&small, SIGTERM), 0);
+    took = mono_s() - t0;
+    if (took > STOP_BOUND_S) fail_msg("SIGTERM during the mirror sphere took %.3f s to exit", took);
+}
+
 /* Priority, then arrival: with one running slot, a blocker runs; then a low-priority job
  * and a high-priority one queue; the high one starts first although it came later. */
 static void test_priority_order(void **state)
@@ -649,6 +753,7 @@ int main(void)
         cmocka_unit_test(test_time_limit_and_target_error),
         cmocka_unit_test(test_progress_eta_and_history),
         cmocka_unit_test(test_job_event_log),
+        cmocka_unit_test(test_stops_inside_a_sample_and_max_work),
         cmocka_unit_test(test_priority_order),
         cmocka_unit_test(test_bad_requests),
         cmocka_unit_test(test_auth),

@@ -74,6 +74,9 @@ static ts_rgb escaped(const ts_scene *s, const ts_ray *ray)
 
 static float power_heuristic(float f_pdf, float g_pdf) { return ts_power_heuristic(1, f_pdf, 1, g_pdf); }
 
+/* Whether the sample should end now (ts_counters.stop). */
+static bool stopped(const ts_counters *c) { return c->stop && atomic_load_explicit(c->stop, memory_order_relaxed); }
+
 /* pbrt's EstimateDirect: light `li` sampled with u_light, the BSDF with (u_lobe, u_bsdf),
  * combined by the power heuristic; delta lights get light sampling only. The BSDF here
  * samples all its lobes; a specular pick adds nothing (specular transport is handled by
@@ -170,7 +173,7 @@ static ts_rgb sample_all_lights(const ts_scene *s, uint32_t fx, const ts_interac
     ts_rgb L = ts_rgb_gray(0);
     uint32_t n = (uint32_t)s->integrator.samples_per_light;
     ts_sampler sampler = {st->type, st->seed};
-    for (uint32_t li = 0; li < s->n_lights; li++) {
+    for (uint32_t li = 0; li < s->n_lights && !stopped(c); li++) {
         uint32_t dim = st->dim;
         st->dim += 3;
         ts_rgb Ll = ts_rgb_gray(0);
@@ -279,7 +282,7 @@ static ts_rgb li_path(const ts_scene *s, uint32_t fx, ts_ray ray, ts_sample_stre
          * emits or its emission does not count — is not traced; it draws no sample
          * dimensions, so nothing else changes. */
         bool counts = emitters && (bounces == 0 || specular_bounce || sampling != TS_SAMPLING_LIGHT);
-        if (bounces > 0 && bounces >= max_depth && !counts) break;
+        if ((bounces > 0 && bounces >= max_depth && !counts) || stopped(c)) break;
         ts_interaction si;
         bool found = ts_accel_intersect(s->accel, &ray, &si);
         if (bounces > 0) c->other_rays++;
@@ -336,7 +339,7 @@ static ts_rgb li_path(const ts_scene *s, uint32_t fx, ts_ray ray, ts_sample_stre
 static ts_rgb li_direct(const ts_scene *s, uint32_t fx, ts_ray ray, ts_sample_stream *st, ts_counters *c, int depth)
 {
     ts_interaction si;
-    if (!(fx & TS_EFFECTS_LIGHTS)) return ts_rgb_gray(0); /* nothing emits: nothing to see */
+    if (!(fx & TS_EFFECTS_LIGHTS) || stopped(c)) return ts_rgb_gray(0); /* nothing emits: nothing to see */
     if (depth > 0) c->other_rays++;
     if (!ts_accel_intersect(s->accel, &ray, &si))
         return (fx & TS_EFFECT_ENVIRONMENT) ? escaped(s, &ray) : ts_rgb_gray(0);
@@ -364,6 +367,30 @@ static ts_rgb li_direct(const ts_scene *s, uint32_t fx, ts_ray ray, ts_sample_st
 }
 
 /* ---------------------------------------------------------------- dispatch */
+
+double ts_integrator_rays_per_sample(const ts_scene *s, ts_integrator_type type, uint32_t fx)
+{
+    switch (type) {
+    case TS_INTEGRATOR_AO: return 2;
+    case TS_INTEGRATOR_NORMALS: return 1;
+    case TS_INTEGRATOR_PATH: {
+        /* The depth caps of li_path. */
+        double depth = s->integrator.max_depth;
+        if (!(fx & TS_EFFECTS_LIGHTS)) depth = 0;
+        else if (!(fx & TS_EFFECTS_SCATTERING)) depth = 0;
+        else if (!(fx & TS_EFFECT_INDIRECT) && depth > 1) depth = 1;
+        return 1 + 2 * depth;
+    }
+    case TS_INTEGRATOR_DIRECT: {
+        double vertices = (fx & TS_EFFECT_INDIRECT) && s->integrator.max_depth > 1 ? s->integrator.max_depth : 1;
+        double nee = s->integrator.strategy == TS_LIGHTS_ALL
+                         ? 2.0 * (double)s->n_lights * (double)s->integrator.samples_per_light
+                         : 2.0;
+        return vertices * (1 + nee);
+    }
+    }
+    return 1;
+}
 
 ts_rgb ts_integrator_li(const ts_scene *s, ts_integrator_type type, uint32_t fx, const ts_ray *ray,
                         ts_sample_stream *st, ts_counters *c)

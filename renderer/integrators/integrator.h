@@ -8,17 +8,23 @@
 #ifndef TS_INTEGRATOR_H
 #define TS_INTEGRATOR_H
 
+#include <stdatomic.h>
 #include <stdbool.h>
 #include <stdint.h>
 
 #include "sampling/sampler.h"
 #include "scene/scene.h"
 
-/* Per-worker counters, summed by the renderer after a pass. */
+/* Per-worker state of the integrator: counters, summed by the renderer after a pass, and
+ * an optional stop flag. */
 typedef struct ts_counters {
     uint64_t camera_rays, other_rays;
     uint64_t samples;
     uint64_t nonfinite; /* samples dropped for NaN, ∞ or negative radiance */
+    /* Optional, only read (relaxed) here: once set, the integrator ends the sample at its
+     * next bounce or light, so no sample outlives a stop by more than one step; the value
+     * it returns then is meaningless and the caller discards the work (render.h). */
+    const atomic_bool *stop;
 } ts_counters;
 
 /* The scene-format name of an integrator type ("path", "direct", "ao", "normals"). */
@@ -26,6 +32,13 @@ const char *ts_integrator_name(ts_integrator_type type);
 
 /* True when the integrator type is implemented in this build. */
 bool ts_integrator_available(ts_integrator_type type);
+
+/* An upper bound on the rays one camera sample of this integrator traces in scene s with
+ * these effects (the camera ray included): path 1 + 2·max_depth (a continuation and a
+ * shadow ray a bounce), direct (1 + shadow and BSDF rays of its light sampling) at each
+ * of up to max_depth specular vertices, ao 2, normals 1. What a request asks of the
+ * renderer is this × spp × pixels (the server's --max-work, docs/security.md). */
+double ts_integrator_rays_per_sample(const ts_scene *s, ts_integrator_type type, uint32_t effects);
 
 /* Radiance arriving along ray (from the camera), simulating the effects in `effects`
  * (effects.h: the scene's own set, or all of them; never more than the scene has). */

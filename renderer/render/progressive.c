@@ -45,7 +45,8 @@ ts_halt_reason ts_progressive_halt(const ts_job_settings *js, const ts_pass_stat
     if (js->target_error > 0 && st->done >= TS_PROGRESSIVE_ERROR_MIN_SPP && st->error >= 0 &&
         st->error <= js->target_error)
         return TS_HALT_ERROR;
-    if (js->time_limit_s > 0 && st->done > 0 && st->elapsed_s >= js->time_limit_s) return TS_HALT_TIME;
+    if (js->time_limit_s > 0 && (st->out_of_time || (st->done > 0 && st->elapsed_s >= js->time_limit_s)))
+        return TS_HALT_TIME;
     return TS_HALT_NONE;
 }
 

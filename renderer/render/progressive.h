@@ -58,6 +58,7 @@ typedef struct ts_pass_state {
     double elapsed_before;  /* of it, spent before this process (a resume) */
     double error;           /* error estimate at `done`; < 0 when unknown */
     bool cancelled;
+    bool out_of_time;       /* the time limit stopped the pass part-way (scheduler.h) */
 } ts_pass_state;
 
 /* Whether (and why) the render halts at this pass end. */

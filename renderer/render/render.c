@@ -68,8 +68,9 @@ typedef struct job {
     ts_render_stats *stats;
 } job;
 
-void ts_render_tile(const ts_render_request *req, int x0, int y0, int w, int h, ts_counters *c)
+bool ts_render_tile(const ts_render_request *req, int x0, int y0, int w, int h, ts_counters *c)
 {
+    c->stop = req->stop;
     const ts_scene *s = req->scene;
     uint32_t fx = req->generic ? TS_EFFECTS_ALL & ~s->job.effects_off : s->effects;
     ts_camera cam = s->camera;
@@ -77,6 +78,7 @@ void ts_render_tile(const ts_render_request *req, int x0, int y0, int w, int h, 
     for (int y = y0; y < y0 + h; y++)
         for (int x = x0; x < x0 + w; x++)
             for (uint32_t i = req->sample_begin; i < req->sample_end; i++) {
+                if (req->stop && atomic_load_explicit(req->stop, memory_order_relaxed)) return false;
                 ts_sample_stream st;
                 ts_sampler_begin(&s->sampler, (uint32_t)x, (uint32_t)y, i, &st);
                 ts_vec2 u_film = ts_sample_2d(&st);
@@ -97,6 +99,7 @@ void ts_render_tile(const ts_render_request *req, int x0, int y0, int w, int h, 
                 }
                 ts_film_add_sample(req->film, x, y, L, weight);
             }
+    return true;
 }
 
 static void *worker(void *arg)

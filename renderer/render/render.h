@@ -47,6 +47,11 @@ typedef struct ts_render_request {
     /* true: simulate every effect whatever the scene calls for (the specialisation off;
      * same estimate, for tests and benchmarks). Job switches (job.effects) still apply. */
     bool generic;
+    /* Optional: once set, ts_render_tile stops within one sample (the integrator checks it
+     * at every bounce and light, ts_counters.stop) and returns false; the rectangle then
+     * holds part of its samples and the caller must restore it (the scheduler does).
+     * ts_render leaves such tiles as they are. */
+    const atomic_bool *stop;
 } ts_render_request;
 
 typedef struct ts_render_stats {
@@ -63,9 +68,10 @@ ts_status ts_render(const ts_render_request *req, ts_render_stats *stats, ts_err
 /* Renders sample indices [req->sample_begin, req->sample_end) of every pixel of the
  * rectangle (x0, y0, w, h) (full-image pixels, inside the film's window) into req->film,
  * adding its counters to *c. The one tile loop: ts_render and the scheduler (scheduler.h)
- * both use it. Only req's scene, integrator, film and sample range are read. The caller
- * must be the only writer of those pixels meanwhile. */
-void ts_render_tile(const ts_render_request *req, int x0, int y0, int w, int h, ts_counters *c);
+ * both use it. Only req's scene, integrator, film, sample range and stop flag are read.
+ * The caller must be the only writer of those pixels meanwhile. Returns false when
+ * req->stop ended it early (the pixels are then partly rendered), else true. */
+bool ts_render_tile(const ts_render_request *req, int x0, int y0, int w, int h, ts_counters *c);
 
 /* Relative RMS error estimate of the film's image: sqrt(mean over pixels of
  * Var[Y] / (Y² + 1e-3)) on luminance Y, from the per-pixel sample variance (definition:

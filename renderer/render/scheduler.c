@@ -4,13 +4,29 @@
  * job. Workers hold it only to pick work and to publish results. A job's working film is
  * written without the lock by the one worker that holds a tile (tile.busy), and read
  * without the lock only while the job is "closing" a pass (no tile in flight, none handed
- * out until closing is cleared). */
+ * out until closing is cleared).
+ *
+ * Stopping inside a tile: each worker has an interrupt flag that the tile it renders
+ * watches (ts_render_request.stop, checked at every sample and, through the integrator, at
+ * every bounce and light). Cancelling a job, its time limit (the timer thread below wakes
+ * at the earliest deadline) and ts_scheduler_stop set the flags of the workers rendering
+ * it, under s->mu; a worker clears its flag under s->mu when it takes a tile. An
+ * interrupted tile is rolled back to its last snapshot (or to zero before its first),
+ * nothing of it is published or counted, and its spp stays: snapshots, and so every film,
+ * checkpoint and image, only ever hold whole tile passes. */
 #include "render/scheduler.h"
 
 #include <math.h>
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
+
+typedef struct worker {
+    struct ts_scheduler *s;  /* immutable */
+    atomic_bool interrupt;   /* set (under s->mu) to stop the tile being rendered */
+    struct ts_sched_job *job; /* guarded: the job whose tile it renders, or NULL */
+} worker;
 
 typedef struct tile_state {
     int tx, ty, x, y, w, h; /* immutable */
@@ -38,6 +54,8 @@ struct ts_sched_job {
     ts_job_state state;
     ts_halt_reason halt;
     bool cancel, closing, in_list;
+    bool out_of_time;           /* the time limit passed: nothing more is dispatched */
+    double deadline;            /* ts_now_seconds() when the time limit passes; 0 = none */
     uint32_t pass_end;
     int cursor, outstanding;
     uint64_t last_dispatch;
@@ -55,9 +73,13 @@ struct ts_scheduler {
     atomic_int refs;            /* the owner's + one per job */
     pthread_mutex_t mu;
     pthread_cond_t work;        /* signalled when there may be work or on stop */
+    pthread_cond_t timer_cv;    /* (CLOCK_MONOTONIC) signalled when a deadline is set or on stop */
     int n_threads, max_running;
     pthread_t *threads;         /* immutable after create */
+    worker *workers;            /* immutable after create (each worker's fields: see worker) */
+    pthread_t timer;
     int started;
+    bool timer_started;
     /* guarded by mu */
     bool stopping, joined;
     ts_sched_job *jobs;
@@ -84,7 +106,9 @@ static void scheduler_unref(ts_scheduler *s)
     if (atomic_fetch_sub(&s->refs, 1) != 1) return;
     pthread_mutex_destroy(&s->mu);
     pthread_cond_destroy(&s->work);
+    pthread_cond_destroy(&s->timer_cv);
     free(s->threads);
+    free(s->workers);
     free(s);
 }
 
@@ -168,7 +192,24 @@ static int next_tile(ts_sched_job *j)
 static bool needs_close(ts_sched_job *j)
 {
     return !j->closing && j->outstanding == 0 && !ts_job_state_finished(j->state) &&
-           (j->cancel || next_tile(j) < 0);
+           (j->cancel || j->out_of_time || next_tile(j) < 0);
+}
+
+/* Stops every tile of j being rendered (their workers roll them back). */
+static void interrupt_job(ts_scheduler *s, const ts_sched_job *j)
+{
+    for (int i = 0; i < s->started; i++)
+        if (s->workers[i].job == j) atomic_store(&s->workers[i].interrupt, true);
+}
+
+/* Marks j out of time once its deadline has passed (now: ts_now_seconds()); true then. */
+static bool check_deadline(ts_scheduler *s, ts_sched_job *j, double now)
+{
+    if (j->deadline <= 0 || j->out_of_time || now < j->deadline || ts_job_state_finished(j->state)) return j->out_of_time;
+    j->out_of_time = true;
+    interrupt_job(s, j);
+    pthread_cond_broadcast(&s->work); /* an idle worker may have to close it */
+    return true;
 }
 
 static void list_remove(ts_scheduler *s, ts_sched_job *j)
@@ -211,7 +252,7 @@ static void close_pass(ts_scheduler *s, ts_sched_job *j)
         j->error = error, j->error_spp = done;
     }
     double now = ts_now_seconds();
-    ts_pass_state ps = {done, j->done_before, job_elapsed(j, now), j->elapsed_before, error, j->cancel};
+    ts_pass_state ps = {done, j->done_before, job_elapsed(j, now), j->elapsed_before, error, j->cancel, j->out_of_time};
     ts_halt_reason halt = ts_progressive_halt(&j->settings, &ps);
     bool finished = halt != TS_HALT_NONE;
     if (finished) {
@@ -256,9 +297,10 @@ static ts_sched_job *pick(ts_scheduler *s, int *tile)
         }
     ts_sched_job *best = NULL;
     int active = 0;
+    double now = ts_now_seconds();
     for (ts_sched_job *j = s->jobs; j && active < s->max_running; j = j->next) {
         active++;
-        if (j->closing || j->cancel || next_tile(j) < 0) continue;
+        if (j->closing || j->cancel || check_deadline(s, j, now) || next_tile(j) < 0) continue;
         if (!best || j->outstanding < best->outstanding ||
             (j->outstanding == best->outstanding && j->last_dispatch < best->last_dispatch))
             best = j;
@@ -270,14 +312,29 @@ static ts_sched_job *pick(ts_scheduler *s, int *tile)
     best->last_dispatch = ++s->dispatch_clock;
     if (best->state == TS_JOB_QUEUED) {
         best->state = TS_JOB_RUNNING;
-        best->t_start = ts_now_seconds();
+        best->t_start = now;
+        if (best->settings.time_limit_s > 0) {
+            best->deadline = now + (best->settings.time_limit_s - best->elapsed_before);
+            pthread_cond_signal(&s->timer_cv);
+        }
     }
     return best;
 }
 
-static void *worker(void *arg)
+/* Puts tile t of the film back as `base` holds it (NULL: empty, before its first pass). */
+static void roll_back(ts_film *f, const tile_state *t, const ts_tile_snapshot *base)
 {
-    ts_scheduler *s = arg;
+    for (int y = 0; y < t->h; y++) {
+        ts_film_pixel *row = ts_film_pixel_at(f, t->x, t->y + y);
+        if (base) memcpy(row, &base->pixels[(size_t)y * t->w], sizeof(ts_film_pixel) * (size_t)t->w);
+        else memset(row, 0, sizeof(ts_film_pixel) * (size_t)t->w);
+    }
+}
+
+static void *worker_main(void *arg)
+{
+    worker *w = arg;
+    ts_scheduler *s = w->s;
     pthread_mutex_lock(&s->mu);
     while (!s->stopping) {
         int ti;
@@ -294,15 +351,44 @@ static void *worker(void *arg)
         tile_state *t = &j->tiles[ti];
         ts_render_request req = {j->scene, j->settings.integrator, j->film, j->sample_begin + t->spp,
                                  j->sample_begin + j->pass_end, 1, NULL, NULL, NULL};
+        /* What an interrupted tile goes back to: its snapshot, or nothing before its first
+         * pass. Only after a snapshot could not be allocated (the film then holds more than
+         * it) is there none to go back to: that tile pass runs to its end. */
+        ts_tile_snapshot *base = t->snap && t->snap->spp == t->spp ? t->snap : NULL;
+        if (base) atomic_fetch_add(&base->refs, 1);
+        if (base || t->spp == 0) req.stop = &w->interrupt;
+        w->job = j;
+        atomic_store(&w->interrupt, false);
         ts_sched_job_retain(j);
         pthread_mutex_unlock(&s->mu);
 
         ts_counters c = {0};
-        ts_render_tile(&req, t->x, t->y, t->w, t->h, &c);
+        bool complete = ts_render_tile(&req, t->x, t->y, t->w, t->h, &c);
+        if (!complete) {
+            roll_back(j->film, t, base);
+            ts_tile_snapshot_release(base);
+            pthread_mutex_lock(&s->mu);
+            w->job = NULL;
+            j->outstanding--;
+            /* Stopped by a cancel or the time limit: close the job; by a shutdown: leave
+             * it as it is (its tiles all hold whole passes). */
+            if (!s->stopping && needs_close(j)) {
+                j->closing = true;
+                close_pass(s, j);
+            } else if (j->outstanding == 0) {
+                pthread_cond_broadcast(&s->work);
+            }
+            pthread_mutex_unlock(&s->mu);
+            ts_sched_job_release(j);
+            pthread_mutex_lock(&s->mu);
+            continue;
+        }
+        ts_tile_snapshot_release(base);
         ts_tile_snapshot *snap = snapshot_from_film(j->film, t, j->pass_end);
         ts_tile_event ev = {t->tx, t->ty, t->x, t->y, t->w, t->h, j->pass_end};
 
         pthread_mutex_lock(&s->mu);
+        w->job = NULL;
         ts_tile_snapshot *old = NULL;
         if (snap) { /* out of memory: the film has the samples; the old snapshot stays */
             old = t->snap;
@@ -333,6 +419,33 @@ static void *worker(void *arg)
     return NULL;
 }
 
+/* Marks jobs out of time at their deadlines, so a time limit stops the tiles being
+ * rendered within one sample (the workers only see it through their interrupt flags).
+ * Sleeps on timer_cv until the earliest deadline. */
+static void *timer_main(void *arg)
+{
+    ts_scheduler *s = arg;
+    pthread_mutex_lock(&s->mu);
+    while (!s->stopping) {
+        double now = ts_now_seconds(), next = 0;
+        for (ts_sched_job *j = s->jobs; j; j = j->next)
+            if (!check_deadline(s, j, now) && j->deadline > 0 && (next == 0 || j->deadline < next)) next = j->deadline;
+        if (next == 0) {
+            pthread_cond_wait(&s->timer_cv, &s->mu);
+            continue;
+        }
+        struct timespec ts;
+        clock_gettime(CLOCK_MONOTONIC, &ts);
+        double wait = next - now, whole = floor(wait);
+        ts.tv_sec += (time_t)whole;
+        ts.tv_nsec += (long)((wait - whole) * 1e9);
+        if (ts.tv_nsec >= 1000000000L) ts.tv_sec++, ts.tv_nsec -= 1000000000L;
+        pthread_cond_timedwait(&s->timer_cv, &s->mu, &ts);
+    }
+    pthread_mutex_unlock(&s->mu);
+    return NULL;
+}
+
 /* ---------------------------------------------------------------- scheduler */
 
 ts_scheduler *ts_scheduler_create(int threads, int max_running, ts_error *err)
@@ -349,14 +462,35 @@ ts_scheduler *ts_scheduler_create(int threads, int max_running, ts_error *err)
     s->max_running = max_running;
     pthread_mutex_init(&s->mu, NULL);
     pthread_cond_init(&s->work, NULL);
+    pthread_condattr_t ca;
+    pthread_condattr_init(&ca);
+    pthread_condattr_setclock(&ca, CLOCK_MONOTONIC); /* the clock of ts_now_seconds */
+    pthread_cond_init(&s->timer_cv, &ca);
+    pthread_condattr_destroy(&ca);
     s->threads = calloc((size_t)threads, sizeof *s->threads);
-    if (!s->threads) {
+    s->workers = calloc((size_t)threads, sizeof *s->workers);
+    if (!s->threads || !s->workers) {
         scheduler_unref(s);
         ts_error_set(err, TS_ERR_NOMEM, "out of memory for %d threads", threads);
         return NULL;
     }
-    while (s->started < threads && pthread_create(&s->threads[s->started], NULL, worker, s) == 0) s->started++;
+    if (pthread_create(&s->timer, NULL, timer_main, s) != 0) {
+        scheduler_unref(s);
+        ts_error_set(err, TS_ERR_INTERNAL, "could not start the scheduler's timer thread");
+        return NULL;
+    }
+    s->timer_started = true;
+    for (int i = 0; i < threads; i++) {
+        s->workers[i].s = s;
+        atomic_init(&s->workers[i].interrupt, false);
+    }
+    /* s->started only grows before any job exists, so interrupt_job never sees a worker
+     * that is not running. */
+    while (s->started < threads &&
+           pthread_create(&s->threads[s->started], NULL, worker_main, &s->workers[s->started]) == 0)
+        s->started++;
     if (s->started == 0) {
+        ts_scheduler_stop(s);
         scheduler_unref(s);
         ts_error_set(err, TS_ERR_INTERNAL, "could not start any render thread");
         return NULL;
@@ -381,10 +515,13 @@ void ts_scheduler_stop(ts_scheduler *s)
     bool join = !s->joined;
     s->stopping = true;
     s->joined = true;
+    for (int i = 0; i < s->started; i++) atomic_store(&s->workers[i].interrupt, true);
     pthread_cond_broadcast(&s->work);
+    pthread_cond_broadcast(&s->timer_cv);
     pthread_mutex_unlock(&s->mu);
-    if (join)
-        for (int i = 0; i < s->started; i++) pthread_join(s->threads[i], NULL);
+    if (!join) return;
+    for (int i = 0; i < s->started; i++) pthread_join(s->threads[i], NULL);
+    if (s->timer_started) pthread_join(s->timer, NULL);
 }
 
 void ts_scheduler_destroy(ts_scheduler *s)
@@ -513,6 +650,7 @@ bool ts_sched_job_cancel(ts_sched_job *j)
         return was;
     }
     j->cancel = true;
+    interrupt_job(s, j);
     if (s->stopping && j->outstanding == 0 && !j->closing) {
         /* No workers left to close it: finish here (no new error estimate). */
         j->state = TS_JOB_CANCELLED;

@@ -20,9 +20,18 @@
  *
  * Passes and halting follow progressive.h, the one policy of every render: the spp target;
  * time_limit_s (rendering wall time; the last pass is shrunk to what the measured speed
- * says still fits); target_error (ts_film_relative_error, checked at pass ends from
- * TS_PROGRESSIVE_ERROR_MIN_SPP on; proto/error-estimate.md); cancellation (tiles being
- * rendered finish, nothing new starts, pixels stay). A job may render a sample range that
+ * says still fits, and a timer stops the tiles still rendering when the limit passes);
+ * target_error (ts_film_relative_error, checked at pass ends from
+ * TS_PROGRESSIVE_ERROR_MIN_SPP on; proto/error-estimate.md); cancellation (nothing new
+ * starts, pixels of whole tile passes stay).
+ *
+ * Stopping inside a tile: cancellation, the time limit and ts_scheduler_stop take effect
+ * within one sample, and the integrator checks at every bounce and light, so a stop takes
+ * about one bounce's time whatever the scene. The tile pass that was interrupted is rolled
+ * back to its last snapshot (its samples are neither published nor counted), so snapshots
+ * and every film read from them hold whole tile passes; after a stop part-way through a
+ * pass tiles may be one pass apart (each pixel's count says how many samples it holds).
+ * A job may render a sample range that
  * starts past 0 (a farm shard): its tiles' sample counts are relative to sample_begin.
  * Samples of a pixel are added in index order by one thread, so a job's film is
  * bit-identical to ts_render of the same sample range.
@@ -129,9 +138,9 @@ typedef struct ts_sched_job_desc {
  * NULL with err filled when threads cannot be started. */
 ts_scheduler *ts_scheduler_create(int threads, int max_running, ts_error *err);
 
-/* Stops the workers after the tiles they are rendering (their snapshots are published),
- * without changing any job's state: used before a final checkpoint. Idempotent. Jobs
- * submitted afterwards are kept but never rendered. */
+/* Stops the workers within one sample (the tiles they were rendering are rolled back to
+ * their snapshots), without changing any job's state: used before a final checkpoint.
+ * Idempotent. Jobs submitted afterwards are kept but never rendered. */
 void ts_scheduler_stop(ts_scheduler *s);
 
 /* Stops (if needed) and frees the scheduler; drops its references to jobs. Jobs the
@@ -150,8 +159,9 @@ ts_sched_job *ts_scheduler_submit(ts_scheduler *s, const ts_sched_job_desc *desc
 void ts_sched_job_retain(ts_sched_job *j);
 void ts_sched_job_release(ts_sched_job *j); /* NULL is fine */
 
-/* Asks the job to stop; tiles being rendered finish and keep their samples. Returns true
- * if the job was unfinished. on_done may run on the calling thread. */
+/* Asks the job to stop; tiles being rendered stop within one sample and are rolled back
+ * (the whole tile passes before them stay). Returns true if the job was unfinished.
+ * on_done may run on the calling thread. */
 bool ts_sched_job_cancel(ts_sched_job *j);
 
 void ts_sched_job_progress(ts_sched_job *j, ts_job_progress *out);
