@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/socket.h>
 
 #include "assets.h"
 #include "job_store.h"
@@ -213,47 +214,60 @@ static int get_image(srv_request *r, srv_job *j, const parsed *p)
 
 /* ---------------------------------------------------------------- events */
 
-static void initial_state(void *arg, srv_events_append_fn append, void *ctx)
+/* A late subscriber's backlog (events.h): tile i's event as it stands, read from its
+ * snapshot when the client gets to it; then the progress (and done) of the tail. */
+static char *backlog_tile(void *arg, int i)
 {
     srv_job *j = arg;
-    for (int ty = 0; ty < j->ny; ty++)
-        for (int tx = 0; tx < j->nx; tx++) {
-            ts_tile_snapshot *s = j->sj ? ts_sched_job_tile(j->sj, tx, ty) : NULL;
-            if (!s) continue;
-            /* The same document as the live `tile` events (job_store.c). */
-            ts_tile_event ev = {s->tx, s->ty, s->x, s->y, s->w, s->h, s->spp};
-            ts_tile_snapshot_release(s);
-            cJSON *o = srv_job_tile_json(j, &ev);
-            char *t = o ? cJSON_PrintUnformatted(o) : NULL;
-            cJSON_Delete(o);
-            char *e = t ? srv_events_format("tile", t) : NULL;
-            if (e) append(ctx, e);
-            free(e);
-            free(t);
-        }
-    if (!j->sj) return;
+    ts_tile_snapshot *s = j->sj ? ts_sched_job_tile(j->sj, i % j->nx, i / j->nx) : NULL;
+    if (!s) return NULL;
+    /* The same event as the live ones (job_store.c). */
+    ts_tile_event ev = {s->tx, s->ty, s->x, s->y, s->w, s->h, s->spp};
+    ts_tile_snapshot_release(s);
+    return srv_job_tile_event(j, &ev);
+}
+
+static char *backlog_tail(void *arg)
+{
+    srv_job *j = arg;
+    if (!j->sj) return NULL;
     ts_job_progress p;
     ts_sched_job_progress(j->sj, &p);
     cJSON *o = srv_job_progress_json(j, &p);
     char *s = cJSON_PrintUnformatted(o);
     cJSON_Delete(o);
-    if (!s) return;
+    if (!s) return NULL;
     char *e = srv_events_format("progress", s);
-    if (e) append(ctx, e);
-    free(e);
-    if (ts_job_state_finished(p.state)) {
-        e = srv_events_format("done", s);
-        if (e) append(ctx, e);
+    if (e && ts_job_state_finished(p.state)) {
+        char *done = srv_events_format("done", s);
+        char *both = done ? malloc(strlen(e) + strlen(done) + 1) : NULL;
+        if (both) strcat(strcpy(both, e), done);
+        free(done);
         free(e);
+        e = both;
     }
     free(s);
+    return e;
 }
+
+static void job_retain(void *j) { srv_job_retain(j); }
+static void job_release(void *j) { srv_job_release(j); }
 
 static int get_events(srv_request *r, srv_job *j)
 {
-    struct MHD_Response *resp = srv_events_subscribe(j->events, r->conn, initial_state, j);
-    srv_job_release(j); /* the store keeps the job (and its hub) for the server's lifetime */
-    if (!resp) return srv_http_error(r, 500, "out of memory");
+    srv_events_source src = {j->sj ? j->nx * j->ny : 0, backlog_tile, backlog_tail, job_retain, job_release, j};
+    unsigned status = 500;
+    char msg[256] = "";
+    struct MHD_Response *resp =
+        srv_events_subscribe(j->events, r->conn, &src, ((srv_api *)r->app)->sse_limits, &status, msg, sizeof msg);
+    srv_job_release(j); /* the stream holds its own reference (src.retain) */
+    if (!resp) return srv_http_error(r, status, "%s", msg);
+    /* A small send buffer: a client that stops reading stops costing the server work (the
+     * backlog is only formatted as the socket takes it) within 64 KiB, instead of the
+     * megabytes the kernel's autotuning would let it queue. */
+    const union MHD_ConnectionInfo *ci = MHD_get_connection_info(r->conn, MHD_CONNECTION_INFO_CONNECTION_FD);
+    int sndbuf = 64 << 10;
+    if (ci) setsockopt(ci->connect_fd, SOL_SOCKET, SO_SNDBUF, &sndbuf, sizeof sndbuf);
     MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, "text/event-stream");
     MHD_add_response_header(resp, "X-Accel-Buffering", "no");
     return srv_http_queue(r, 200, resp);
@@ -345,6 +359,12 @@ static int metrics(srv_request *r)
                    "# TYPE tessera_render_threads gauge\ntessera_render_threads %d\n",
                    by_state[TS_JOB_QUEUED], (unsigned long long)ts_scheduler_samples(srv->sched), sps,
                    ts_scheduler_threads(srv->sched));
+    srv_buf_printf(&buf, &len, &cap,
+                   "# HELP tessera_event_streams Event streams (SSE subscribers) open now.\n"
+                   "# TYPE tessera_event_streams gauge\ntessera_event_streams %d\n"
+                   "# HELP tessera_event_streams_dropped_total Event streams ended for falling too far behind.\n"
+                   "# TYPE tessera_event_streams_dropped_total counter\ntessera_event_streams_dropped_total %llu\n",
+                   atomic_load(&srv->sse_limits->total), (unsigned long long)atomic_load(&srv->sse_limits->dropped));
     srv_metrics_format(srv->metrics, &buf, &len, &cap);
     if (!buf) return srv_http_error(r, 500, "out of memory");
     int ret = srv_http_reply(r, 200, "text/plain; version=0.0.4; charset=utf-8", buf, len);

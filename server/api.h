@@ -11,6 +11,7 @@
 
 struct srv_store;
 struct srv_metrics;
+struct srv_events_limits;
 struct ts_scheduler;
 
 /* What the routes read: the server's parts and the settings that concern them. Owned by
@@ -22,6 +23,7 @@ typedef struct srv_api {
     struct srv_store *store;
     struct ts_scheduler *sched;
     struct srv_metrics *metrics;
+    struct srv_events_limits *sse_limits; /* event-stream subscriber caps */
 } srv_api;
 
 /* The handler table of API v1 over api (srv_http_start takes it). */

@@ -41,6 +41,8 @@ static void job_free(srv_job *j)
     free(j);
 }
 
+void srv_job_retain(srv_job *j) { atomic_fetch_add(&j->refs, 1); }
+
 void srv_job_release(srv_job *j)
 {
     if (j && atomic_fetch_sub(&j->refs, 1) == 1) job_free(j);
@@ -120,10 +122,11 @@ static char *print_and_delete(cJSON *o)
     return s;
 }
 
-static void publish_json(srv_job *j, const char *name, cJSON *o)
+/* item: the tile the event is about (its index in the grid), or -1 (events.h). */
+static void publish_json(srv_job *j, const char *name, cJSON *o, int item)
 {
     char *s = print_and_delete(o);
-    if (s) srv_events_publish(j->events, name, s);
+    if (s) srv_events_publish(j->events, name, s, item);
     free(s);
 }
 
@@ -145,12 +148,35 @@ cJSON *srv_job_tile_json(const srv_job *j, const ts_tile_event *ev)
     return o;
 }
 
+char *srv_job_tile_event(const srv_job *j, const ts_tile_event *ev)
+{
+    bool plain = j->id[0] != '\0';
+    for (const char *c = j->id; *c; c++)
+        plain = plain && ((*c >= '0' && *c <= '9') || (*c >= 'a' && *c <= 'z') || (*c >= 'A' && *c <= 'Z') ||
+                          *c == '-' || *c == '_');
+    if (!plain) { /* an id JSON must escape (never one the server makes): through cJSON */
+        char *doc = print_and_delete(srv_job_tile_json(j, ev));
+        char *e = doc ? srv_events_format("tile", doc) : NULL;
+        free(doc);
+        return e;
+    }
+    char *e = malloc(512);
+    if (e)
+        snprintf(e, 512,
+                 "event: tile\ndata: {\"tx\":%d,\"ty\":%d,\"x\":%d,\"y\":%d,\"w\":%d,\"h\":%d,\"spp\":%u,"
+                 "\"png\":\"/api/v1/jobs/%s/tiles/%d/%d.png\",\"exr\":\"/api/v1/jobs/%s/tiles/%d/%d.exr\"}\n\n",
+                 ev->tx, ev->ty, ev->x, ev->y, ev->w, ev->h, ev->spp, j->id, ev->tx, ev->ty, j->id, ev->tx, ev->ty);
+    return e;
+}
+
 static void on_tile(void *user, ts_sched_job *sj, const ts_tile_event *ev)
 {
     (void)sj;
     srv_job *j = user;
     atomic_fetch_add(&j->version, 1);
-    publish_json(j, "tile", srv_job_tile_json(j, ev));
+    char *e = srv_job_tile_event(j, ev);
+    if (e) srv_events_publish_frame(j->events, e, ev->ty * j->nx + ev->tx);
+    free(e);
     if (!atomic_exchange(&j->started_logged, true) && srv_log_enabled(j->store->cfg.log, SRV_LOG_INFO)) {
         ts_job_progress p;
         ts_sched_job_progress(sj, &p);
@@ -218,7 +244,7 @@ void srv_job_tick(srv_job *j)
     ts_sched_job_progress(j->sj, &p);
     if (p.state != TS_JOB_RUNNING) return;
     history_add_progress(j, &p, 't');
-    publish_json(j, "progress", srv_job_progress_json(j, &p));
+    publish_json(j, "progress", srv_job_progress_json(j, &p), -1);
 }
 
 cJSON *srv_job_history_json(srv_job *j)
@@ -267,7 +293,7 @@ static void on_pass(void *user, ts_sched_job *sj, const ts_job_progress *p)
     (void)sj;
     srv_job *j = user;
     history_add_progress(j, p, 'p');
-    publish_json(j, "progress", srv_job_progress_json(j, p));
+    publish_json(j, "progress", srv_job_progress_json(j, p), -1);
     log_progress(j, "job.pass", p);
 }
 
@@ -278,8 +304,8 @@ static void on_done(void *user, ts_sched_job *sj, const ts_job_progress *p)
     history_add_progress(j, p, 'd');
     log_progress(j, p->state == TS_JOB_CANCELLED ? "job.cancelled" : p->state == TS_JOB_FAILED ? "job.failed" : "job.finished", p);
     atomic_fetch_add(&j->version, 1);
-    publish_json(j, "progress", srv_job_progress_json(j, p));
-    publish_json(j, "done", srv_job_progress_json(j, p));
+    publish_json(j, "progress", srv_job_progress_json(j, p), -1);
+    publish_json(j, "done", srv_job_progress_json(j, p), -1);
     srv_events_close(j->events);
     if (j->store->cfg.on_job_finished) j->store->cfg.on_job_finished(j->store->cfg.user);
 }
@@ -427,6 +453,7 @@ static srv_job *submit(srv_store *st, const char *text, size_t len, int *http_st
         goto fail_scene;
     }
     j->settings = js;
+    srv_events_set_items(j->events, j->nx * j->ny);
     struct timespec now;
     clock_gettime(CLOCK_REALTIME, &now);
     j->created_unix = (double)now.tv_sec + 1e-6 * (double)(now.tv_nsec / 1000); /* µs: orders restored jobs */
@@ -483,6 +510,7 @@ srv_job *srv_store_restore(srv_store *st, const srv_restore *r, ts_error *err)
         j->x0 = r->film->x0, j->y0 = r->film->y0, j->w = r->film->width, j->h = r->film->height;
         ts_tile_grid_size(j->w, j->h, &j->nx, &j->ny);
     }
+    srv_events_set_items(j->events, j->nx * j->ny);
     if (r->failure && !r->film) {
         /* Nothing to show: a failed job without a scheduler job. */
         srv_events_close(j->events);

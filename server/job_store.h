@@ -108,6 +108,7 @@ srv_job *srv_store_get(srv_store *st, const char *id);
 bool srv_store_remove(srv_store *st, srv_job *j);
 /* New references to all jobs, newest first; *n of them (caller frees the array). */
 srv_job **srv_store_list(srv_store *st, int *n);
+void srv_job_retain(srv_job *j);
 void srv_job_release(srv_job *j);
 
 /* The job's status document (proto/job-status.schema.json). Caller deletes. */
@@ -133,6 +134,11 @@ const char *srv_job_state_name(const srv_job *j, const ts_job_progress *p);
 cJSON *srv_job_progress_json(srv_job *j, const ts_job_progress *p);
 /* The tile event document ({tx, ty, x, y, w, h, spp, png, exr}). Caller deletes. */
 cJSON *srv_job_tile_json(const srv_job *j, const ts_tile_event *ev);
+/* The whole SSE frame of that document ("event: tile\ndata: …\n\n", malloc'd; NULL when
+ * out of memory): the same bytes as srv_events_format("tile", cJSON_PrintUnformatted of
+ * srv_job_tile_json), printed directly, since a late subscriber's backlog makes one per
+ * tile. */
+char *srv_job_tile_event(const srv_job *j, const ts_tile_event *ev);
 ts_job_state srv_job_state(srv_job *j);
 /* Records why the job's checkpoint failed (NULL: it was written); true when that changed
  * the recorded state. Shown as `checkpoint_error` in the status. Thread-safe. */

@@ -50,6 +50,8 @@ static void usage(FILE *f)
             "  --max-shapes N              most shapes in a posted scene (default 65536)\n"
             "  --client-timeout S          close a connection idle this many seconds (default 60)\n"
             "  --max-client-connections N  connections one address may hold, to 4000 (default 1024)\n"
+            "  --max-subscribers N         event streams open at once, all jobs, to 4000 (default 2048)\n"
+            "  --max-job-subscribers N     event streams of one job at once, to 4000 (default 1024)\n"
             "  --max-work RAYS             most rays one job may ask for: rays a sample x spp x pixels (default 1e13)\n"
             "  --log-format text|json      job events as text lines or JSON lines on stderr (default text)\n"
             "  --log-level LEVEL           error, warn, info (job events; default) or debug (and every request)\n"
@@ -228,7 +230,12 @@ bool srv_server_start(srv_server *srv, int *port_out, char *err, size_t err_len)
         goto fail;
     }
     srv->maint_started = true;
-    srv->api = (srv_api){cfg->token, cfg->data_dir, cfg->cors_origin, srv->store, srv->sched, srv->metrics};
+    srv->sse_limits.max_per_job = cfg->max_job_subscribers;
+    srv->sse_limits.max_total = cfg->max_subscribers;
+    atomic_init(&srv->sse_limits.total, 0);
+    atomic_init(&srv->sse_limits.dropped, 0);
+    srv->api = (srv_api){cfg->token, cfg->data_dir, cfg->cors_origin, srv->store, srv->sched, srv->metrics,
+                         &srv->sse_limits};
     srv_http_config hc = {cfg->bind,       cfg->port,        cfg->http_threads, cfg->client_timeout_s,
                           cfg->max_client_conns, cfg->max_body, cfg->cors_origin, srv->metrics,
                           srv->offload, &srv->log};
@@ -280,7 +287,7 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
         OPT_BIND = 256, OPT_PORT, OPT_THREADS, OPT_DATA, OPT_TOKEN, OPT_MAX_RUNNING, OPT_HTTP_THREADS, OPT_MAX_BODY,
         OPT_MAX_PIXELS, OPT_MAX_RES, OPT_MAX_SPP, OPT_MAX_TRIS, OPT_MAX_SHAPES, OPT_CKPT, OPT_CORS, OPT_BUILTIN, OPT_HELP,
         OPT_TOKEN_FILE, OPT_ASSETS, OPT_MAX_ASSET_BYTES, OPT_MAX_JOBS, OPT_CLIENT_TIMEOUT, OPT_MAX_CLIENT_CONNS,
-        OPT_LOG_FORMAT, OPT_LOG_LEVEL, OPT_MAX_WORK
+        OPT_LOG_FORMAT, OPT_LOG_LEVEL, OPT_MAX_WORK, OPT_MAX_SUBS, OPT_MAX_JOB_SUBS
     };
     static const struct option opts[] = {
         {"bind", required_argument, NULL, OPT_BIND},
@@ -293,6 +300,8 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
         {"max-asset-bytes", required_argument, NULL, OPT_MAX_ASSET_BYTES},
         {"max-jobs", required_argument, NULL, OPT_MAX_JOBS},
         {"max-work", required_argument, NULL, OPT_MAX_WORK},
+        {"max-subscribers", required_argument, NULL, OPT_MAX_SUBS},
+        {"max-job-subscribers", required_argument, NULL, OPT_MAX_JOB_SUBS},
         {"client-timeout", required_argument, NULL, OPT_CLIENT_TIMEOUT},
         {"max-client-connections", required_argument, NULL, OPT_MAX_CLIENT_CONNS},
         {"max-running", required_argument, NULL, OPT_MAX_RUNNING},
@@ -332,6 +341,8 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
     cfg->limits.max_file_bytes = 256ull << 20; /* each asset file (only read with --assets) */
     cfg->max_jobs = 1000;
     cfg->max_work = 1e13;
+    cfg->max_subscribers = 2048;
+    cfg->max_job_subscribers = 1024;
     const char *token_file = NULL, *assets = NULL;
     cfg->limits.max_memory = 2ull << 30;
     unsigned long long v;
@@ -404,6 +415,14 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
         case OPT_MAX_SHAPES:
             if (!parse_u64(optarg, 1, 1u << 24, &v)) return usage_error("--max-shapes: expected a positive count, got '%s'", optarg);
             cfg->limits.max_shapes = (uint32_t)v;
+            break;
+        case OPT_MAX_SUBS:
+            if (!parse_u64(optarg, 1, 4000, &v)) return usage_error("--max-subscribers: expected 1 to 4000, got '%s'", optarg);
+            cfg->max_subscribers = (int)v;
+            break;
+        case OPT_MAX_JOB_SUBS:
+            if (!parse_u64(optarg, 1, 4000, &v)) return usage_error("--max-job-subscribers: expected 1 to 4000, got '%s'", optarg);
+            cfg->max_job_subscribers = (int)v;
             break;
         case OPT_MAX_WORK: {
             char *end;

@@ -35,6 +35,8 @@ typedef struct srv_config {
     const char *assets_dir;      /* --assets: the only folder posted scenes may read; NULL = none */
     int max_jobs;                /* jobs held in the store (any state); a POST beyond: 503 */
     double max_work;             /* rays one job may ask for; a POST beyond: 422 */
+    int max_subscribers;         /* event streams at once, all jobs; beyond: 503 */
+    int max_job_subscribers;     /* event streams of one job at once; beyond: 503 */
     const char *cors_origin;     /* NULL = no CORS headers */
     size_t max_body;             /* request body cap, bytes */
     double checkpoint_interval_s;
@@ -54,6 +56,7 @@ typedef struct srv_server {
     srv_api api;                    /* what the routes read; immutable after start */
     srv_log log;                    /* job events and (at debug) requests, to stderr */
     char builtin_job[24];           /* the id of the queued built-in scene (--queue-builtin), or "" */
+    srv_events_limits sse_limits;   /* caps from cfg; its count is atomic */
     /* maintenance thread */
     pthread_t maint;
     bool maint_started;

@@ -13,7 +13,10 @@
  *   clients     clients that disconnect mid-download and mid-event-stream, slow clients
  *               (one byte per second, more of them than HTTP threads), an idle client past
  *               --client-timeout, and --max-client-connections: the server stays healthy
- *               and holds no socket afterwards (its open descriptors return to baseline). */
+ *               and holds no socket afterwards (its open descriptors return to baseline);
+ *               1000 event-stream subscribers that never read leave /healthz prompt and the
+ *               server's memory bounded, subscriber caps answer 503, and a subscriber that
+ *               falls too far behind is dropped. */
 #define _GNU_SOURCE /* unshare, mount namespaces */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -34,6 +37,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mount.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <time.h>
@@ -701,11 +705,142 @@ static void test_slow_clients(void **state)
     assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
 }
 
+static long rss_kib(pid_t pid)
+{
+    char path[64], line[256];
+    snprintf(path, sizeof path, "/proc/%d/status", (int)pid);
+    FILE *f = fopen(path, "r");
+    long kib = -1;
+    while (f && fgets(line, sizeof line, f))
+        if (!strncmp(line, "VmRSS:", 6)) kib = atol(line + 6);
+    if (f) fclose(f);
+    return kib;
+}
+
+static double metric(const test_server *s, const char *name)
+{
+    http_resp r;
+    ts_http(s, "GET", "/metrics", NULL, 0, NULL, &r);
+    char key[128];
+    snprintf(key, sizeof key, "\n%s ", name);
+    const char *at = strstr(r.body, key);
+    double v = at ? atof(at + strlen(key)) : -1;
+    ts_http_free(&r);
+    return v;
+}
+
+static int subscribe(const test_server *s, const char *id)
+{
+    char req[256];
+    snprintf(req, sizeof req, "GET /api/v1/jobs/%s/events HTTP/1.1\r\nHost: 127.0.0.1:%d\r\n\r\n", id, s->port);
+    int fd = connect_to(s);
+    send_all(fd, req);
+    return fd;
+}
+
+/* The status line of what fd received first (waits up to 5 s). */
+static int status_of(int fd)
+{
+    char buf[64] = "";
+    double t0 = now_s();
+    size_t got = 0;
+    while (got < 12 && now_s() - t0 < 5) {
+        struct pollfd p = {fd, POLLIN, 0};
+        if (poll(&p, 1, 50) <= 0) continue;
+        ssize_t r = recv(fd, buf + got, 12 - got, 0);
+        if (r <= 0) break;
+        got += (size_t)r;
+    }
+    return got >= 12 ? atoi(buf + 9) : -1;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* 1000 subscribers that never read, to a finished job of 1024 tiles: subscribing costs
+ * O(1) and the backlog is pulled only as each socket takes it, so /healthz stays prompt
+ * (p99 < 50 ms over 200 requests once the sockets are full) and the server's memory grows
+ * by a bounded amount (each stream holds at most SRV_EVENTS_BUFFER_CAP, 256 KiB). Then the
+ * caps (503 past --max-job-subscribers and --max-subscribers) and a subscriber that stops
+ * reading while events keep coming: dropped, its connection closed. */
+static void test_idle_subscribers(void **state)
+{
+    (void)state;
+    enum { SUBS = 1000 };
+    struct rlimit rl;
+    getrlimit(RLIMIT_NOFILE, &rl);
+    if (rl.rlim_cur < SUBS + 200) {
+        rl.rlim_cur = rl.rlim_max < SUBS + 200 ? rl.rlim_max : SUBS + 200;
+        setrlimit(RLIMIT_NOFILE, &rl); /* the server inherits it */
+    }
+    if (rl.rlim_cur < SUBS + 200) {
+        printf("note: only %lu descriptors may be open: the idle-subscriber case is skipped\n", (unsigned long)rl.rlim_cur);
+        skip();
+    }
+    test_server s;
+    const char *args[] = {"--threads", "2", NULL};
+    ts_server_start(&s, args);
+    char *doc = ts_ao_scene("subscribers", 1024, 1024, 1), id[32];
+    ts_submit(&s, doc, id, sizeof id);
+    free(doc);
+    cJSON_Delete(ts_wait_done(&s, id, 60));
+    long rss0 = rss_kib(s.pid);
+    int *fds = malloc(sizeof *fds * SUBS);
+    for (int i = 0; i < SUBS; i++) fds[i] = subscribe(&s, id);
+    ts_sleep_ms(2000); /* the sockets fill up */
+    assert_int_equal((int)metric(&s, "tessera_event_streams"), SUBS);
+    double ms[200];
+    for (int i = 0; i < 200; i++) ms[i] = healthz_ms(&s);
+    qsort(ms, 200, sizeof *ms, cmp_double);
+    long rss1 = rss_kib(s.pid);
+    printf("%d idle subscribers to a finished 1024-tile job: /healthz p50 %.1f ms, p99 %.1f ms; server RSS %ld → %ld MiB\n",
+           SUBS, ms[100], ms[197], rss0 >> 10, rss1 >> 10);
+    assert_true(ms[197] < 50);
+    assert_true(rss1 - rss0 < (long)SUBS * 256 + (64 << 10)); /* KiB: the buffer cap each, and slack */
+    for (int i = 0; i < SUBS; i++) close(fds[i]);
+    free(fds);
+    assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
+
+    /* The caps: 2 streams a job, 3 in all. */
+    const char *capped[] = {"--threads", "2", "--max-job-subscribers", "2", "--max-subscribers", "3", NULL};
+    ts_server_start(&s, capped);
+    char a[32], b[32];
+    doc = ts_ao_scene("caps", 2048, 512, 1 << 16); /* 1024 tiles: 230 KiB of tile events a pass */
+    ts_submit(&s, doc, a, sizeof a);
+    ts_submit(&s, doc, b, sizeof b);
+    free(doc);
+    int fa1 = subscribe(&s, a), fa2 = subscribe(&s, a), fa3 = subscribe(&s, a);
+    assert_int_equal(status_of(fa1), 200);
+    assert_int_equal(status_of(fa2), 200);
+    assert_int_equal(status_of(fa3), 503);
+    int fb1 = subscribe(&s, b), fb2 = subscribe(&s, b);
+    assert_int_equal(status_of(fb1), 200);
+    assert_int_equal(status_of(fb2), 503); /* 3 in all */
+    close(fa3), close(fb2);
+    /* fa1, fa2 and fb1 never read while both jobs publish a tile event a tile pass: the
+     * server drops them once they are SRV_EVENTS_BUFFER_CAP behind (a few passes) and
+     * closes their connections. */
+    double t0 = now_s();
+    while (metric(&s, "tessera_event_streams_dropped_total") < 3 && now_s() - t0 < 30) ts_sleep_ms(100);
+    assert_int_equal((int)metric(&s, "tessera_event_streams_dropped_total"), 3);
+    assert_true(closed_by_server(fa1, 10));
+    close(fa1), close(fa2), close(fb1);
+    t0 = now_s();
+    while (metric(&s, "tessera_event_streams") > 0 && now_s() - t0 < 10) ts_sleep_ms(50);
+    assert_int_equal((int)metric(&s, "tessera_event_streams"), 0);
+    assert_int_equal(status_of(subscribe(&s, a)), 200); /* places are given back */
+    assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
+}
+
 static int run_clients(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_disconnects),
         cmocka_unit_test(test_slow_clients),
+        cmocka_unit_test(test_idle_subscribers),
     };
     return cmocka_run_group_tests_name("clients", tests, NULL, NULL);
 }

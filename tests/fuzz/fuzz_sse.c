@@ -296,6 +296,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     snprintf(want, sizeof want, "/api/v1/jobs/%s/tiles/%d/%d.exr", j->id, ev.tx, ev.ty);
     check_string(te, "exr", want);
     cJSON_Delete(te);
+    /* The directly printed frame of the same event is byte for byte the cJSON one. */
+    char *direct = srv_job_tile_event(j, &ev), *framed = srv_events_format("tile", text[2]);
+    FUZZ_CHECK(direct && framed && strcmp(direct, framed) == 0);
+    free(direct);
+    free(framed);
 
     /* SSE frames: the three documents, then the rest of the input as free text. */
     for (int i = 0; i < 3; i++) {
