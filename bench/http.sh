@@ -35,7 +35,7 @@ done
 now() { date +%s.%N; }
 http_run() {
   t0=$(now)
-  id=$(curl -sf -X POST --data-binary @"$work/scene.json" "http://127.0.0.1:$PORT/api/v1/jobs" |
+  id=$(curl -sf -X POST -H "Content-Type: application/json" --data-binary @"$work/scene.json" "http://127.0.0.1:$PORT/api/v1/jobs" |
        sed -n 's/^{"id":"\([0-9a-f]*\)".*/\1/p')
   [ -n "$id" ] || { echo "bench http: submission failed" >&2; exit 1; }
   # Read the event stream until `done`, stamping the first tile; at most 10 minutes.

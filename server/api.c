@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <arpa/inet.h>
 #include <sys/socket.h>
 
 #include "assets.h"
@@ -33,6 +34,22 @@ static bool parse_ext(const char *s, const char *stem, bool *png)
     return false;
 }
 
+/* A tile index in canonical decimal: digits only, no sign, no leading zero (but "0"
+ * itself), at most 9 digits (so it fits an int without wrapping); advances *s past it. */
+static bool parse_index(const char **s, int *out)
+{
+    const char *p = *s;
+    int n = 0, v = 0;
+    while (p[n] >= '0' && p[n] <= '9' && n < 10) v = v * 10 + (p[n] - '0'), n++;
+    if (n == 0 || n > 9 || (n > 1 && p[0] == '0')) return false;
+    *s = p + n;
+    *out = v;
+    return true;
+}
+
+/* The URL arrives as the client sent it (http.c turns libmicrohttpd's unescaping off), so
+ * "%2f" or "%00" never become a '/' or a NUL here: an id is [0-9A-Za-z_-] and any escape
+ * in a path segment makes the route unknown (404). */
 static void parse_url(const char *url, parsed *p)
 {
     memset(p, 0, sizeof *p);
@@ -58,12 +75,11 @@ static void parse_url(const char *url, parsed *p)
         else if (!strcmp(slash, "/cancel")) p->route = SRV_ROUTE_CANCEL;
         else if (parse_ext(slash, "/image", &p->png)) p->route = SRV_ROUTE_IMAGE;
         else if (!strncmp(slash, "/tiles/", 7)) {
-            char ext[8] = "";
-            int tx, ty, used = 0;
-            if (sscanf(slash + 7, "%d/%d.%4[a-z]%n", &tx, &ty, ext, &used) == 3 && slash[7 + used] == '\0' &&
-                (!strcmp(ext, "png") || !strcmp(ext, "exr"))) {
+            const char *at = slash + 7;
+            int tx, ty;
+            if (parse_index(&at, &tx) && *at++ == '/' && parse_index(&at, &ty) && parse_ext(at, "", &p->png)) {
                 p->route = SRV_ROUTE_TILE;
-                p->tx = tx, p->ty = ty, p->png = !strcmp(ext, "png");
+                p->tx = tx, p->ty = ty;
             }
         }
     }
@@ -88,28 +104,158 @@ static int reply_cjson(srv_request *r, unsigned status, cJSON *o)
     return ret;
 }
 
-/* True when given equals the configured token. The time taken depends only on the
- * configured token's length, never on where the first difference is: every byte of the
- * token is compared (no early exit; past the end of given, its terminating NUL is used),
- * and a length mismatch is folded into the result rather than tested first. */
-static bool token_matches(const char *given, const char *token)
+/* True when the a bytes of given equal the configured token. The whole presented value
+ * counts (a NUL inside it is a byte like any other, so "TOKEN\0x" is not "TOKEN"). The
+ * time taken depends only on the configured token's length, never on where the first
+ * difference is: every byte of the token is compared (no early exit; past the end of
+ * given, a NUL is used), and a length mismatch is folded into the result rather than
+ * tested first. */
+static bool token_matches(const char *given, size_t a, const char *token)
 {
-    size_t a = strlen(given), b = strlen(token);
+    size_t b = strlen(token);
     volatile unsigned diff = a != b;
-    for (size_t i = 0; i < b; i++) diff |= (unsigned char)token[i] ^ (unsigned char)given[i < a ? i : a];
+    for (size_t i = 0; i < b; i++) diff |= (unsigned char)token[i] ^ (i < a ? (unsigned char)given[i] : 0u);
     return diff == 0;
+}
+
+static int hex_digit(char c)
+{
+    return c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10 : c >= 'A' && c <= 'F' ? c - 'A' + 10 : -1;
+}
+
+/* Percent-decodes s (n bytes) into out (at least n bytes); returns the decoded length, or
+ * (size_t)-1 for a malformed escape. */
+static size_t percent_decode(const char *s, size_t n, char *out)
+{
+    size_t k = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (s[i] != '%') {
+            out[k++] = s[i] == '+' ? ' ' : s[i];
+            continue;
+        }
+        int hi = i + 2 < n ? hex_digit(s[i + 1]) : -1;
+        int lo = i + 2 < n ? hex_digit(s[i + 2]) : -1;
+        if (hi < 0 || lo < 0) return (size_t)-1;
+        out[k++] = (char)(hi * 16 + lo);
+        i += 2;
+    }
+    return k;
 }
 
 static bool authorised(srv_request *r)
 {
     const char *token = ((srv_api *)r->app)->token;
     if (!token) return true;
-    const char *h = MHD_lookup_connection_value(r->conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_AUTHORIZATION);
-    const char *given = NULL;
-    if (h && !strncasecmp(h, "Bearer ", 7)) given = h + 7;
-    /* EventSource cannot send headers: the token may come as ?access_token=. */
-    if (!given) given = MHD_lookup_connection_value(r->conn, MHD_GET_ARGUMENT_KIND, "access_token");
-    return given && token_matches(given, token);
+    const char *h = NULL;
+    size_t h_len = 0;
+    if (MHD_lookup_connection_value_n(r->conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_AUTHORIZATION,
+                                      strlen(MHD_HTTP_HEADER_AUTHORIZATION), &h, &h_len) == MHD_YES &&
+        h && h_len >= 7 && !strncasecmp(h, "Bearer ", 7))
+        return token_matches(h + 7, h_len - 7, token);
+    /* EventSource cannot send headers: the token may come as ?access_token=, percent-encoded
+     * (the URL reaches us undecoded). */
+    const char *q = NULL;
+    size_t q_len = 0;
+    if (MHD_lookup_connection_value_n(r->conn, MHD_GET_ARGUMENT_KIND, "access_token", 12, &q, &q_len) != MHD_YES || !q)
+        return false;
+    char *dec = malloc(q_len + 1);
+    size_t n = dec ? percent_decode(q, q_len, dec) : (size_t)-1;
+    bool ok = n != (size_t)-1 && token_matches(dec, n, token);
+    free(dec);
+    return ok;
+}
+
+/* True when the Content-Type value v is the media type `want` (case-insensitive),
+ * parameters after ';' allowed: "application/json; charset=utf-8" is JSON,
+ * "application/jsonx" is not. */
+static bool media_type_is(const char *v, const char *want)
+{
+    size_t n = strlen(want);
+    while (*v == ' ' || *v == '\t') v++;
+    if (strncasecmp(v, want, n) != 0) return false;
+    v += n;
+    while (*v == ' ' || *v == '\t') v++;
+    return *v == '\0' || *v == ';';
+}
+
+/* Whether a POST's Content-Type is acceptable: without a token only application/json,
+ * so no page of another site can post through a browser (HTML forms and "simple" fetches
+ * can only send text/plain, form encodings or none); with a token (which such a page
+ * cannot send) also text/plain, application/x-www-form-urlencoded or none, read as JSON. */
+static bool post_type_ok(srv_request *r)
+{
+    const char *type = MHD_lookup_connection_value(r->conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_TYPE);
+    if (type && media_type_is(type, "application/json")) return true;
+    if (!((srv_api *)r->app)->token) return false;
+    return !type || media_type_is(type, "text/plain") || media_type_is(type, "application/x-www-form-urlencoded");
+}
+
+static bool is_ip_literal(const char *s)
+{
+    unsigned char b[16];
+    return inet_pton(AF_INET, s, b) == 1 || inet_pton(AF_INET6, s, b) == 1;
+}
+
+/* The name part of a Host value ("name", "name:port", "[v6]", "[v6]:port") into out;
+ * false when malformed or too long. */
+static bool host_name(const char *v, char *out, size_t n)
+{
+    const char *end;
+    if (v[0] == '[') {
+        end = strchr(v, ']');
+        if (!end || (end[1] && end[1] != ':')) return false;
+        v++;
+    } else {
+        end = strchr(v, ':');
+        if (!end) end = v + strlen(v);
+        if (strchr(end + (*end == ':'), ':')) return false;
+    }
+    size_t len = (size_t)(end - v);
+    if (len == 0 || len >= n) return false;
+    memcpy(out, v, len);
+    out[len] = '\0';
+    return true;
+}
+
+/* DNS rebinding: a page of another site whose name was made to resolve to this server
+ * sends its own name as Host. Only names the server was bound to pass: the bind address,
+ * localhost (and any loopback address) for a loopback bind, any IP address for a
+ * wildcard bind, and the names of --allowed-hosts. A request without Host (HTTP/1.0; no
+ * browser sends one) passes. */
+static bool host_allowed(srv_request *r, char *name, size_t n)
+{
+    const srv_api *a = r->app;
+    const char *h = MHD_lookup_connection_value(r->conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_HOST);
+    name[0] = '\0';
+    if (!h) return true;
+    snprintf(name, n, "%s", h);
+    char host[256];
+    if (!host_name(h, host, sizeof host)) return false;
+    const char *bind = a->bind ? a->bind : "127.0.0.1";
+    if (!strcasecmp(host, bind)) return true;
+    bool loopback = !strncmp(bind, "127.", 4) || !strcmp(bind, "::1");
+    if (loopback && (!strcasecmp(host, "localhost") || !strcmp(host, "::1") || (!strncmp(host, "127.", 4) && is_ip_literal(host))))
+        return true;
+    if ((!strcmp(bind, "0.0.0.0") || !strcmp(bind, "::")) && is_ip_literal(host)) return true;
+    for (const char *at = a->allowed_hosts; at && *at;) {
+        size_t len = strcspn(at, ",");
+        if (len == strlen(host) && !strncasecmp(at, host, len)) return true;
+        at += len + (at[len] == ',');
+    }
+    return false;
+}
+
+/* CSRF: a browser names the page's origin in Origin. Only the server's own origin (the
+ * Host it was reached by, over http) and --cors-origin pass; a request without Origin
+ * (not from a browser, or a same-origin GET) passes. */
+static bool origin_allowed(srv_request *r)
+{
+    const srv_api *a = r->app;
+    const char *o = MHD_lookup_connection_value(r->conn, MHD_HEADER_KIND, "Origin");
+    if (!o) return true;
+    if (a->cors_origin && !strcmp(o, a->cors_origin)) return true;
+    const char *h = MHD_lookup_connection_value(r->conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_HOST);
+    return h && !strncasecmp(o, "http://", 7) && !strcasecmp(o + 7, h);
 }
 
 /* ---------------------------------------------------------------- images (deferred) */
@@ -277,10 +423,6 @@ static int get_events(srv_request *r, srv_job *j)
 
 static int post_job(srv_request *r)
 {
-    const char *type = MHD_lookup_connection_value(r->conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_TYPE);
-    if (type && strncasecmp(type, "application/json", 16) != 0 && strncasecmp(type, "text/plain", 10) != 0 &&
-        strncasecmp(type, "application/x-www-form-urlencoded", 33) != 0)
-        return srv_http_error(r, 415, "a job is a JSON scene document (Content-Type: application/json), not %s", type);
     if (!r->body_len) return srv_http_error(r, 400, "the request body is empty: send a scene document (JSON)");
     ts_error err = {0};
     int status = 500;
@@ -402,6 +544,13 @@ static int handle(srv_request *r)
         MHD_add_response_header(resp, "Access-Control-Max-Age", "600");
         return srv_http_queue(r, 204, resp);
     }
+    char host[160];
+    if (!host_allowed(r, host, sizeof host))
+        return srv_http_error(r, 403, "Host '%s' is not a name of this server (tessera serve --bind, --allowed-hosts)",
+                              host);
+    if (!origin_allowed(r))
+        return srv_http_error(r, 403, "requests from another site's pages are refused (Origin is not this server's "
+                                      "and not --cors-origin)");
     if (p.route == SRV_ROUTE_OTHER) return srv_http_error(r, 404, "no such resource: %s", r->url);
     bool get = !strcmp(m, "GET") || !strcmp(m, "HEAD");
     if (p.route != SRV_ROUTE_UI && p.route != SRV_ROUTE_HEALTHZ && !authorised(r)) {
@@ -410,6 +559,11 @@ static int handle(srv_request *r)
         MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, "application/json");
         MHD_add_response_header(resp, MHD_HTTP_HEADER_WWW_AUTHENTICATE, "Bearer realm=\"tessera\"");
         return srv_http_queue(r, 401, resp);
+    }
+    if (!strcmp(m, "POST") && !post_type_ok(r)) {
+        const char *type = MHD_lookup_connection_value(r->conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_TYPE);
+        return srv_http_error(r, 415, "a POST is JSON: send Content-Type: application/json (got %s)",
+                              type ? type : "none");
     }
     switch (p.route) {
     case SRV_ROUTE_UI:

@@ -20,6 +20,8 @@ typedef struct srv_api {
     const char *token;        /* NULL = no auth; never printed or logged */
     const char *data_dir;     /* --data, or NULL: accepted jobs are written there */
     const char *cors_origin;  /* NULL = no CORS preflight answers */
+    const char *bind;         /* the address the server listens on: the Host names it answers */
+    const char *allowed_hosts; /* --allowed-hosts: more Host names, comma-separated; or NULL */
     struct srv_store *store;
     struct ts_scheduler *sched;
     struct srv_metrics *metrics;

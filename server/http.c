@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -175,6 +176,23 @@ static int reply_deferred(srv_request *r)
     return srv_http_queue(r, r->reply_status, resp);
 }
 
+/* libmicrohttpd would percent-decode the path and the query arguments before the handler
+ * sees them, so "%2f" became a '/' and "%00" cut a string short before routing: the URL
+ * is kept as sent, and what needs decoding (the access_token argument) is decoded by the
+ * code that reads it, with its length. */
+static size_t keep_escaped(void *cls, struct MHD_Connection *conn, char *s)
+{
+    (void)cls, (void)conn;
+    return strlen(s);
+}
+
+static enum MHD_Result count_content_length(void *cls, enum MHD_ValueKind kind, const char *key, const char *value)
+{
+    (void)kind, (void)value;
+    if (key && !strcasecmp(key, MHD_HTTP_HEADER_CONTENT_LENGTH)) ++*(int *)cls;
+    return MHD_YES;
+}
+
 static enum MHD_Result handler(void *cls, struct MHD_Connection *conn, const char *url, const char *method,
                                const char *version, const char *upload, size_t *upload_size, void **con_cls)
 {
@@ -196,6 +214,13 @@ static enum MHD_Result handler(void *cls, struct MHD_Connection *conn, const cha
         }
         r->route = h->handlers.route(url);
         *con_cls = r;
+        int n_cl = 0;
+        MHD_get_connection_values(conn, MHD_HEADER_KIND, count_content_length, &n_cl);
+        if (n_cl > 1) { /* which one frames the body? (request smuggling) */
+            r->method = method, r->url = url;
+            r->body_too_large = true; /* discard the body */
+            return (enum MHD_Result)srv_http_error(r, 400, "the request has %d Content-Length headers; send one", n_cl);
+        }
         const char *cl = MHD_lookup_connection_value(conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH);
         if (cl && strtoull(cl, NULL, 10) > h->cfg.max_body) {
             r->method = method, r->url = url;
@@ -288,6 +313,7 @@ srv_http *srv_http_start(const srv_http_config *cfg, const srv_http_handlers *ha
     h->d = MHD_start_daemon(flags, (uint16_t)h->cfg.port, NULL, NULL, handler, h,
                             MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&ss,
                             MHD_OPTION_NOTIFY_COMPLETED, completed, h,
+                            MHD_OPTION_UNESCAPE_CALLBACK, keep_escaped, NULL,
                             MHD_OPTION_THREAD_POOL_SIZE, (unsigned)(h->cfg.threads > 0 ? h->cfg.threads : 1),
                             MHD_OPTION_CONNECTION_LIMIT, (unsigned)4000,
                             /* Slow clients hold no thread (the pool polls); these bound

@@ -39,6 +39,7 @@ static void usage(FILE *f)
             "  --token TOKEN               require 'Authorization: Bearer TOKEN' (default: no token)\n"
             "  --token-file FILE           the same, the token read from FILE's first line (kept out of ps)\n"
             "  --cors-origin ORIGIN        answer CORS requests from ORIGIN (default: none)\n"
+            "  --allowed-hosts H1,H2       Host names to answer besides the bind address (and localhost on loopback)\n"
             "  --assets DIR                the only folder posted scenes may read files from (default: none)\n"
             "  --max-asset-bytes BYTES     largest file a scene may read under --assets (default 268435456)\n"
             "  --max-jobs N                jobs held at once, any state; a POST beyond gets 503 (default 1000)\n"
@@ -234,7 +235,7 @@ bool srv_server_start(srv_server *srv, int *port_out, char *err, size_t err_len)
     srv->sse_limits.max_total = cfg->max_subscribers;
     atomic_init(&srv->sse_limits.total, 0);
     atomic_init(&srv->sse_limits.dropped, 0);
-    srv->api = (srv_api){cfg->token, cfg->data_dir, cfg->cors_origin, srv->store, srv->sched, srv->metrics,
+    srv->api = (srv_api){cfg->token, cfg->data_dir, cfg->cors_origin, cfg->bind, cfg->allowed_hosts, srv->store, srv->sched, srv->metrics,
                          &srv->sse_limits};
     srv_http_config hc = {cfg->bind,       cfg->port,        cfg->http_threads, cfg->client_timeout_s,
                           cfg->max_client_conns, cfg->max_body, cfg->cors_origin, srv->metrics,
@@ -287,7 +288,7 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
         OPT_BIND = 256, OPT_PORT, OPT_THREADS, OPT_DATA, OPT_TOKEN, OPT_MAX_RUNNING, OPT_HTTP_THREADS, OPT_MAX_BODY,
         OPT_MAX_PIXELS, OPT_MAX_RES, OPT_MAX_SPP, OPT_MAX_TRIS, OPT_MAX_SHAPES, OPT_CKPT, OPT_CORS, OPT_BUILTIN, OPT_HELP,
         OPT_TOKEN_FILE, OPT_ASSETS, OPT_MAX_ASSET_BYTES, OPT_MAX_JOBS, OPT_CLIENT_TIMEOUT, OPT_MAX_CLIENT_CONNS,
-        OPT_LOG_FORMAT, OPT_LOG_LEVEL, OPT_MAX_WORK, OPT_MAX_SUBS, OPT_MAX_JOB_SUBS
+        OPT_LOG_FORMAT, OPT_LOG_LEVEL, OPT_MAX_WORK, OPT_MAX_SUBS, OPT_MAX_JOB_SUBS, OPT_ALLOWED_HOSTS
     };
     static const struct option opts[] = {
         {"bind", required_argument, NULL, OPT_BIND},
@@ -300,6 +301,7 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
         {"max-asset-bytes", required_argument, NULL, OPT_MAX_ASSET_BYTES},
         {"max-jobs", required_argument, NULL, OPT_MAX_JOBS},
         {"max-work", required_argument, NULL, OPT_MAX_WORK},
+        {"allowed-hosts", required_argument, NULL, OPT_ALLOWED_HOSTS},
         {"max-subscribers", required_argument, NULL, OPT_MAX_SUBS},
         {"max-job-subscribers", required_argument, NULL, OPT_MAX_JOB_SUBS},
         {"client-timeout", required_argument, NULL, OPT_CLIENT_TIMEOUT},
@@ -392,6 +394,7 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
             cfg->max_client_conns = (unsigned)v;
             break;
         case OPT_CORS: cfg->cors_origin = optarg; break;
+        case OPT_ALLOWED_HOSTS: cfg->allowed_hosts = optarg; break;
         case OPT_MAX_BODY:
             if (!parse_u64(optarg, 64, 1ull << 32, &v)) return usage_error("--max-body: expected 64 to 4294967296 bytes, got '%s'", optarg);
             cfg->max_body = (size_t)v;

@@ -38,6 +38,7 @@ typedef struct srv_config {
     int max_subscribers;         /* event streams at once, all jobs; beyond: 503 */
     int max_job_subscribers;     /* event streams of one job at once; beyond: 503 */
     const char *cors_origin;     /* NULL = no CORS headers */
+    const char *allowed_hosts;   /* Host names answered besides the bind address; comma-separated; NULL = none */
     size_t max_body;             /* request body cap, bytes */
     double checkpoint_interval_s;
     ts_scene_limits limits;      /* resolution, spp, scene size; max_file_bytes: --max-asset-bytes */

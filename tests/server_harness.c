@@ -127,7 +127,7 @@ void ts_http(const test_server *s, const char *method, const char *path, const c
     buf b = {0};
     struct curl_slist *h = NULL;
     if (auth) h = curl_slist_append(h, auth);
-    if (body) h = curl_slist_append(h, "Content-Type: application/json");
+    if (body || !strcmp(method, "POST")) h = curl_slist_append(h, "Content-Type: application/json");
     h = curl_slist_append(h, "Expect:");
     curl_easy_setopt(c, CURLOPT_URL, url);
     curl_easy_setopt(c, CURLOPT_CUSTOMREQUEST, method);

@@ -122,6 +122,7 @@ static void server_start(void)
     cfg->http_threads = 1;
     cfg->token = FUZZ_TOKEN;
     cfg->cors_origin = "https://ui.example";
+    cfg->allowed_hosts = "fuzz"; /* the Host the harness sends */
     cfg->max_body = MAX_BODY;
     cfg->max_jobs = MAX_JOBS;
     cfg->checkpoint_interval_s = 30;

@@ -176,7 +176,10 @@ async function removeJob(id) {
 }
 
 async function cancel(id) {
-  const r = await api('/api/v1/jobs/' + encodeURIComponent(id) + '/cancel', { method: 'POST' });
+  const r = await api('/api/v1/jobs/' + encodeURIComponent(id) + '/cancel', {
+    method: 'POST',
+    headers: { 'Content-Type': 'application/json' }, // without a token the server takes only JSON POSTs
+  });
   if (r.ok && r.body) jobs.set(id, r.body);
   renderJobs();
   poll();
