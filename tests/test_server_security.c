@@ -657,6 +657,34 @@ static void test_strict_urls_and_tokens(void **state)
     assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
 }
 
+/* Every string of a posted document has a length limit (255 bytes; 1024 for file
+ * references), refused with 400 naming its JSON path before anything renders; a name at
+ * the limit renders and its images are served. */
+static void test_string_limits(void **state)
+{
+    (void)state;
+    test_server s;
+    const char *args[] = {"--threads", "1", NULL};
+    ts_server_start(&s, args);
+    char name[300], extra[400], path[128];
+    memset(name, 'n', 256);
+    name[256] = '\0';
+    snprintf(extra, sizeof extra, ",\"name\":\"%s\"", name);
+    post(&s, scene_doc(tetra_inline, extra), NULL, 400, "name: a string of 256 bytes", "limit of 255");
+    snprintf(extra, sizeof extra, ",\"job\":{\"name\":\"%s\"}", name);
+    post(&s, scene_doc(tetra_inline, extra), NULL, 400, "job.name: a string of 256 bytes", NULL);
+    name[255] = '\0';
+    snprintf(extra, sizeof extra, ",\"name\":\"%s\"", name);
+    char id[64];
+    snprintf(id, sizeof id, "%s", post(&s, scene_doc(tetra_inline, extra), NULL, 201, NULL, NULL));
+    cJSON_Delete(ts_wait_done(&s, id, 30));
+    snprintf(path, sizeof path, "/api/v1/jobs/%s/image.png", id);
+    assert_int_equal(get_status(&s, path, NULL), 200);
+    snprintf(path, sizeof path, "/api/v1/jobs/%s/tiles/0/0.exr", id);
+    assert_int_equal(get_status(&s, path, NULL), 200);
+    assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -667,6 +695,7 @@ int main(void)
         cmocka_unit_test(test_delete_with_data),
         cmocka_unit_test(test_browser_pages),
         cmocka_unit_test(test_strict_urls_and_tokens),
+        cmocka_unit_test(test_string_limits),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
