@@ -600,7 +600,7 @@ static void test_disconnects(void **state)
     assert_true(baseline > 0);
 
     /* Mid-download: raw sockets that read 8 KiB and close, and curl aborting. */
-    snprintf(path, sizeof path, "GET /api/v1/jobs/%s/image.exr HTTP/1.1\r\nHost: x\r\n\r\n", id);
+    snprintf(path, sizeof path, "GET /api/v1/jobs/%s/image.exr HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n", id);
     for (int i = 0; i < 4; i++) {
         int fd = connect_to(&s);
         send_all(fd, path);
@@ -627,7 +627,7 @@ static void test_disconnects(void **state)
     /* Mid-stream: event streams of a running job read a little and close. */
     ts_submit(&s, slow, sid, sizeof sid);
     ts_wait_field(&s, sid, "spp_done", 1, 20);
-    snprintf(path, sizeof path, "GET /api/v1/jobs/%s/events HTTP/1.1\r\nHost: x\r\n\r\n", sid);
+    snprintf(path, sizeof path, "GET /api/v1/jobs/%s/events HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n", sid);
     for (int i = 0; i < 6; i++) {
         int fd = connect_to(&s);
         send_all(fd, path);
@@ -659,7 +659,7 @@ static void test_slow_clients(void **state)
 
     /* SLOW clients (three times --http-threads) send a request one byte per second, and an
      * idle one sends half a request line and stops. */
-    static const char req[] = "GET /healthz HTTP/1.1\r\nHost: x\r\n\r\n";
+    static const char req[] = "GET /healthz HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n";
     int fds[SLOW], idle = connect_to(&s);
     send_all(idle, "GET /hea");
     for (int i = 0; i < SLOW; i++) fds[i] = connect_to(&s);
