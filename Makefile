@@ -1,7 +1,8 @@
 # tessera — the README's two commands, set-up included.
 #   make run    install what is missing, build, serve with the built-in Cornell box queued
 #   make test   install what is missing, build, run the whole suite through ctest
-# Also: make build, make deps, make test-asan, make test-tsan, make fuzz, make bench (+ bench-deps), make clean.
+# Also: make build, make deps, make test-asan, make test-tsan, make fuzz, make bench (+ bench-deps),
+#       make image (+ image-deps), make clean.
 
 BUILD      ?= build
 BUILD_TYPE ?= Release
@@ -21,10 +22,15 @@ OPTIONAL_PACKAGES := chromium
 # comparison (bench/cycles), bc for the timing arithmetic of the bench scripts, valgrind for
 # the instruction counts of bench_effects, gnuplot-nox for the accuracy plots.
 BENCH_PACKAGES := blender bc valgrind gnuplot-nox
+# Container image only (installed by `make image` and the container test, never by `make deps`):
+# podman with runc builds and runs the image of docker/Dockerfile; catatonit is the pause
+# process of the pods `podman kube play` runs; debootstrap makes the local Debian base images
+# where no registry is reachable (docker/README.md).
+IMAGE_PACKAGES := podman runc catatonit debootstrap
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: all run test build deps test-asan test-tsan fuzz fuzz-build bench bench-deps clean
+.PHONY: all run test build deps test-asan test-tsan fuzz fuzz-build bench bench-deps image image-deps clean
 
 all: build
 
@@ -108,6 +114,17 @@ bench-deps:
 
 bench: build bench-deps
 	@if [ -x bench/run ]; then bench/run $(BUILD); else echo "bench: no benchmarks yet"; fi
+
+# The container image (docker/README.md): docker/build-image.sh builds docker/Dockerfile with
+# podman (or docker where that is what a user has), making the Debian base images first
+# (debootstrap) when they are missing and no registry answers, and prints the image's size.
+IMAGE ?= tessera:latest
+# (CONTAINER_ENGINE=docker: of these, only debootstrap.)
+image-deps:
+	$(call install_missing,image-deps,$(if $(filter docker,$(CONTAINER_ENGINE)),debootstrap,$(IMAGE_PACKAGES)))
+
+image: image-deps
+	docker/build-image.sh $(IMAGE)
 
 clean:
 	rm -rf build build-asan build-tsan build-fuzz cornell.exr cornell.png
