@@ -17,7 +17,7 @@ if ! cmp -s "$mods/package-lock.json" "$mods/node_modules/.tessera-installed-loc
 fi
 T=$(mktemp -d /tmp/tessera-k8s-XXXXXX)
 trap 'rm -rf "$T"' EXIT
-mkdir -p "$T/bin" "$T/farm/shards"
+mkdir -p "$T/bin" "$T/farm" # the Jobs make the folders they write
 ln -s "$TS_BINARY" "$T/bin/tessera"
 # The operator's step: a small Cornell box onto the shared volume as scene.json.
 sed -e 's/"width": 512/"width": 32/; s/"height": 512/"height": 32/; s/"spp": 64/"spp": 16/' \
