@@ -5,6 +5,8 @@
 # merge, waits with squeue/scontrol, compares the merged image with a single render, and
 # stops every daemon it started by its PID. Exit 77 (ctest: skipped) when the daemons
 # cannot run here, with the reason; never a pass without a real run.
+# TS_SLURM_TESSERA: how the tasks run tessera (the scripts' TESSERA; default the built
+# binary); tests/container/run.sh runs it in the image, with TMPDIR its mounted folder.
 set -uo pipefail
 : "${TS_BINARY:?run through ctest}" "${TS_SOURCE_DIR:?}" "${TS_FARM_COMPARE:?}"
 skip() { echo "SKIPPED: $*" >&2; exit 77; }
@@ -28,7 +30,7 @@ done
 [ "$(id -u)" = 0 ] || skip "starting munged as the munge user and slurmd needs root here"
 id munge >/dev/null 2>&1 || skip "the munge user does not exist"
 
-T=$(mktemp -d /tmp/tessera-slurm-XXXXXX)
+T=$(mktemp -d "${TMPDIR:-/tmp}/tessera-slurm-XXXXXX")
 chmod 755 "$T"
 pids=()
 cleanup() {
@@ -121,7 +123,7 @@ sed -e 's/"width": 512/"width": 32/; s/"height": 512/"height": 32/; s/"spp": 64/
 grep -q '"spp": 16' "$T/cornell.json" || { echo "could not shrink the scene" >&2; exit 1; }
 cd "$T"
 submit_t=$(date +%s.%N)
-TESSERA="$TS_BINARY" "$TS_SOURCE_DIR/docker/slurm/submit.sh" "$T/cornell.json" "$T/out" 4 || { dump_logs; exit 1; }
+TESSERA="${TS_SLURM_TESSERA:-$TS_BINARY}" "$TS_SOURCE_DIR/docker/slurm/submit.sh" "$T/cornell.json" "$T/out" 4 || { dump_logs; exit 1; }
 read -r array merge <"$T/out/jobs"
 for _ in $(seq 600); do
     [ -z "$(squeue -h -j "$array,$merge" 2>/dev/null)" ] && break
