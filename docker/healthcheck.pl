@@ -44,7 +44,9 @@ my $status = eval {
     alarm 4;
     my $sock = IO::Socket::IP->new(PeerHost => $host, PeerPort => $port, Timeout => 3)
         or die "cannot connect to $host port $port: $@\n";
-    print $sock "GET /healthz HTTP/1.0\r\nHost: localhost\r\nConnection: close\r\n\r\n";
+    # Host: the address asked, which the server answers for whatever it is bound to.
+    my $authority = ($host =~ /:/ ? "[$host]" : $host) . ":$port";
+    print $sock "GET /healthz HTTP/1.0\r\nHost: $authority\r\nConnection: close\r\n\r\n";
     my $line = <$sock> // die "connection closed without an answer\n";
     alarm 0;
     $line =~ s/\r?\n$//;

@@ -113,7 +113,7 @@ small_scene 64 16 "$T/serve.json"
 "$TS_BINARY" render "$T/serve.json" -o "$T/cli.exr" --quiet || fail "the CLI reference render failed"
 srv="$name-serve"
 started+=("$srv")
-"${engine[@]}" run -d --name "$srv" -p 127.0.0.1::8080 "$image" serve --bind 0.0.0.0 --port 8080 --threads 2 \
+"${engine[@]}" run -d --name "$srv" -p 127.0.0.1::8080 "$image" serve --bind 0.0.0.0 --port 8080 --allowed-hosts localhost --threads 2 \
     >"$T/run.log" 2>&1 || fail "could not start the server container: $(grep -v '^time=' "$T/run.log" | head -n 1)"
 published=$("${engine[@]}" port "$srv" 8080/tcp)
 case $published in 127.0.0.1:[0-9]*) ;; *) fail "port 8080 published as '$published', not on 127.0.0.1 only" ;; esac
@@ -135,7 +135,8 @@ kill -CONT "$pid"
 grep -q unhealthy "$T/health.out" || fail "the HEALTHCHECK of a stopped server: $(cat "$T/health.out")"
 healthcheck || fail "the HEALTHCHECK does not report healthy after SIGCONT: $(health_log)"
 log "serve: $URL (127.0.0.1 only); HEALTHCHECK healthy, unhealthy while stopped, healthy again: $(health_log)"
-curl -sf --max-time 10 "$URL/" -o "$T/index.html" || fail "GET / failed"
+# The web UI as a browser on this machine asks for it (Host: localhost, hence --allowed-hosts).
+curl -sf --max-time 10 "http://localhost:${published#*:}/" -o "$T/index.html" || fail "GET / as localhost failed"
 asset=$(grep -o '/assets/[^"]*\.js' "$T/index.html" | head -n 1)
 grep -q 'id="jobs-h"' "$T/index.html" && [ -n "$asset" ] || fail "GET / is not the built web UI"
 curl -sf --max-time 10 "$URL$asset" -o /dev/null || fail "the web UI's $asset is not served"
