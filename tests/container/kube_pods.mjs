@@ -1,5 +1,5 @@
 // kube_pods.mjs — the Pods the Kubernetes Job controller would make of docker/k8s, for
-// `podman kube play` (tests/container/run.sh, issue 20). podman 4.3 plays Pods and
+// `podman kube play` (tests/container/run.sh). podman 4.3 plays Pods and
 // PersistentVolumeClaims but not Jobs, so, as the controller does:
 //   - the claim of render-job.yaml, renamed CLAIM (the test's own volume);
 //   - one Pod per completion index i of the Indexed Job (completions of them), its pod

@@ -1,5 +1,5 @@
 #!/bin/bash
-# The container image for real (issue 20; docker/README.md). Installs podman, runc, catatonit
+# The container image for real (docker/README.md). Installs podman, runc, catatonit
 # and debootstrap if missing (`make image-deps`), builds docker/Dockerfile with
 # docker/build-image.sh (podman's layer cache reused; the Debian base images debootstrapped
 # where no registry answers), checks the image (size ≤ 150 MB, user 10001, HEALTHCHECK, no
