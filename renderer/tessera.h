@@ -19,5 +19,6 @@
 #include "render/scheduler.h"
 #include "render/shard.h"
 #include "scene/scene.h"
+#include "scene/scene_json.h"
 
 #endif

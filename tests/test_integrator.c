@@ -21,6 +21,7 @@
 #include <string.h>
 
 #include "render/render.h"
+#include "scene/scene_json.h"
 
 typedef struct result { double mean, se; uint64_t nonfinite; } result;
 

@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "render/render.h"
+#include "scene/scene_json.h"
 
 static ts_film *render(const ts_scene *s, int threads, const uint32_t *passes, int n_passes)
 {

@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "scene/scene.h"
+#include "scene/scene_json.h"
 
 static const char *source_dir(void)
 {

@@ -1,14 +1,11 @@
-/* scene.h — scene format v1 (docs/design.md §4, proto/scene.schema.json): loading, validation
- * and the immutable Scene every render thread reads.
+/* scene.h — the immutable scene every render thread reads, and its teardown.
  *
- * Design note: loading is two phases. Phase one walks the whole JSON document and checks
- * every value (types, ranges, unknown keys, references to materials, mesh files), so a
- * bad document is refused with one sentence naming its JSON path before anything is
- * built. Phase two builds: transforms, shapes, lights, the Embree accelerator. All of a
- * scene's memory comes from its arena (plus the accel, Fourier tables and environment
- * maps, which the scene owns), so ts_scene_destroy is the whole teardown. After a
- * ts_scene_load_* function returns, the scene is immutable and may be shared by any number of
- * threads. */
+ * Design note: a scene is made by the scene builder (scene_builder.h), which a front end
+ * drives — the JSON loader of scene format v1 (scene_json.h, docs/design.md §4) or another
+ * format's importer — and which checks everything before building anything expensive. All
+ * of a scene's memory comes from its arena (plus the accelerator, Fourier tables and
+ * environment maps, which the scene owns), so ts_scene_destroy is the whole teardown. Once
+ * built, the scene is immutable and may be shared by any number of threads. */
 #ifndef TS_SCENE_H
 #define TS_SCENE_H
 
@@ -24,20 +21,6 @@
 #include "lights/light.h"
 #include "materials/material.h"
 #include "sampling/sampler.h"
-
-/* Resource limits checked while loading, before any large allocation. */
-typedef struct ts_scene_limits {
-    uint32_t max_width, max_height; /* film */
-    uint64_t max_pixels;
-    uint32_t max_spp;
-    uint64_t max_triangles; /* all meshes together */
-    uint32_t max_shapes, max_lights, max_materials;
-    uint64_t max_file_bytes; /* each referenced file */
-    uint64_t max_memory;     /* the scene arena */
-} ts_scene_limits;
-
-/* Generous defaults for the CLI (a server sets its own). */
-void ts_scene_limits_default(ts_scene_limits *l);
 
 typedef enum ts_integrator_type {
     TS_INTEGRATOR_PATH,
@@ -77,7 +60,8 @@ typedef struct ts_scene {
     ts_arena arena;
     const char *name;      /* scene name: the document's "name", else the file name */
     const char *base_dir;  /* folder that relative file paths resolve against, or NULL */
-    char digest[65];       /* SHA-256 (hex) of the canonical document, set at load (scene_digest.h) */
+    char digest[65];       /* the front end's identity of its document, 64 hex digits (JSON: SHA-256 of
+                              the canonical document, scene_digest.h) */
 
     ts_camera camera;
     int width, height;                         /* full film */
@@ -89,7 +73,7 @@ typedef struct ts_scene {
     ts_job_desc job;
 
     ts_material *materials;
-    const char **material_names;
+    const char **material_names; /* NULL for a material added without a name */
     uint32_t n_materials;
     ts_shape *shapes;
     uint32_t n_shapes;
@@ -115,20 +99,8 @@ typedef struct ts_scene {
     uint32_t n_envmaps;
 } ts_scene;
 
-/* Loads a scene file (JSON). Relative paths inside it resolve against its folder and may
- * not leave it. On failure: NULL *out, err holds the sentence (JSON path first for
- * content errors), nothing leaks. */
-ts_status ts_scene_load_file(const char *path, const ts_scene_limits *limits, ts_scene **out, ts_error *err);
-
-/* Loads a scene from text. base_dir: folder for relative file paths, or NULL to refuse
- * every file reference. name: used when the document has no "name". */
-ts_status ts_scene_load_text(const char *text, size_t len, const char *base_dir, const char *name,
-                             const ts_scene_limits *limits, ts_scene **out, ts_error *err);
-
-/* The built-in default scene (the classic Cornell box, scenes/cornell-box.json). */
-ts_status ts_scene_load_builtin(const ts_scene_limits *limits, ts_scene **out, ts_error *err);
-const char *ts_scene_builtin_text(size_t *len);
-
+/* Frees the scene and everything it owns (its arena, accelerator, Fourier tables and
+ * environment maps). NULL is fine. Not while any thread still reads the scene. */
 void ts_scene_destroy(ts_scene *s);
 
 #endif

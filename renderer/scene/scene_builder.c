@@ -1,0 +1,774 @@
+/* scene_builder.c — checking a scene's description and building the immutable scene; see
+ * scene_builder.h.
+ *
+ * The scene under construction exists from create on (its arena takes names and mesh
+ * arrays as they come); materials, shapes and lights wait in growable lists, so that finish
+ * can lay them out in the arena at their final counts, with the area lights after the
+ * lights added (in shape order). finish then does the expensive steps — accelerator, light
+ * preparation and distribution — once, after everything has been accepted. */
+#include "scene/scene_builder.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "image/exr.h"
+#include "image/image.h"
+#include "integrators/effects.h"
+#include "lights/envmap.h"
+#include "materials/fourier_bsdf.h"
+#include "scene/mesh_file.h"
+#include "scene/scene_path.h"
+
+struct ts_scene_builder {
+    ts_scene *s; /* the scene being built (arena, settings, name, digest); finish hands it over */
+    ts_scene_limits lim;
+    bool finished;
+    bool has_film, has_camera, has_sampler, has_integrator, has_digest;
+    ts_camera_desc camera; /* set up for the film's size at finish */
+
+    /* Growable lists (malloc), copied into the arena by finish. */
+    ts_material *materials;
+    const char **material_names; /* arena strings; NULL for anonymous materials */
+    uint32_t n_materials;
+    size_t cap_materials, cap_material_names;
+    ts_shape *shapes;
+    uint32_t n_shapes;
+    size_t cap_shapes;
+    ts_light *lights;
+    uint32_t n_lights;
+    size_t cap_lights;
+    uint64_t n_triangles, n_area_lights;
+
+    /* Owned until finish moves them into the scene. */
+    struct ts_fourier_table **fourier_tables;
+    uint32_t n_fourier_tables;
+    size_t cap_fourier_tables;
+    struct ts_envmap **envmaps;
+    uint32_t n_envmaps;
+    size_t cap_envmaps;
+};
+
+void ts_scene_limits_default(ts_scene_limits *l)
+{
+    l->max_width = 16384;
+    l->max_height = 16384;
+    l->max_pixels = 64ull << 20;
+    l->max_spp = 1u << 24;
+    l->max_triangles = 50ull << 20;
+    l->max_shapes = 1u << 20;
+    l->max_lights = 1u << 22;
+    l->max_materials = 1u << 16;
+    l->max_file_bytes = 4ull << 30;
+    l->max_memory = 16ull << 30;
+}
+
+#define TRY(expr)                                                                                            \
+    do {                                                                                                     \
+        ts_status st_ = (expr);                                                                              \
+        if (st_ != TS_OK) return st_;                                                                        \
+    } while (0)
+
+static ts_status nomem(ts_error *err, const char *what)
+{
+    return ts_error_set(err, TS_ERR_NOMEM, "out of memory (or past the scene memory limit) while building %s",
+                        what);
+}
+
+/* Grows the malloc'd array *p (of *cap elements of size elem) to hold at least need. */
+static bool grow(void **p, size_t *cap, size_t need, size_t elem)
+{
+    if (need <= *cap) return true;
+    size_t nc = *cap ? *cap : 16;
+    while (nc < need) {
+        if (nc > SIZE_MAX / 2 / elem) return false;
+        nc *= 2;
+    }
+    void *q = realloc(*p, nc * elem);
+    if (!q) return false;
+    *p = q;
+    *cap = nc;
+    return true;
+}
+
+static ts_status usable(const ts_scene_builder *b, ts_error *err)
+{
+    if (b->finished)
+        return ts_error_set(err, TS_ERR_INVALID, "the scene builder has finished; it takes no more calls");
+    return TS_OK;
+}
+
+static bool rgb_nonneg(ts_rgb c) { return c.r >= 0 && c.g >= 0 && c.b >= 0; } /* false for NaN */
+static bool rgb_unit(ts_rgb c) { return rgb_nonneg(c) && c.r <= 1 && c.g <= 1 && c.b <= 1; }
+static bool rgb_finite_nonneg(ts_rgb c) { return rgb_nonneg(c) && isfinite(c.r) && isfinite(c.g) && isfinite(c.b); }
+
+/* ---------------------------------------------------------------- create, destroy */
+
+ts_status ts_scene_builder_create(const ts_scene_limits *limits, const char *base_dir, ts_scene_builder **out,
+                                  ts_error *err)
+{
+    *out = NULL;
+    ts_scene_builder *b = calloc(1, sizeof *b);
+    ts_scene *s = b ? calloc(1, sizeof *s) : NULL;
+    if (!s) {
+        free(b);
+        return ts_error_set(err, TS_ERR_NOMEM, "out of memory while loading the scene");
+    }
+    if (limits) b->lim = *limits;
+    else ts_scene_limits_default(&b->lim);
+    b->s = s;
+    ts_arena_init(&s->arena, b->lim.max_memory);
+    if (base_dir && !(s->base_dir = ts_arena_strdup(&s->arena, base_dir))) {
+        ts_scene_builder_destroy(b);
+        return nomem(err, "the scene");
+    }
+    *out = b;
+    return TS_OK;
+}
+
+void ts_scene_builder_destroy(ts_scene_builder *b)
+{
+    if (!b) return;
+    for (uint32_t i = 0; i < b->n_fourier_tables; i++) ts_fourier_table_destroy(b->fourier_tables[i]);
+    for (uint32_t i = 0; i < b->n_envmaps; i++) ts_envmap_destroy(b->envmaps[i]);
+    free(b->fourier_tables);
+    free(b->envmaps);
+    free(b->materials);
+    free(b->material_names);
+    free(b->shapes);
+    free(b->lights);
+    ts_scene_destroy(b->s);
+    free(b);
+}
+
+/* ---------------------------------------------------------------- settings */
+
+ts_status ts_scene_builder_set_name(ts_scene_builder *b, const char *name, ts_error *err)
+{
+    TRY(usable(b, err));
+    if (!name) return ts_error_set(err, TS_ERR_INVALID, "name: expected a string");
+    const char *copy = ts_arena_strdup(&b->s->arena, name);
+    if (!copy) return nomem(err, "the name");
+    b->s->name = copy;
+    return TS_OK;
+}
+
+ts_status ts_scene_builder_set_digest(ts_scene_builder *b, const char *hex, ts_error *err)
+{
+    TRY(usable(b, err));
+    const size_t want = sizeof b->s->digest - 1;
+    size_t n = 0;
+    while (hex && n <= want && ((hex[n] >= '0' && hex[n] <= '9') || (hex[n] >= 'a' && hex[n] <= 'f'))) n++;
+    if (!hex || n != want || hex[n] != '\0')
+        return ts_error_set(err, TS_ERR_INVALID, "digest: expected %zu lower-case hex digits", want);
+    memcpy(b->s->digest, hex, want + 1);
+    b->has_digest = true;
+    return TS_OK;
+}
+
+ts_status ts_scene_builder_set_film(ts_scene_builder *b, const ts_film_desc *f, ts_error *err)
+{
+    TRY(usable(b, err));
+    const ts_scene_limits *lim = &b->lim;
+    if (f->width < 1 || f->width > lim->max_width || f->height < 1 || f->height > lim->max_height)
+        return ts_error_set(err, TS_ERR_LIMIT, "film: %u × %u pixels, expected 1 to %u × 1 to %u", f->width,
+                            f->height, lim->max_width, lim->max_height);
+    if ((uint64_t)f->width * f->height > lim->max_pixels)
+        return ts_error_set(err, TS_ERR_LIMIT, "film: %u × %u pixels is more than the limit of %llu", f->width,
+                            f->height, (unsigned long long)lim->max_pixels);
+    if (!(f->filter_radius <= 16))
+        return ts_error_set(err, TS_ERR_INVALID, "film.filter.radius: expected at most 16 pixels, got %g",
+                            f->filter_radius);
+    const float *c = f->crop;
+    if (!(c[0] >= 0 && c[0] < c[1] && c[1] <= 1 && c[2] >= 0 && c[2] < c[3] && c[3] <= 1))
+        return ts_error_set(err, TS_ERR_INVALID,
+                            "film.crop: expected [x0, x1, y0, y1] with 0 ≤ x0 < x1 ≤ 1 and 0 ≤ y0 < y1 ≤ 1");
+    int width = (int)f->width, height = (int)f->height;
+    /* pbrt's rule: the window's edges, scaled to pixels, rounded up. */
+    int x0 = (int)ceilf(width * c[0]), x1 = (int)ceilf(width * c[1]);
+    int y0 = (int)ceilf(height * c[2]), y1 = (int)ceilf(height * c[3]);
+    if (x1 <= x0 || y1 <= y0) return ts_error_set(err, TS_ERR_INVALID, "film.crop: the window holds no pixel");
+    ts_filter filter; /* its own checks: a radius > 0, a known type */
+    TRY(ts_filter_init(&filter, f->filter, f->filter_radius, err));
+    ts_scene *s = b->s;
+    s->width = width;
+    s->height = height;
+    s->crop_x0 = x0, s->crop_x1 = x1, s->crop_y0 = y0, s->crop_y1 = y1;
+    s->filter = filter;
+    b->has_film = true;
+    return TS_OK;
+}
+
+ts_status ts_scene_builder_set_camera(ts_scene_builder *b, const ts_camera_desc *d, ts_error *err)
+{
+    TRY(usable(b, err));
+    if (d->type != TS_CAMERA_PERSPECTIVE && d->type != TS_CAMERA_ORTHOGRAPHIC)
+        return ts_error_set(err, TS_ERR_INVALID, "camera.type: unknown camera type %d", (int)d->type);
+    /* ts_camera_init's checks do not depend on the film's size. */
+    ts_camera probe;
+    TRY(ts_camera_init(&probe, d, 1, 1, err));
+    if (!(d->lens_radius >= 0 && isfinite(d->lens_radius)))
+        return ts_error_set(err, TS_ERR_INVALID, "camera.lens_radius: expected a finite number ≥ 0, got %g",
+                            d->lens_radius);
+    if (!(d->focus_distance > 0 && isfinite(d->focus_distance)))
+        return ts_error_set(err, TS_ERR_INVALID, "camera.focus_distance: expected a finite number > 0, got %g",
+                            d->focus_distance);
+    b->camera = *d;
+    b->has_camera = true;
+    return TS_OK;
+}
+
+ts_status ts_scene_builder_set_sampler(ts_scene_builder *b, const ts_sampler *sampler, uint32_t spp, ts_error *err)
+{
+    TRY(usable(b, err));
+    if (sampler->type != TS_SAMPLER_SOBOL && sampler->type != TS_SAMPLER_INDEPENDENT)
+        return ts_error_set(err, TS_ERR_INVALID, "sampler.type: unknown sampler type %d", (int)sampler->type);
+    if (spp < 1 || spp > b->lim.max_spp)
+        return ts_error_set(err, TS_ERR_INVALID, "sampler.spp: expected 1 to %u samples per pixel, got %u",
+                            b->lim.max_spp, spp);
+    b->s->sampler = *sampler;
+    b->s->spp = spp;
+    b->has_sampler = true;
+    return TS_OK;
+}
+
+static ts_status int_in(int v, int lo, int hi, const char *what, ts_error *err)
+{
+    if (v < lo || v > hi)
+        return ts_error_set(err, TS_ERR_INVALID, "integrator.%s: expected an integer in [%d, %d], got %d", what, lo,
+                            hi, v);
+    return TS_OK;
+}
+
+ts_status ts_scene_builder_set_integrator(ts_scene_builder *b, const ts_integrator_desc *in, ts_error *err)
+{
+    TRY(usable(b, err));
+    bool sampling_ok = in->sampling == TS_SAMPLING_MIS || in->sampling == TS_SAMPLING_LIGHT ||
+                       in->sampling == TS_SAMPLING_BSDF;
+    switch (in->type) {
+    case TS_INTEGRATOR_PATH:
+        /* The path loop is iterative, so depth costs no stack; `direct` recurses on
+         * specular chains and keeps a lower cap. */
+        TRY(int_in(in->max_depth, 0, 65535, "max_depth", err));
+        TRY(int_in(in->rr_depth, 0, 65535, "rr_depth", err));
+        if (in->light_sampling != TS_LIGHT_SELECT_UNIFORM && in->light_sampling != TS_LIGHT_SELECT_POWER)
+            return ts_error_set(err, TS_ERR_INVALID, "integrator.light_sampling: unknown selection %d",
+                                (int)in->light_sampling);
+        if (!sampling_ok)
+            return ts_error_set(err, TS_ERR_INVALID, "integrator.sampling: unknown strategy %d", (int)in->sampling);
+        break;
+    case TS_INTEGRATOR_DIRECT:
+        TRY(int_in(in->max_depth, 0, 1000, "max_depth", err));
+        TRY(int_in(in->samples_per_light, 1, 4096, "samples_per_light", err));
+        if (in->strategy != TS_LIGHTS_ALL && in->strategy != TS_LIGHTS_ONE)
+            return ts_error_set(err, TS_ERR_INVALID, "integrator.strategy: unknown strategy %d", (int)in->strategy);
+        if (!sampling_ok)
+            return ts_error_set(err, TS_ERR_INVALID, "integrator.sampling: unknown strategy %d", (int)in->sampling);
+        break;
+    case TS_INTEGRATOR_AO:
+        if (!(in->ao_distance > 0))
+            return ts_error_set(err, TS_ERR_INVALID, "integrator.max_distance: expected a positive number, got %g",
+                                in->ao_distance);
+        break;
+    case TS_INTEGRATOR_NORMALS: break;
+    default: return ts_error_set(err, TS_ERR_INVALID, "integrator.type: unknown integrator %d", (int)in->type);
+    }
+    b->s->integrator = *in;
+    b->has_integrator = true;
+    return TS_OK;
+}
+
+ts_status ts_scene_builder_set_job(ts_scene_builder *b, const ts_job_desc *job, ts_error *err)
+{
+    TRY(usable(b, err));
+    /* Switching a light type or a lobe off consistently would need the light distribution
+     * and materials rebuilt; these two are switched off exactly. */
+    if (job->effects_off & ~(uint32_t)(TS_EFFECT_INDIRECT | TS_EFFECT_DEPTH_OF_FIELD))
+        return ts_error_set(err, TS_ERR_INVALID, "job.effects: only 'indirect' and 'depth_of_field' can be switched off");
+    if (job->priority < -1000000 || job->priority > 1000000)
+        return ts_error_set(err, TS_ERR_INVALID, "job.priority: expected an integer in [-1000000, 1000000], got %d",
+                            job->priority);
+    if (job->spp > b->lim.max_spp)
+        return ts_error_set(err, TS_ERR_INVALID, "job.spp: expected at most %u samples per pixel, got %u",
+                            b->lim.max_spp, job->spp);
+    if (!(job->time_limit_s >= 0 && isfinite(job->time_limit_s)))
+        return ts_error_set(err, TS_ERR_INVALID, "job.time_limit_s: expected a finite number ≥ 0, got %g",
+                            job->time_limit_s);
+    if (!(job->target_error >= 0 && isfinite(job->target_error)))
+        return ts_error_set(err, TS_ERR_INVALID, "job.target_error: expected a finite number ≥ 0, got %g",
+                            job->target_error);
+    ts_job_desc j = *job;
+    if (job->name && !(j.name = ts_arena_strdup(&b->s->arena, job->name))) return nomem(err, "job.name");
+    b->s->job = j;
+    return TS_OK;
+}
+
+/* ---------------------------------------------------------------- files */
+
+ts_status ts_scene_builder_load_fourier(ts_scene_builder *b, const char *rel_path,
+                                        const struct ts_fourier_table **out, ts_error *err)
+{
+    TRY(usable(b, err));
+    if (!grow((void **)&b->fourier_tables, &b->cap_fourier_tables, (size_t)b->n_fourier_tables + 1,
+              sizeof *b->fourier_tables))
+        return nomem(err, "the Fourier tables");
+    char *bytes = NULL;
+    size_t n_bytes = 0;
+    struct ts_fourier_table *t = NULL;
+    ts_status st = ts_scene_path_read(b->s->base_dir, rel_path, "Fourier BSDF file", b->lim.max_file_bytes, &bytes,
+                                      &n_bytes, err);
+    if (!st) st = ts_fourier_table_load_memory((const unsigned char *)bytes, n_bytes, rel_path, &t, err);
+    free(bytes);
+    if (st) return st;
+    b->fourier_tables[b->n_fourier_tables++] = t;
+    *out = t;
+    return TS_OK;
+}
+
+ts_status ts_scene_builder_load_envmap(ts_scene_builder *b, const char *rel_path, const struct ts_envmap **out,
+                                       ts_error *err)
+{
+    TRY(usable(b, err));
+    if (!grow((void **)&b->envmaps, &b->cap_envmaps, (size_t)b->n_envmaps + 1, sizeof *b->envmaps))
+        return nomem(err, "the environment maps");
+    char *bytes = NULL;
+    size_t n_bytes = 0;
+    struct ts_envmap *em = NULL;
+    ts_status st = ts_scene_path_read(b->s->base_dir, rel_path, "environment map", b->lim.max_file_bytes, &bytes,
+                                      &n_bytes, err);
+    if (!st) {
+        ts_image img = {0};
+        st = ts_exr_read_memory((const unsigned char *)bytes, n_bytes, &img, err);
+        if (st) ts_error_prefix(err, "environment map '%s'", rel_path);
+        else st = ts_envmap_from_image(&img, rel_path, &em, err);
+        ts_image_fini(&img);
+    }
+    free(bytes);
+    if (st) return st;
+    b->envmaps[b->n_envmaps++] = em;
+    *out = em;
+    return TS_OK;
+}
+
+ts_status ts_scene_builder_load_mesh(ts_scene_builder *b, const char *rel_path, ts_mesh_data *out, ts_error *err)
+{
+    *out = (ts_mesh_data){0};
+    TRY(usable(b, err));
+    const ts_scene_limits *lim = &b->lim;
+    if (b->n_triangles >= lim->max_triangles)
+        return ts_error_set(err, TS_ERR_LIMIT, "the scene's triangles exceed the limit of %llu",
+                            (unsigned long long)lim->max_triangles);
+    if (!b->s->base_dir)
+        return ts_error_set(err, TS_ERR_INVALID,
+                            "mesh file '%s': this scene may not refer to files (no asset folder is configured)",
+                            rel_path);
+    /* What is left of the scene's triangle budget (never 0, which would mean unlimited). */
+    ts_mesh_limits ml = {lim->max_triangles * 3, lim->max_triangles - b->n_triangles, lim->max_file_bytes};
+    return ts_mesh_file_load(b->s->base_dir, rel_path, &ml, out, err);
+}
+
+/* ---------------------------------------------------------------- materials */
+
+static ts_status bad_rgb(ts_error *err, const char *what, const char *expected, ts_rgb c)
+{
+    return ts_error_set(err, TS_ERR_INVALID, "%s: expected %s, got (%g, %g, %g)", what, expected, c.r, c.g, c.b);
+}
+
+static ts_status check_material(const ts_scene_builder *b, const ts_material *m, ts_error *err)
+{
+    static const char unit[] = "RGB in [0, 1]", finite[] = "finite RGB ≥ 0";
+    bool rough = false;
+    switch (m->type) {
+    case TS_MATERIAL_DIFFUSE:
+        if (!rgb_unit(m->reflectance)) return bad_rgb(err, "reflectance", unit, m->reflectance);
+        if (!(m->sigma_deg >= 0 && m->sigma_deg <= 90))
+            return ts_error_set(err, TS_ERR_INVALID, "sigma: expected an angle in [0, 90] degrees, got %g",
+                                m->sigma_deg);
+        break;
+    case TS_MATERIAL_MIRROR:
+        if (!rgb_unit(m->reflectance)) return bad_rgb(err, "reflectance", unit, m->reflectance);
+        break;
+    case TS_MATERIAL_DIELECTRIC:
+        if (!(m->eta > 0 && isfinite(m->eta)))
+            return ts_error_set(err, TS_ERR_INVALID, "eta: expected a finite number > 0, got %g", m->eta);
+        if (!rgb_unit(m->reflectance)) return bad_rgb(err, "reflectance", unit, m->reflectance);
+        if (!rgb_unit(m->transmittance)) return bad_rgb(err, "transmittance", unit, m->transmittance);
+        rough = true;
+        break;
+    case TS_MATERIAL_CONDUCTOR:
+        if (!rgb_finite_nonneg(m->conductor_eta)) return bad_rgb(err, "eta", finite, m->conductor_eta);
+        if (!rgb_finite_nonneg(m->conductor_k)) return bad_rgb(err, "k", finite, m->conductor_k);
+        if (m->distribution != TS_MICROFACET_GGX && m->distribution != TS_MICROFACET_BECKMANN)
+            return ts_error_set(err, TS_ERR_INVALID, "distribution: unknown microfacet distribution %d",
+                                (int)m->distribution);
+        rough = true;
+        break;
+    case TS_MATERIAL_PLASTIC:
+    case TS_MATERIAL_SUBSTRATE:
+        if (!rgb_unit(m->diffuse)) return bad_rgb(err, "diffuse", unit, m->diffuse);
+        if (!rgb_unit(m->specular)) return bad_rgb(err, "specular", unit, m->specular);
+        rough = true;
+        break;
+    case TS_MATERIAL_FOURIER: {
+        uint32_t i = 0;
+        while (i < b->n_fourier_tables && b->fourier_tables[i] != m->fourier) i++;
+        if (!m->fourier || i == b->n_fourier_tables)
+            return ts_error_set(err, TS_ERR_INVALID, "file: the Fourier table was not loaded by this scene builder");
+        break;
+    }
+    default: return ts_error_set(err, TS_ERR_INVALID, "type: unknown material type %d", (int)m->type);
+    }
+    if (rough && !(m->roughness >= 0 && isfinite(m->roughness)))
+        return ts_error_set(err, TS_ERR_INVALID, "roughness: expected a finite number ≥ 0, got %g", m->roughness);
+    return TS_OK;
+}
+
+uint32_t ts_scene_builder_find_material(const ts_scene_builder *b, const char *name)
+{
+    for (uint32_t k = 0; k < b->n_materials; k++)
+        if (b->material_names[k] && strcmp(b->material_names[k], name) == 0) return k;
+    return TS_NONE;
+}
+
+ts_status ts_scene_builder_add_material(ts_scene_builder *b, const char *name, const ts_material *m, uint32_t *id,
+                                        ts_error *err)
+{
+    TRY(usable(b, err));
+    if (b->n_materials >= b->lim.max_materials)
+        return ts_error_set(err, TS_ERR_LIMIT, "more than the limit of %u materials", b->lim.max_materials);
+    if (name && ts_scene_builder_find_material(b, name) != TS_NONE)
+        return ts_error_set(err, TS_ERR_INVALID, "a material named \"%s\" was added before", name);
+    TRY(check_material(b, m, err));
+    size_t need = (size_t)b->n_materials + 1;
+    if (!grow((void **)&b->materials, &b->cap_materials, need, sizeof *b->materials) ||
+        !grow((void **)&b->material_names, &b->cap_material_names, need, sizeof *b->material_names))
+        return nomem(err, "the materials");
+    const char *copy = NULL;
+    if (name && !(copy = ts_arena_strdup(&b->s->arena, name))) return nomem(err, "the material names");
+    b->materials[b->n_materials] = *m;
+    b->material_names[b->n_materials] = copy;
+    if (id) *id = b->n_materials;
+    b->n_materials++;
+    return TS_OK;
+}
+
+/* ---------------------------------------------------------------- shapes */
+
+static ts_status check_mesh(const ts_scene_builder *b, const ts_mesh *m, ts_error *err)
+{
+    if (m->n_vertices == 0 || m->n_triangles == 0 || !m->p || !m->index)
+        return ts_error_set(err, TS_ERR_INVALID, "a mesh needs vertices and triangles (got %u and %u)",
+                            m->n_vertices, m->n_triangles);
+    if (b->n_triangles + m->n_triangles > b->lim.max_triangles)
+        return ts_error_set(err, TS_ERR_LIMIT, "the scene's triangles exceed the limit of %llu",
+                            (unsigned long long)b->lim.max_triangles);
+    for (uint64_t k = 0; k < 3ull * m->n_vertices; k++)
+        if (!isfinite(m->p[k]))
+            return ts_error_set(err, TS_ERR_INVALID, "positions[%llu]: expected a finite number",
+                                (unsigned long long)k);
+    for (uint64_t k = 0; k < 3ull * m->n_triangles; k++)
+        if (m->index[k] >= m->n_vertices)
+            return ts_error_set(err, TS_ERR_INVALID, "indices[%llu]: %u is not a vertex index (%u vertices)",
+                                (unsigned long long)k, m->index[k], m->n_vertices);
+    for (uint32_t k = 0; m->n && k < m->n_vertices; k++) {
+        const float *n = m->n + 3 * (size_t)k;
+        if (!(isfinite(n[0]) && isfinite(n[1]) && isfinite(n[2])) || (n[0] == 0 && n[1] == 0 && n[2] == 0))
+            return ts_error_set(err, TS_ERR_INVALID, "normals[%u]: expected a finite, non-zero normal", k);
+    }
+    for (uint64_t k = 0; m->uv && k < 2ull * m->n_vertices; k++)
+        if (!isfinite(m->uv[k]))
+            return ts_error_set(err, TS_ERR_INVALID, "uvs[%llu]: expected a finite number", (unsigned long long)k);
+    return TS_OK;
+}
+
+static ts_status check_shape(const ts_scene_builder *b, const ts_shape_desc *d, ts_error *err)
+{
+    if (b->n_shapes >= b->lim.max_shapes)
+        return ts_error_set(err, TS_ERR_LIMIT, "more than the limit of %u shapes", b->lim.max_shapes);
+    if (d->material >= b->n_materials)
+        return ts_error_set(err, TS_ERR_INVALID, "material: no material of id %u (%u were added)", d->material,
+                            b->n_materials);
+    /* Infinite channels are ts_lights_prepare's to refuse, as every light's colour. */
+    if (!rgb_nonneg(d->emission)) return bad_rgb(err, "emission", "RGB ≥ 0", d->emission);
+    /* Sizes and transforms too large for float are refused at finish, with the scene's
+     * bounds ("shapes: the scene reaches beyond ±1e15 units …"). */
+    switch (d->type) {
+    case TS_SHAPE_SPHERE:
+        if (!(d->sphere.radius > 0))
+            return ts_error_set(err, TS_ERR_INVALID, "radius: expected a positive number, got %g", d->sphere.radius);
+        break;
+    case TS_SHAPE_DISK:
+        if (!(d->disk.radius > 0))
+            return ts_error_set(err, TS_ERR_INVALID, "radius: expected a positive number, got %g", d->disk.radius);
+        if (!(d->disk.inner_radius >= 0 && d->disk.inner_radius < d->disk.radius))
+            return ts_error_set(err, TS_ERR_INVALID, "inner_radius: expected a number in [0, radius), got %g",
+                                d->disk.inner_radius);
+        break;
+    case TS_SHAPE_CYLINDER:
+        if (!(d->cylinder.radius > 0))
+            return ts_error_set(err, TS_ERR_INVALID, "radius: expected a positive number, got %g", d->cylinder.radius);
+        if (!(d->cylinder.height > 0))
+            return ts_error_set(err, TS_ERR_INVALID, "height: expected a positive number, got %g", d->cylinder.height);
+        break;
+    case TS_SHAPE_MESH: return check_mesh(b, &d->mesh, err);
+    default: return ts_error_set(err, TS_ERR_INVALID, "type: unknown shape type %d", (int)d->type);
+    }
+    return TS_OK;
+}
+
+/* Copies the object-space mesh m into the arena, in world space (xf). */
+static ts_status place_mesh(ts_scene_builder *b, const ts_mesh *m, const ts_xform *xf, ts_mesh *out,
+                            ts_error *err)
+{
+    ts_arena *arena = &b->s->arena;
+    uint32_t nv = m->n_vertices, nt = m->n_triangles;
+    float *p = ts_arena_calloc(arena, (size_t)nv * 3, sizeof *p);
+    float *n = m->n ? ts_arena_calloc(arena, (size_t)nv * 3, sizeof *n) : NULL;
+    float *uv = m->uv ? ts_arena_calloc(arena, (size_t)nv * 2, sizeof *uv) : NULL;
+    uint32_t *idx = ts_arena_calloc(arena, (size_t)nt * 3, sizeof *idx);
+    if (!p || (m->n && !n) || (m->uv && !uv) || !idx) return nomem(err, "a mesh");
+    memcpy(p, m->p, (size_t)nv * 3 * sizeof *p);
+    if (n) memcpy(n, m->n, (size_t)nv * 3 * sizeof *n);
+    if (uv) memcpy(uv, m->uv, (size_t)nv * 2 * sizeof *uv);
+    memcpy(idx, m->index, (size_t)nt * 3 * sizeof *idx);
+    /* To world space. A mirroring transform reverses the winding so that triangles keep
+     * facing the way they did in object space (as pbrt's ReverseOrientation does). */
+    if (!ts_xform_is_identity(xf)) {
+        for (uint32_t k = 0; k < nv; k++) {
+            ts_dvec3 q = ts_xform_point(xf, (ts_dvec3){p[3 * k], p[3 * k + 1], p[3 * k + 2]});
+            if (!(fabs(q.x) < 3e38 && fabs(q.y) < 3e38 && fabs(q.z) < 3e38))
+                return ts_error_set(err, TS_ERR_INVALID, "a transformed vertex is not a finite float");
+            p[3 * k] = (float)q.x, p[3 * k + 1] = (float)q.y, p[3 * k + 2] = (float)q.z;
+            if (n) {
+                ts_dvec3 w = ts_dvec3_normalize(ts_xform_normal(xf, (ts_dvec3){n[3 * k], n[3 * k + 1], n[3 * k + 2]}));
+                n[3 * k] = (float)w.x, n[3 * k + 1] = (float)w.y, n[3 * k + 2] = (float)w.z;
+            }
+        }
+        if (ts_xform_swaps_handedness(xf))
+            for (uint32_t t = 0; t < nt; t++) {
+                uint32_t tmp = idx[3 * t + 1];
+                idx[3 * t + 1] = idx[3 * t + 2];
+                idx[3 * t + 2] = tmp;
+            }
+    } else if (n) {
+        for (uint32_t k = 0; k < nv; k++) {
+            ts_vec3 v = {n[3 * k], n[3 * k + 1], n[3 * k + 2]};
+            ts_vec3 w = ts_vec3_normalize(v);
+            /* A normal too long or too short for float arithmetic: normalised in double. */
+            if (!ts_vec3_is_finite(w)) w = ts_dvec3_to_vec3(ts_dvec3_normalize(ts_dvec3_from(v)));
+            n[3 * k] = w.x, n[3 * k + 1] = w.y, n[3 * k + 2] = w.z;
+        }
+    }
+    *out = (ts_mesh){nv, nt, p, n, uv, idx};
+    return TS_OK;
+}
+
+ts_status ts_scene_builder_add_shape(ts_scene_builder *b, const ts_shape_desc *d, uint32_t *id, ts_error *err)
+{
+    TRY(usable(b, err));
+    TRY(check_shape(b, d, err));
+    if (!grow((void **)&b->shapes, &b->cap_shapes, (size_t)b->n_shapes + 1, sizeof *b->shapes))
+        return nomem(err, "the shapes");
+    ts_shape sh = {0};
+    sh.type = d->type;
+    sh.material = d->material;
+    sh.emission = d->emission;
+    sh.emissive = !ts_rgb_is_black(d->emission);
+    sh.two_sided = d->two_sided;
+    switch (d->type) {
+    case TS_SHAPE_SPHERE: sh.sphere.radius = d->sphere.radius; break;
+    case TS_SHAPE_DISK:
+        sh.disk.radius = d->disk.radius;
+        sh.disk.inner_radius = d->disk.inner_radius;
+        break;
+    case TS_SHAPE_CYLINDER:
+        sh.cylinder.radius = d->cylinder.radius;
+        sh.cylinder.height = d->cylinder.height;
+        break;
+    case TS_SHAPE_MESH: TRY(place_mesh(b, &d->mesh, &d->to_world, &sh.mesh, err)); break;
+    }
+    sh.to_world = d->type == TS_SHAPE_MESH ? ts_xform_identity() : d->to_world;
+    sh.flip_normal = d->type != TS_SHAPE_MESH && ts_xform_swaps_handedness(&sh.to_world);
+    if (d->type == TS_SHAPE_MESH) b->n_triangles += d->mesh.n_triangles;
+    if (sh.emissive) b->n_area_lights += d->type == TS_SHAPE_MESH ? d->mesh.n_triangles : 1;
+    b->shapes[b->n_shapes] = sh;
+    if (id) *id = b->n_shapes;
+    b->n_shapes++;
+    return TS_OK;
+}
+
+/* ---------------------------------------------------------------- lights */
+
+ts_status ts_scene_builder_add_light(ts_scene_builder *b, const ts_light_desc *d, ts_error *err)
+{
+    TRY(usable(b, err));
+    if ((uint64_t)b->n_lights + b->n_area_lights + 1 > b->lim.max_lights)
+        return ts_error_set(err, TS_ERR_LIMIT, "more than the limit of %u lights (emitting shapes included)",
+                            b->lim.max_lights);
+    /* Finiteness of colours, positions, directions and transforms: ts_lights_prepare's. */
+    if (!rgb_nonneg(d->color)) return bad_rgb(err, "color", "RGB ≥ 0", d->color);
+    ts_light l = {0};
+    l.type = d->type;
+    l.color = d->color;
+    l.shape = TS_NONE;
+    l.prim = TS_NONE;
+    l.to_world = ts_xform_identity();
+    bool same = d->from.x == d->to.x && d->from.y == d->to.y && d->from.z == d->to.z;
+    switch (d->type) {
+    case TS_LIGHT_POINT: l.position = d->from; break;
+    case TS_LIGHT_SPOT: {
+        double angle = d->cone_angle_deg, delta = d->cone_delta_deg;
+        if (same) return ts_error_set(err, TS_ERR_INVALID, "to: must differ from 'from'");
+        if (!(angle > 0 && angle <= 180))
+            return ts_error_set(err, TS_ERR_INVALID, "cone_angle: expected an angle in (0, 180] degrees, got %g",
+                                angle);
+        if (!(delta >= 0 && delta <= angle))
+            return ts_error_set(err, TS_ERR_INVALID, "cone_delta: expected an angle in [0, cone_angle], got %g",
+                                delta);
+        l.position = d->from;
+        l.direction = ts_vec3_normalize(ts_vec3_sub(d->to, d->from));
+        l.cos_total = cosf(ts_radians((float)angle));
+        l.cos_falloff_start = cosf(ts_radians((float)(angle - delta)));
+        break;
+    }
+    case TS_LIGHT_DISTANT:
+        if (same) return ts_error_set(err, TS_ERR_INVALID, "to: must differ from 'from'");
+        l.direction = ts_vec3_normalize(ts_vec3_sub(d->to, d->from));
+        break;
+    case TS_LIGHT_INFINITE:
+        if (d->map) {
+            uint32_t i = 0;
+            while (i < b->n_envmaps && b->envmaps[i] != d->map) i++;
+            if (i == b->n_envmaps)
+                return ts_error_set(err, TS_ERR_INVALID, "map: the map was not loaded by this scene builder");
+        }
+        l.map = d->map;
+        l.to_world = d->to_world;
+        break;
+    case TS_LIGHT_AREA:
+        return ts_error_set(err, TS_ERR_INVALID, "type: area lights come from shapes with an emission");
+    default: return ts_error_set(err, TS_ERR_INVALID, "type: unknown light type %d", (int)d->type);
+    }
+    if (!grow((void **)&b->lights, &b->cap_lights, (size_t)b->n_lights + 1, sizeof *b->lights))
+        return nomem(err, "the lights");
+    b->lights[b->n_lights++] = l;
+    return TS_OK;
+}
+
+void ts_scene_builder_counts(const ts_scene_builder *b, ts_scene_counts *out)
+{
+    *out = (ts_scene_counts){b->n_materials, b->n_shapes, b->n_lights, b->n_triangles, b->n_area_lights};
+}
+
+/* ---------------------------------------------------------------- finish */
+
+/* The lists into the arena at their final sizes (+ 1: calloc of 0 may fail), the files'
+ * tables and maps into the scene's keeping, and one area light per emitting shape or
+ * triangle after the lights added. */
+static ts_status lay_out(ts_scene_builder *b, ts_error *err)
+{
+    ts_scene *s = b->s;
+    ts_arena *a = &s->arena;
+    uint64_t n_lights = b->n_lights + b->n_area_lights;
+    s->materials = ts_arena_calloc(a, (size_t)b->n_materials + 1, sizeof *s->materials);
+    s->material_names = ts_arena_calloc(a, (size_t)b->n_materials + 1, sizeof *s->material_names);
+    s->shapes = ts_arena_calloc(a, (size_t)b->n_shapes + 1, sizeof *s->shapes);
+    s->lights = ts_arena_calloc(a, (size_t)n_lights + 1, sizeof *s->lights);
+    s->fourier_tables = ts_arena_calloc(a, (size_t)b->n_fourier_tables + 1, sizeof *s->fourier_tables);
+    s->envmaps = ts_arena_calloc(a, (size_t)b->n_envmaps + 1, sizeof *s->envmaps);
+    if (!s->materials || !s->material_names || !s->shapes || !s->lights || !s->fourier_tables || !s->envmaps)
+        return nomem(err, "the scene");
+    if (b->n_fourier_tables) memcpy(s->fourier_tables, b->fourier_tables, b->n_fourier_tables * sizeof *b->fourier_tables);
+    s->n_fourier_tables = b->n_fourier_tables;
+    b->n_fourier_tables = 0;
+    if (b->n_envmaps) memcpy(s->envmaps, b->envmaps, b->n_envmaps * sizeof *b->envmaps);
+    s->n_envmaps = b->n_envmaps;
+    b->n_envmaps = 0;
+    if (b->n_materials) {
+        memcpy(s->materials, b->materials, b->n_materials * sizeof *b->materials);
+        memcpy(s->material_names, b->material_names, b->n_materials * sizeof *b->material_names);
+    }
+    s->n_materials = b->n_materials;
+    if (b->n_shapes) memcpy(s->shapes, b->shapes, b->n_shapes * sizeof *b->shapes);
+    s->n_shapes = b->n_shapes;
+    s->n_triangles = b->n_triangles;
+    if (b->n_lights) memcpy(s->lights, b->lights, b->n_lights * sizeof *b->lights);
+    s->n_lights = b->n_lights;
+    for (uint32_t k = 0; k < s->n_shapes; k++) {
+        ts_shape *sh = &s->shapes[k];
+        if (!sh->emissive) continue;
+        sh->first_light = s->n_lights;
+        uint32_t count = sh->type == TS_SHAPE_MESH ? sh->mesh.n_triangles : 1;
+        for (uint32_t t = 0; t < count; t++) {
+            ts_light *l = &s->lights[s->n_lights++];
+            *l = (ts_light){0};
+            l->type = TS_LIGHT_AREA;
+            l->color = sh->emission;
+            l->shape = k;
+            l->prim = sh->type == TS_SHAPE_MESH ? t : 0;
+            l->two_sided = sh->two_sided;
+            l->to_world = ts_xform_identity();
+        }
+    }
+    return TS_OK;
+}
+
+static ts_status build(ts_scene_builder *b, ts_error *err)
+{
+    ts_scene *s = b->s;
+    s->accel = ts_accel_create(s->shapes, s->n_shapes, err);
+    if (!s->accel) return err->status ? err->status : TS_ERR_INTERNAL;
+    s->bounds = ts_accel_bounds(s->accel);
+    /* Rays carry float coordinates and Embree refuses components beyond ~1.8e18; far before
+     * that, float spacing makes geometry meaningless. Refuse scenes that reach beyond. */
+    const float limit = 1e15f;
+    if (!ts_bounds3_is_empty(s->bounds) &&
+        !(fabsf(s->bounds.lo.x) <= limit && fabsf(s->bounds.lo.y) <= limit && fabsf(s->bounds.lo.z) <= limit &&
+          fabsf(s->bounds.hi.x) <= limit && fabsf(s->bounds.hi.y) <= limit && fabsf(s->bounds.hi.z) <= limit))
+        return ts_error_set(err, TS_ERR_INVALID,
+                            "shapes: the scene reaches beyond ±1e15 units from the origin (bounds [%g, %g, %g] to "
+                            "[%g, %g, %g]); scale or move it",
+                            s->bounds.lo.x, s->bounds.lo.y, s->bounds.lo.z, s->bounds.hi.x, s->bounds.hi.y,
+                            s->bounds.hi.z);
+    ts_vec3 from = s->camera.origin;
+    if (!(fabsf(from.x) <= limit && fabsf(from.y) <= limit && fabsf(from.z) <= limit))
+        return ts_error_set(err, TS_ERR_INVALID, "camera.from: farther than 1e15 units from the origin");
+    TRY(ts_lights_prepare(s->lights, s->n_lights, s->shapes, s->bounds, err));
+    ts_light_sampling mode = s->integrator.type == TS_INTEGRATOR_PATH &&
+                                     s->integrator.light_sampling == TS_LIGHT_SELECT_UNIFORM
+                                 ? TS_LIGHT_SAMPLING_UNIFORM
+                                 : TS_LIGHT_SAMPLING_POWER;
+    TRY(ts_light_distribution_init(&s->light_distribution, s->lights, s->n_lights, s->shapes, mode, &s->arena, err));
+    s->infinite_lights = ts_arena_calloc(&s->arena, (size_t)s->n_lights + 1, sizeof *s->infinite_lights);
+    if (!s->infinite_lights) return nomem(err, "the lights");
+    for (uint32_t i = 0; i < s->n_lights; i++)
+        if (s->lights[i].type == TS_LIGHT_INFINITE) s->infinite_lights[s->n_infinite_lights++] = i;
+    s->effects = ts_effects_analyse(s) & ~s->job.effects_off;
+    return TS_OK;
+}
+
+ts_status ts_scene_builder_finish(ts_scene_builder *b, ts_scene **out, ts_error *err)
+{
+    *out = NULL;
+    TRY(usable(b, err));
+    b->finished = true;
+    const char *missing = !b->has_film         ? "film"
+                          : !b->has_camera     ? "camera"
+                          : !b->has_sampler    ? "sampler"
+                          : !b->has_integrator ? "integrator"
+                          : !b->has_digest     ? "digest"
+                                               : NULL;
+    if (missing) return ts_error_set(err, TS_ERR_INVALID, "%s: not set (the scene builder needs it)", missing);
+    if ((uint64_t)b->n_lights + b->n_area_lights > b->lim.max_lights)
+        return ts_error_set(err, TS_ERR_LIMIT,
+                            "lights: %llu lights (with emitting triangles) is more than the limit of %u",
+                            (unsigned long long)(b->n_lights + b->n_area_lights), b->lim.max_lights);
+    ts_scene *s = b->s;
+    if (!s->name && !(s->name = ts_arena_strdup(&s->arena, "untitled"))) return nomem(err, "the scene");
+    TRY(lay_out(b, err));
+    TRY(ts_camera_init(&s->camera, &b->camera, s->width, s->height, err));
+    TRY(build(b, err));
+    *out = s;
+    b->s = NULL;
+    return TS_OK;
+}
