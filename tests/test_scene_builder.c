@@ -8,6 +8,7 @@
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
+
 #include <cmocka.h>
 
 #include <math.h>
@@ -36,8 +37,11 @@ static ts_scene_builder *base(const ts_scene_limits *lim)
     ok(ts_scene_builder_set_camera(b, &cam, &err), &err);
     ts_sampler smp = {TS_SAMPLER_SOBOL, 3};
     ok(ts_scene_builder_set_sampler(b, &smp, 4, &err), &err);
-    ts_integrator_desc in = {.type = TS_INTEGRATOR_PATH, .max_depth = 5, .rr_depth = 3,
-                             .light_sampling = TS_LIGHT_SELECT_POWER, .samples_per_light = 1,
+    ts_integrator_desc in = {.type = TS_INTEGRATOR_PATH,
+                             .max_depth = 5,
+                             .rr_depth = 3,
+                             .light_sampling = TS_LIGHT_SELECT_POWER,
+                             .samples_per_light = 1,
                              .ao_distance = INFINITY};
     ok(ts_scene_builder_set_integrator(b, &in, &err), &err);
     ok(ts_scene_builder_set_digest(b, digest, &err), &err);
@@ -69,8 +73,8 @@ static ts_shape_desc sphere(double r)
 static bool same_material(const ts_material *a, const ts_material *b)
 {
     return SAME(type) && SAME(reflectance) && SAME(transmittance) && SAME(sigma_deg) && SAME(eta) &&
-           SAME(conductor_eta) && SAME(conductor_k) && SAME(roughness) && SAME(distribution) && SAME(diffuse) &&
-           SAME(specular) && a->fourier == b->fourier;
+           SAME(conductor_eta) && SAME(conductor_k) && SAME(roughness) && SAME(distribution) &&
+           SAME(diffuse) && SAME(specular) && a->fourier == b->fourier;
 }
 #undef SAME
 
@@ -82,12 +86,14 @@ static void test_same_scene_as_json(void **state)
     const char *doc =
         "{\"tessera\":1,\"name\":\"twin\",\"camera\":{\"from\":[0,1,6],\"to\":[0,0,0],\"fov\":40},"
         "\"film\":{\"width\":64,\"height\":48,\"crop\":[0.25,0.75,0,0.5],\"filter\":{\"type\":\"mitchell\"}},"
-        "\"sampler\":{\"spp\":4,\"seed\":3},\"integrator\":{\"type\":\"path\",\"light_sampling\":\"uniform\"},"
+        "\"sampler\":{\"spp\":4,\"seed\":3},\"integrator\":{\"type\":\"path\",\"light_sampling\":\"uniform\"}"
+        ","
         "\"materials\":{\"m\":{\"type\":\"diffuse\"},\"g\":{\"type\":\"conductor\",\"eta\":[0.2,0.4,1.4],"
         "\"k\":[3.6,2.4,1.8],\"roughness\":0.2}},"
         "\"shapes\":[{\"type\":\"sphere\",\"center\":[1,0.5,0],\"radius\":0.5,\"material\":\"g\"},"
         "{\"type\":\"mesh\",\"positions\":[-1,0,-1,1,0,-1,1,0,1,-1,0,1],\"indices\":[0,2,1,0,3,2],"
-        "\"material\":\"m\",\"emission\":[2,2,2],\"transform\":[{\"scale\":[-1,1,1]},{\"translate\":[0,2,0]}]}],"
+        "\"material\":\"m\",\"emission\":[2,2,2],\"transform\":[{\"scale\":[-1,1,1]},{\"translate\":[0,2,0]}]"
+        "}],"
         "\"lights\":[{\"type\":\"spot\",\"from\":[0,4,0],\"to\":[0,0,0],\"intensity\":10,\"cone_angle\":30,"
         "\"cone_delta\":5}]}";
     ts_scene *js = NULL;
@@ -104,14 +110,24 @@ static void test_same_scene_as_json(void **state)
     ok(ts_scene_builder_set_camera(b, &cam, &err), &err);
     ts_sampler smp = {TS_SAMPLER_SOBOL, 3};
     ok(ts_scene_builder_set_sampler(b, &smp, 4, &err), &err);
-    ts_integrator_desc in = {.type = TS_INTEGRATOR_PATH, .max_depth = 5, .rr_depth = 3,
-                             .light_sampling = TS_LIGHT_SELECT_UNIFORM, .samples_per_light = 1,
+    ts_integrator_desc in = {.type = TS_INTEGRATOR_PATH,
+                             .max_depth = 5,
+                             .rr_depth = 3,
+                             .light_sampling = TS_LIGHT_SELECT_UNIFORM,
+                             .samples_per_light = 1,
                              .ao_distance = INFINITY};
     ok(ts_scene_builder_set_integrator(b, &in, &err), &err);
-    ts_material m = {.type = TS_MATERIAL_DIFFUSE, .reflectance = ts_rgb_gray(0.5f), .transmittance = ts_rgb_gray(1),
-                     .eta = 1.5f, .roughness = 0};
-    ts_material g = {.type = TS_MATERIAL_CONDUCTOR, .reflectance = ts_rgb_gray(1), .transmittance = ts_rgb_gray(1),
-                     .eta = 1.5f, .conductor_eta = {0.2f, 0.4f, 1.4f}, .conductor_k = {3.6f, 2.4f, 1.8f},
+    ts_material m = {.type = TS_MATERIAL_DIFFUSE,
+                     .reflectance = ts_rgb_gray(0.5f),
+                     .transmittance = ts_rgb_gray(1),
+                     .eta = 1.5f,
+                     .roughness = 0};
+    ts_material g = {.type = TS_MATERIAL_CONDUCTOR,
+                     .reflectance = ts_rgb_gray(1),
+                     .transmittance = ts_rgb_gray(1),
+                     .eta = 1.5f,
+                     .conductor_eta = {0.2f, 0.4f, 1.4f},
+                     .conductor_k = {3.6f, 2.4f, 1.8f},
                      .roughness = 0.2f};
     uint32_t mid, gid;
     ok(ts_scene_builder_add_material(b, "m", &m, &mid, &err), &err);
@@ -129,8 +145,13 @@ static void test_same_scene_as_json(void **state)
     s1.to_world = ts_xform_compose(&mirror, &none); /* the list, applied first to last */
     s1.to_world = ts_xform_compose(&up, &s1.to_world);
     ok(ts_scene_builder_add_shape(b, &s1, NULL, &err), &err);
-    ts_light_desc spot = {.type = TS_LIGHT_SPOT, .color = ts_rgb_gray(10), .from = {0, 4, 0}, .to = {0, 0, 0},
-                          .cone_angle_deg = 30, .cone_delta_deg = 5, .to_world = ts_xform_identity()};
+    ts_light_desc spot = {.type = TS_LIGHT_SPOT,
+                          .color = ts_rgb_gray(10),
+                          .from = {0, 4, 0},
+                          .to = {0, 0, 0},
+                          .cone_angle_deg = 30,
+                          .cone_delta_deg = 5,
+                          .to_world = ts_xform_identity()};
     ok(ts_scene_builder_add_light(b, &spot, &err), &err);
     ts_scene *bs = NULL;
     ok(ts_scene_builder_finish(b, &bs, &err), &err);
@@ -145,7 +166,8 @@ static void test_same_scene_as_json(void **state)
     assert_int_equal(bs->crop_y1, js->crop_y1);
     assert_memory_equal(&bs->filter, &js->filter, sizeof bs->filter);
     assert_int_equal(bs->n_materials, 2);
-    for (uint32_t i = 0; i < 2; i++) assert_true(same_material(&bs->materials[i], &js->materials[i]));
+    for (uint32_t i = 0; i < 2; i++)
+        assert_true(same_material(&bs->materials[i], &js->materials[i]));
     assert_int_equal(bs->n_shapes, js->n_shapes);
     for (uint32_t i = 0; i < bs->n_shapes; i++) {
         const ts_shape *x = &bs->shapes[i], *y = &js->shapes[i];
@@ -177,7 +199,8 @@ static void test_same_scene_as_json(void **state)
     assert_int_equal(bs->lights[1].type, TS_LIGHT_AREA);
     assert_int_equal(bs->shapes[1].first_light, 1);
     assert_int_equal(bs->light_distribution.n, 3);
-    assert_memory_equal(bs->light_distribution.table.pmf, js->light_distribution.table.pmf, 3 * sizeof(float));
+    assert_memory_equal(bs->light_distribution.table.pmf, js->light_distribution.table.pmf,
+                        3 * sizeof(float));
     assert_int_equal(bs->effects, js->effects);
     assert_memory_equal(&bs->bounds, &js->bounds, sizeof bs->bounds);
     ts_scene_destroy(bs);
@@ -211,7 +234,8 @@ static void test_mesh_to_world(void **state)
     /* object space: (p1 − p0) × (p2 − p0) of triangle 0, 2, 1 points along +y */
     ts_vec3 f = ts_vec3_cross(ts_vec3_sub(p[1], p[0]), ts_vec3_sub(p[2], p[0]));
     assert_true(f.y > 0);
-    for (uint32_t v = 0; v < 4; v++) assert_float_equal(m->n[3 * v + 1], 1, 0);
+    for (uint32_t v = 0; v < 4; v++)
+        assert_float_equal(m->n[3 * v + 1], 1, 0);
     assert_float_equal(m->p[2], 2, 0); /* z = −1 scaled by −2 */
     ts_scene_destroy(s);
 }
@@ -224,8 +248,10 @@ typedef struct expect {
 static void refused(ts_status st, const ts_error *err, expect e)
 {
     if (st == TS_OK) fail_msg("accepted, but should have been refused with \"%s\"", e.text);
-    if (st != e.st) fail_msg("status %s (%s), expected %s", ts_status_name(st), err->message, ts_status_name(e.st));
-    if (!strstr(err->message, e.text)) fail_msg("message \"%s\" does not contain \"%s\"", err->message, e.text);
+    if (st != e.st)
+        fail_msg("status %s (%s), expected %s", ts_status_name(st), err->message, ts_status_name(e.st));
+    if (!strstr(err->message, e.text))
+        fail_msg("message \"%s\" does not contain \"%s\"", err->message, e.text);
 }
 
 static void test_settings_refused(void **state)
@@ -242,12 +268,17 @@ static void test_settings_refused(void **state)
         expect e;
     } films[] = {
         {{0, 10, {0, 1, 0, 1}, TS_FILTER_BOX, 0.5f}, {TS_ERR_LIMIT, "film: 0 × 10 pixels"}},
-        {{80, 80, {0, 1, 0, 1}, TS_FILTER_BOX, 0.5f}, {TS_ERR_LIMIT, "80 × 80 pixels is more than the limit of 4000"}},
-        {{10, 10, {0, 1, 0, 1}, TS_FILTER_BOX, 17}, {TS_ERR_INVALID, "film.filter.radius: expected at most 16"}},
-        {{10, 10, {0, 1, 0, 1}, TS_FILTER_BOX, 0}, {TS_ERR_INVALID, "filter radius: expected a positive number"}},
+        {{80, 80, {0, 1, 0, 1}, TS_FILTER_BOX, 0.5f},
+         {TS_ERR_LIMIT, "80 × 80 pixels is more than the limit of 4000"}},
+        {{10, 10, {0, 1, 0, 1}, TS_FILTER_BOX, 17},
+         {TS_ERR_INVALID, "film.filter.radius: expected at most 16"}},
+        {{10, 10, {0, 1, 0, 1}, TS_FILTER_BOX, 0},
+         {TS_ERR_INVALID, "filter radius: expected a positive number"}},
         {{10, 10, {0, 1, 0, 1}, (ts_filter_type)9, 1}, {TS_ERR_INVALID, "filter type: unknown type 9"}},
-        {{10, 10, {0.5f, 0.5f, 0, 1}, TS_FILTER_BOX, 1}, {TS_ERR_INVALID, "film.crop: expected [x0, x1, y0, y1]"}},
-        {{10, 10, {0.11f, 0.12f, 0, 1}, TS_FILTER_BOX, 1}, {TS_ERR_INVALID, "film.crop: the window holds no pixel"}},
+        {{10, 10, {0.5f, 0.5f, 0, 1}, TS_FILTER_BOX, 1},
+         {TS_ERR_INVALID, "film.crop: expected [x0, x1, y0, y1]"}},
+        {{10, 10, {0.11f, 0.12f, 0, 1}, TS_FILTER_BOX, 1},
+         {TS_ERR_INVALID, "film.crop: the window holds no pixel"}},
     };
     for (size_t i = 0; i < sizeof films / sizeof *films; i++)
         refused(ts_scene_builder_set_film(b, &films[i].film, &err), &err, films[i].e);
@@ -260,14 +291,16 @@ static void test_settings_refused(void **state)
          {TS_ERR_INVALID, "camera: 'from' and 'to' are the same point"}},
         {{TS_CAMERA_PERSPECTIVE, {0, 0, 1}, {0, 0, 0}, {0, 0, 1}, 40, 1, 0, 1},
          {TS_ERR_INVALID, "camera.up: must not be parallel"}},
-        {{TS_CAMERA_PERSPECTIVE, {0, 0, 1}, {0, 0, 0}, {0, 1, 0}, 180, 1, 0, 1}, {TS_ERR_INVALID, "camera.fov"}},
+        {{TS_CAMERA_PERSPECTIVE, {0, 0, 1}, {0, 0, 0}, {0, 1, 0}, 180, 1, 0, 1},
+         {TS_ERR_INVALID, "camera.fov"}},
         {{TS_CAMERA_PERSPECTIVE, {0, 0, 1}, {0, 0, 0}, {0, 1, 0}, 40, 1, -1, 1},
          {TS_ERR_INVALID, "camera.lens_radius: expected a finite number ≥ 0, got -1"}},
         {{TS_CAMERA_PERSPECTIVE, {0, 0, 1}, {0, 0, 0}, {0, 1, 0}, 40, 1, INFINITY, 1},
          {TS_ERR_INVALID, "camera.lens_radius"}},
         {{TS_CAMERA_PERSPECTIVE, {0, 0, 1}, {0, 0, 0}, {0, 1, 0}, 40, 1, 0.1f, 0},
          {TS_ERR_INVALID, "camera.focus_distance: expected a finite number > 0, got 0"}},
-        {{TS_CAMERA_ORTHOGRAPHIC, {0, 0, 1}, {0, 0, 0}, {0, 1, 0}, 40, 0, 0, 1}, {TS_ERR_INVALID, "camera.height"}},
+        {{TS_CAMERA_ORTHOGRAPHIC, {0, 0, 1}, {0, 0, 0}, {0, 1, 0}, 40, 0, 0, 1},
+         {TS_ERR_INVALID, "camera.height"}},
         {{(ts_camera_type)5, {0, 0, 1}, {0, 0, 0}, {0, 1, 0}, 40, 1, 0, 1}, {TS_ERR_INVALID, "camera.type"}},
     };
     for (size_t i = 0; i < sizeof cams / sizeof *cams; i++)
@@ -280,17 +313,21 @@ static void test_settings_refused(void **state)
     smp.type = (ts_sampler_type)4;
     refused(ts_scene_builder_set_sampler(b, &smp, 1, &err), &err, (expect){TS_ERR_INVALID, "sampler.type"});
 
-    ts_integrator_desc path = {.type = TS_INTEGRATOR_PATH, .max_depth = -1, .light_sampling = TS_LIGHT_SELECT_POWER};
+    ts_integrator_desc path = {
+        .type = TS_INTEGRATOR_PATH, .max_depth = -1, .light_sampling = TS_LIGHT_SELECT_POWER};
     refused(ts_scene_builder_set_integrator(b, &path, &err), &err,
             (expect){TS_ERR_INVALID, "integrator.max_depth: expected an integer in [0, 65535], got -1"});
     path.max_depth = 3, path.light_sampling = (ts_light_selection)3;
-    refused(ts_scene_builder_set_integrator(b, &path, &err), &err, (expect){TS_ERR_INVALID, "integrator.light_sampling"});
+    refused(ts_scene_builder_set_integrator(b, &path, &err), &err,
+            (expect){TS_ERR_INVALID, "integrator.light_sampling"});
     ts_integrator_desc direct = {.type = TS_INTEGRATOR_DIRECT, .max_depth = 1001, .samples_per_light = 1};
     refused(ts_scene_builder_set_integrator(b, &direct, &err), &err, (expect){TS_ERR_INVALID, "[0, 1000]"});
     direct.max_depth = 2, direct.samples_per_light = 0;
-    refused(ts_scene_builder_set_integrator(b, &direct, &err), &err, (expect){TS_ERR_INVALID, "samples_per_light"});
+    refused(ts_scene_builder_set_integrator(b, &direct, &err), &err,
+            (expect){TS_ERR_INVALID, "samples_per_light"});
     ts_integrator_desc ao = {.type = TS_INTEGRATOR_AO, .ao_distance = 0};
-    refused(ts_scene_builder_set_integrator(b, &ao, &err), &err, (expect){TS_ERR_INVALID, "integrator.max_distance"});
+    refused(ts_scene_builder_set_integrator(b, &ao, &err), &err,
+            (expect){TS_ERR_INVALID, "integrator.max_distance"});
     ao.type = (ts_integrator_type)8;
     refused(ts_scene_builder_set_integrator(b, &ao, &err), &err, (expect){TS_ERR_INVALID, "integrator.type"});
 
@@ -306,8 +343,10 @@ static void test_settings_refused(void **state)
     job = (ts_job_desc){.priority = 2000000};
     refused(ts_scene_builder_set_job(b, &job, &err), &err, (expect){TS_ERR_INVALID, "job.priority"});
 
-    refused(ts_scene_builder_set_digest(b, "00ff", &err), &err, (expect){TS_ERR_INVALID, "digest: expected 64"});
-    refused(ts_scene_builder_set_digest(b, "00112233445566778899AABBCCDDEEFF00112233445566778899AABBCCDDEEFF", &err),
+    refused(ts_scene_builder_set_digest(b, "00ff", &err), &err,
+            (expect){TS_ERR_INVALID, "digest: expected 64"});
+    refused(ts_scene_builder_set_digest(b, "00112233445566778899AABBCCDDEEFF00112233445566778899AABBCCDDEEFF",
+                                        &err),
             &err, (expect){TS_ERR_INVALID, "lower-case hex"});
     refused(ts_scene_builder_set_name(b, NULL, &err), &err, (expect){TS_ERR_INVALID, "name"});
 
@@ -337,17 +376,25 @@ static void test_elements_refused(void **state)
         ts_material m;
         expect e;
     } mats[] = {
-        {{.type = TS_MATERIAL_DIFFUSE, .reflectance = {0.5f, 1.5f, 0}}, {TS_ERR_INVALID, "reflectance: expected RGB in [0, 1], got (0.5, 1.5, 0)"}},
-        {{.type = TS_MATERIAL_DIFFUSE, .sigma_deg = 91}, {TS_ERR_INVALID, "sigma: expected an angle in [0, 90]"}},
+        {{.type = TS_MATERIAL_DIFFUSE, .reflectance = {0.5f, 1.5f, 0}},
+         {TS_ERR_INVALID, "reflectance: expected RGB in [0, 1], got (0.5, 1.5, 0)"}},
+        {{.type = TS_MATERIAL_DIFFUSE, .sigma_deg = 91},
+         {TS_ERR_INVALID, "sigma: expected an angle in [0, 90]"}},
         {{.type = TS_MATERIAL_MIRROR, .reflectance = {NAN, 0, 0}}, {TS_ERR_INVALID, "reflectance"}},
-        {{.type = TS_MATERIAL_DIELECTRIC, .eta = 0}, {TS_ERR_INVALID, "eta: expected a finite number > 0, got 0"}},
+        {{.type = TS_MATERIAL_DIELECTRIC, .eta = 0},
+         {TS_ERR_INVALID, "eta: expected a finite number > 0, got 0"}},
         {{.type = TS_MATERIAL_DIELECTRIC, .eta = 1.5f, .transmittance = {2, 0, 0}},
          {TS_ERR_INVALID, "transmittance: expected RGB in [0, 1], got (2, 0, 0)"}},
-        {{.type = TS_MATERIAL_CONDUCTOR, .conductor_k = {INFINITY, 0, 0}}, {TS_ERR_INVALID, "k: expected finite RGB ≥ 0, got (inf, 0, 0)"}},
-        {{.type = TS_MATERIAL_CONDUCTOR, .distribution = (ts_microfacet_type)4}, {TS_ERR_INVALID, "distribution"}},
-        {{.type = TS_MATERIAL_PLASTIC, .roughness = -0.5f}, {TS_ERR_INVALID, "roughness: expected a finite number"}},
-        {{.type = TS_MATERIAL_SUBSTRATE, .specular = {0, 3, 0}}, {TS_ERR_INVALID, "specular: expected RGB in [0, 1], got (0, 3, 0)"}},
-        {{.type = TS_MATERIAL_FOURIER}, {TS_ERR_INVALID, "the Fourier table was not loaded by this scene builder"}},
+        {{.type = TS_MATERIAL_CONDUCTOR, .conductor_k = {INFINITY, 0, 0}},
+         {TS_ERR_INVALID, "k: expected finite RGB ≥ 0, got (inf, 0, 0)"}},
+        {{.type = TS_MATERIAL_CONDUCTOR, .distribution = (ts_microfacet_type)4},
+         {TS_ERR_INVALID, "distribution"}},
+        {{.type = TS_MATERIAL_PLASTIC, .roughness = -0.5f},
+         {TS_ERR_INVALID, "roughness: expected a finite number"}},
+        {{.type = TS_MATERIAL_SUBSTRATE, .specular = {0, 3, 0}},
+         {TS_ERR_INVALID, "specular: expected RGB in [0, 1], got (0, 3, 0)"}},
+        {{.type = TS_MATERIAL_FOURIER},
+         {TS_ERR_INVALID, "the Fourier table was not loaded by this scene builder"}},
         {{.type = (ts_material_type)20}, {TS_ERR_INVALID, "type: unknown material type 20"}},
     };
     for (size_t i = 0; i < sizeof mats / sizeof *mats; i++)
@@ -372,7 +419,8 @@ static void test_elements_refused(void **state)
             (expect){TS_ERR_INVALID, "material: no material of id 2 (2 were added)"});
     d = sphere(1);
     d.emission = (ts_rgb){1, -1, 1};
-    refused(ts_scene_builder_add_shape(b, &d, NULL, &err), &err, (expect){TS_ERR_INVALID, "emission: expected RGB ≥ 0, got (1, -1, 1)"});
+    refused(ts_scene_builder_add_shape(b, &d, NULL, &err), &err,
+            (expect){TS_ERR_INVALID, "emission: expected RGB ≥ 0, got (1, -1, 1)"});
     d = sphere(0);
     refused(ts_scene_builder_add_shape(b, &d, NULL, &err), &err,
             (expect){TS_ERR_INVALID, "radius: expected a positive number, got 0"});
@@ -383,7 +431,8 @@ static void test_elements_refused(void **state)
     refused(ts_scene_builder_add_shape(b, &d, NULL, &err), &err,
             (expect){TS_ERR_INVALID, "height: expected a positive number, got 0"});
     d = (ts_shape_desc){.type = (ts_shape_type)9, .to_world = ts_xform_identity()};
-    refused(ts_scene_builder_add_shape(b, &d, NULL, &err), &err, (expect){TS_ERR_INVALID, "unknown shape type 9"});
+    refused(ts_scene_builder_add_shape(b, &d, NULL, &err), &err,
+            (expect){TS_ERR_INVALID, "unknown shape type 9"});
     d = quad();
     d.mesh.n_triangles = 0;
     refused(ts_scene_builder_add_shape(b, &d, NULL, &err), &err,
@@ -530,9 +579,9 @@ static void test_finish_needs_settings(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_same_scene_as_json),  cmocka_unit_test(test_mesh_to_world),
-        cmocka_unit_test(test_settings_refused),    cmocka_unit_test(test_elements_refused),
-        cmocka_unit_test(test_count_limits),        cmocka_unit_test(test_finish_needs_settings),
+        cmocka_unit_test(test_same_scene_as_json), cmocka_unit_test(test_mesh_to_world),
+        cmocka_unit_test(test_settings_refused),   cmocka_unit_test(test_elements_refused),
+        cmocka_unit_test(test_count_limits),       cmocka_unit_test(test_finish_needs_settings),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -10,8 +10,10 @@ void ts_scene_destroy(ts_scene *s)
 {
     if (!s) return;
     if (s->accel) ts_accel_destroy(s->accel);
-    for (uint32_t i = 0; i < s->n_fourier_tables; i++) ts_fourier_table_destroy(s->fourier_tables[i]);
-    for (uint32_t i = 0; i < s->n_envmaps; i++) ts_envmap_destroy(s->envmaps[i]);
+    for (uint32_t i = 0; i < s->n_fourier_tables; i++)
+        ts_fourier_table_destroy(s->fourier_tables[i]);
+    for (uint32_t i = 0; i < s->n_envmaps; i++)
+        ts_envmap_destroy(s->envmaps[i]);
     ts_arena_fini(&s->arena);
     free(s);
 }

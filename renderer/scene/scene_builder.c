@@ -100,7 +100,10 @@ static ts_status usable(const ts_scene_builder *b, ts_error *err)
 
 static bool rgb_nonneg(ts_rgb c) { return c.r >= 0 && c.g >= 0 && c.b >= 0; } /* false for NaN */
 static bool rgb_unit(ts_rgb c) { return rgb_nonneg(c) && c.r <= 1 && c.g <= 1 && c.b <= 1; }
-static bool rgb_finite_nonneg(ts_rgb c) { return rgb_nonneg(c) && isfinite(c.r) && isfinite(c.g) && isfinite(c.b); }
+static bool rgb_finite_nonneg(ts_rgb c)
+{
+    return rgb_nonneg(c) && isfinite(c.r) && isfinite(c.g) && isfinite(c.b);
+}
 
 /* ---------------------------------------------------------------- create, destroy */
 
@@ -112,10 +115,12 @@ ts_status ts_scene_builder_create(const ts_scene_limits *limits, const char *bas
     ts_scene *s = b ? calloc(1, sizeof *s) : NULL;
     if (!s) {
         free(b);
-        return ts_error_set(err, TS_ERR_NOMEM, "out of memory while loading the scene");
+        return ts_error_set(err, TS_ERR_NOMEM, "out of memory while building the scene");
     }
-    if (limits) b->lim = *limits;
-    else ts_scene_limits_default(&b->lim);
+    if (limits)
+        b->lim = *limits;
+    else
+        ts_scene_limits_default(&b->lim);
     b->s = s;
     ts_arena_init(&s->arena, b->lim.max_memory);
     if (base_dir && !(s->base_dir = ts_arena_strdup(&s->arena, base_dir))) {
@@ -129,8 +134,10 @@ ts_status ts_scene_builder_create(const ts_scene_limits *limits, const char *bas
 void ts_scene_builder_destroy(ts_scene_builder *b)
 {
     if (!b) return;
-    for (uint32_t i = 0; i < b->n_fourier_tables; i++) ts_fourier_table_destroy(b->fourier_tables[i]);
-    for (uint32_t i = 0; i < b->n_envmaps; i++) ts_envmap_destroy(b->envmaps[i]);
+    for (uint32_t i = 0; i < b->n_fourier_tables; i++)
+        ts_fourier_table_destroy(b->fourier_tables[i]);
+    for (uint32_t i = 0; i < b->n_envmaps; i++)
+        ts_envmap_destroy(b->envmaps[i]);
     free(b->fourier_tables);
     free(b->envmaps);
     free(b->materials);
@@ -158,7 +165,8 @@ ts_status ts_scene_builder_set_digest(ts_scene_builder *b, const char *hex, ts_e
     TRY(usable(b, err));
     const size_t want = sizeof b->s->digest - 1;
     size_t n = 0;
-    while (hex && n <= want && ((hex[n] >= '0' && hex[n] <= '9') || (hex[n] >= 'a' && hex[n] <= 'f'))) n++;
+    while (hex && n <= want && ((hex[n] >= '0' && hex[n] <= '9') || (hex[n] >= 'a' && hex[n] <= 'f')))
+        n++;
     if (!hex || n != want || hex[n] != '\0')
         return ts_error_set(err, TS_ERR_INVALID, "digest: expected %zu lower-case hex digits", want);
     memcpy(b->s->digest, hex, want + 1);
@@ -174,8 +182,8 @@ ts_status ts_scene_builder_set_film(ts_scene_builder *b, const ts_film_desc *f, 
         return ts_error_set(err, TS_ERR_LIMIT, "film: %u × %u pixels, expected 1 to %u × 1 to %u", f->width,
                             f->height, lim->max_width, lim->max_height);
     if ((uint64_t)f->width * f->height > lim->max_pixels)
-        return ts_error_set(err, TS_ERR_LIMIT, "film: %u × %u pixels is more than the limit of %llu", f->width,
-                            f->height, (unsigned long long)lim->max_pixels);
+        return ts_error_set(err, TS_ERR_LIMIT, "film: %u × %u pixels is more than the limit of %llu",
+                            f->width, f->height, (unsigned long long)lim->max_pixels);
     if (!(f->filter_radius <= 16))
         return ts_error_set(err, TS_ERR_INVALID, "film.filter.radius: expected at most 16 pixels, got %g",
                             f->filter_radius);
@@ -187,7 +195,8 @@ ts_status ts_scene_builder_set_film(ts_scene_builder *b, const ts_film_desc *f, 
     /* pbrt's rule: the window's edges, scaled to pixels, rounded up. */
     int x0 = (int)ceilf(width * c[0]), x1 = (int)ceilf(width * c[1]);
     int y0 = (int)ceilf(height * c[2]), y1 = (int)ceilf(height * c[3]);
-    if (x1 <= x0 || y1 <= y0) return ts_error_set(err, TS_ERR_INVALID, "film.crop: the window holds no pixel");
+    if (x1 <= x0 || y1 <= y0)
+        return ts_error_set(err, TS_ERR_INVALID, "film.crop: the window holds no pixel");
     ts_filter filter; /* its own checks: a radius > 0, a known type */
     TRY(ts_filter_init(&filter, f->filter, f->filter_radius, err));
     ts_scene *s = b->s;
@@ -211,14 +220,15 @@ ts_status ts_scene_builder_set_camera(ts_scene_builder *b, const ts_camera_desc 
         return ts_error_set(err, TS_ERR_INVALID, "camera.lens_radius: expected a finite number ≥ 0, got %g",
                             d->lens_radius);
     if (!(d->focus_distance > 0 && isfinite(d->focus_distance)))
-        return ts_error_set(err, TS_ERR_INVALID, "camera.focus_distance: expected a finite number > 0, got %g",
-                            d->focus_distance);
+        return ts_error_set(err, TS_ERR_INVALID,
+                            "camera.focus_distance: expected a finite number > 0, got %g", d->focus_distance);
     b->camera = *d;
     b->has_camera = true;
     return TS_OK;
 }
 
-ts_status ts_scene_builder_set_sampler(ts_scene_builder *b, const ts_sampler *sampler, uint32_t spp, ts_error *err)
+ts_status ts_scene_builder_set_sampler(ts_scene_builder *b, const ts_sampler *sampler, uint32_t spp,
+                                       ts_error *err)
 {
     TRY(usable(b, err));
     if (sampler->type != TS_SAMPLER_SOBOL && sampler->type != TS_SAMPLER_INDEPENDENT)
@@ -235,8 +245,8 @@ ts_status ts_scene_builder_set_sampler(ts_scene_builder *b, const ts_sampler *sa
 static ts_status int_in(int v, int lo, int hi, const char *what, ts_error *err)
 {
     if (v < lo || v > hi)
-        return ts_error_set(err, TS_ERR_INVALID, "integrator.%s: expected an integer in [%d, %d], got %d", what, lo,
-                            hi, v);
+        return ts_error_set(err, TS_ERR_INVALID, "integrator.%s: expected an integer in [%d, %d], got %d",
+                            what, lo, hi, v);
     return TS_OK;
 }
 
@@ -255,23 +265,29 @@ ts_status ts_scene_builder_set_integrator(ts_scene_builder *b, const ts_integrat
             return ts_error_set(err, TS_ERR_INVALID, "integrator.light_sampling: unknown selection %d",
                                 (int)in->light_sampling);
         if (!sampling_ok)
-            return ts_error_set(err, TS_ERR_INVALID, "integrator.sampling: unknown strategy %d", (int)in->sampling);
+            return ts_error_set(err, TS_ERR_INVALID, "integrator.sampling: unknown strategy %d",
+                                (int)in->sampling);
         break;
     case TS_INTEGRATOR_DIRECT:
         TRY(int_in(in->max_depth, 0, 1000, "max_depth", err));
         TRY(int_in(in->samples_per_light, 1, 4096, "samples_per_light", err));
         if (in->strategy != TS_LIGHTS_ALL && in->strategy != TS_LIGHTS_ONE)
-            return ts_error_set(err, TS_ERR_INVALID, "integrator.strategy: unknown strategy %d", (int)in->strategy);
+            return ts_error_set(err, TS_ERR_INVALID, "integrator.strategy: unknown strategy %d",
+                                (int)in->strategy);
         if (!sampling_ok)
-            return ts_error_set(err, TS_ERR_INVALID, "integrator.sampling: unknown strategy %d", (int)in->sampling);
+            return ts_error_set(err, TS_ERR_INVALID, "integrator.sampling: unknown strategy %d",
+                                (int)in->sampling);
         break;
     case TS_INTEGRATOR_AO:
         if (!(in->ao_distance > 0))
-            return ts_error_set(err, TS_ERR_INVALID, "integrator.max_distance: expected a positive number, got %g",
+            return ts_error_set(err, TS_ERR_INVALID,
+                                "integrator.max_distance: expected a positive number, got %g",
                                 in->ao_distance);
         break;
-    case TS_INTEGRATOR_NORMALS: break;
-    default: return ts_error_set(err, TS_ERR_INVALID, "integrator.type: unknown integrator %d", (int)in->type);
+    case TS_INTEGRATOR_NORMALS:
+        break;
+    default:
+        return ts_error_set(err, TS_ERR_INVALID, "integrator.type: unknown integrator %d", (int)in->type);
     }
     b->s->integrator = *in;
     b->has_integrator = true;
@@ -284,9 +300,11 @@ ts_status ts_scene_builder_set_job(ts_scene_builder *b, const ts_job_desc *job, 
     /* Switching a light type or a lobe off consistently would need the light distribution
      * and materials rebuilt; these two are switched off exactly. */
     if (job->effects_off & ~(uint32_t)(TS_EFFECT_INDIRECT | TS_EFFECT_DEPTH_OF_FIELD))
-        return ts_error_set(err, TS_ERR_INVALID, "job.effects: only 'indirect' and 'depth_of_field' can be switched off");
+        return ts_error_set(err, TS_ERR_INVALID,
+                            "job.effects: only 'indirect' and 'depth_of_field' can be switched off");
     if (job->priority < -1000000 || job->priority > 1000000)
-        return ts_error_set(err, TS_ERR_INVALID, "job.priority: expected an integer in [-1000000, 1000000], got %d",
+        return ts_error_set(err, TS_ERR_INVALID,
+                            "job.priority: expected an integer in [-1000000, 1000000], got %d",
                             job->priority);
     if (job->spp > b->lim.max_spp)
         return ts_error_set(err, TS_ERR_INVALID, "job.spp: expected at most %u samples per pixel, got %u",
@@ -315,8 +333,8 @@ ts_status ts_scene_builder_load_fourier(ts_scene_builder *b, const char *rel_pat
     char *bytes = NULL;
     size_t n_bytes = 0;
     struct ts_fourier_table *t = NULL;
-    ts_status st = ts_scene_path_read(b->s->base_dir, rel_path, "Fourier BSDF file", b->lim.max_file_bytes, &bytes,
-                                      &n_bytes, err);
+    ts_status st = ts_scene_path_read(b->s->base_dir, rel_path, "Fourier BSDF file", b->lim.max_file_bytes,
+                                      &bytes, &n_bytes, err);
     if (!st) st = ts_fourier_table_load_memory((const unsigned char *)bytes, n_bytes, rel_path, &t, err);
     free(bytes);
     if (st) return st;
@@ -325,8 +343,8 @@ ts_status ts_scene_builder_load_fourier(ts_scene_builder *b, const char *rel_pat
     return TS_OK;
 }
 
-ts_status ts_scene_builder_load_envmap(ts_scene_builder *b, const char *rel_path, const struct ts_envmap **out,
-                                       ts_error *err)
+ts_status ts_scene_builder_load_envmap(ts_scene_builder *b, const char *rel_path,
+                                       const struct ts_envmap **out, ts_error *err)
 {
     TRY(usable(b, err));
     if (!grow((void **)&b->envmaps, &b->cap_envmaps, (size_t)b->n_envmaps + 1, sizeof *b->envmaps))
@@ -334,13 +352,15 @@ ts_status ts_scene_builder_load_envmap(ts_scene_builder *b, const char *rel_path
     char *bytes = NULL;
     size_t n_bytes = 0;
     struct ts_envmap *em = NULL;
-    ts_status st = ts_scene_path_read(b->s->base_dir, rel_path, "environment map", b->lim.max_file_bytes, &bytes,
-                                      &n_bytes, err);
+    ts_status st = ts_scene_path_read(b->s->base_dir, rel_path, "environment map", b->lim.max_file_bytes,
+                                      &bytes, &n_bytes, err);
     if (!st) {
         ts_image img = {0};
         st = ts_exr_read_memory((const unsigned char *)bytes, n_bytes, &img, err);
-        if (st) ts_error_prefix(err, "environment map '%s'", rel_path);
-        else st = ts_envmap_from_image(&img, rel_path, &em, err);
+        if (st)
+            ts_error_prefix(err, "environment map '%s'", rel_path);
+        else
+            st = ts_envmap_from_image(&img, rel_path, &em, err);
         ts_image_fini(&img);
     }
     free(bytes);
@@ -350,7 +370,8 @@ ts_status ts_scene_builder_load_envmap(ts_scene_builder *b, const char *rel_path
     return TS_OK;
 }
 
-ts_status ts_scene_builder_load_mesh(ts_scene_builder *b, const char *rel_path, ts_mesh_data *out, ts_error *err)
+ts_status ts_scene_builder_load_mesh(ts_scene_builder *b, const char *rel_path, ts_mesh_data *out,
+                                     ts_error *err)
 {
     *out = (ts_mesh_data){0};
     TRY(usable(b, err));
@@ -359,9 +380,9 @@ ts_status ts_scene_builder_load_mesh(ts_scene_builder *b, const char *rel_path, 
         return ts_error_set(err, TS_ERR_LIMIT, "the scene's triangles exceed the limit of %llu",
                             (unsigned long long)lim->max_triangles);
     if (!b->s->base_dir)
-        return ts_error_set(err, TS_ERR_INVALID,
-                            "mesh file '%s': this scene may not refer to files (no asset folder is configured)",
-                            rel_path);
+        return ts_error_set(
+            err, TS_ERR_INVALID,
+            "mesh file '%s': this scene may not refer to files (no asset folder is configured)", rel_path);
     /* What is left of the scene's triangle budget (never 0, which would mean unlimited). */
     ts_mesh_limits ml = {lim->max_triangles * 3, lim->max_triangles - b->n_triangles, lim->max_file_bytes};
     return ts_mesh_file_load(b->s->base_dir, rel_path, &ml, out, err);
@@ -371,7 +392,8 @@ ts_status ts_scene_builder_load_mesh(ts_scene_builder *b, const char *rel_path, 
 
 static ts_status bad_rgb(ts_error *err, const char *what, const char *expected, ts_rgb c)
 {
-    return ts_error_set(err, TS_ERR_INVALID, "%s: expected %s, got (%g, %g, %g)", what, expected, c.r, c.g, c.b);
+    return ts_error_set(err, TS_ERR_INVALID, "%s: expected %s, got (%g, %g, %g)", what, expected, c.r, c.g,
+                        c.b);
 }
 
 static ts_status check_material(const ts_scene_builder *b, const ts_material *m, ts_error *err)
@@ -411,15 +433,19 @@ static ts_status check_material(const ts_scene_builder *b, const ts_material *m,
         break;
     case TS_MATERIAL_FOURIER: {
         uint32_t i = 0;
-        while (i < b->n_fourier_tables && b->fourier_tables[i] != m->fourier) i++;
+        while (i < b->n_fourier_tables && b->fourier_tables[i] != m->fourier)
+            i++;
         if (!m->fourier || i == b->n_fourier_tables)
-            return ts_error_set(err, TS_ERR_INVALID, "file: the Fourier table was not loaded by this scene builder");
+            return ts_error_set(err, TS_ERR_INVALID,
+                                "file: the Fourier table was not loaded by this scene builder");
         break;
     }
-    default: return ts_error_set(err, TS_ERR_INVALID, "type: unknown material type %d", (int)m->type);
+    default:
+        return ts_error_set(err, TS_ERR_INVALID, "type: unknown material type %d", (int)m->type);
     }
     if (rough && !(m->roughness >= 0 && isfinite(m->roughness)))
-        return ts_error_set(err, TS_ERR_INVALID, "roughness: expected a finite number ≥ 0, got %g", m->roughness);
+        return ts_error_set(err, TS_ERR_INVALID, "roughness: expected a finite number ≥ 0, got %g",
+                            m->roughness);
     return TS_OK;
 }
 
@@ -430,8 +456,8 @@ uint32_t ts_scene_builder_find_material(const ts_scene_builder *b, const char *n
     return TS_NONE;
 }
 
-ts_status ts_scene_builder_add_material(ts_scene_builder *b, const char *name, const ts_material *m, uint32_t *id,
-                                        ts_error *err)
+ts_status ts_scene_builder_add_material(ts_scene_builder *b, const char *name, const ts_material *m,
+                                        uint32_t *id, ts_error *err)
 {
     TRY(usable(b, err));
     if (b->n_materials >= b->lim.max_materials)
@@ -477,7 +503,8 @@ static ts_status check_mesh(const ts_scene_builder *b, const ts_mesh *m, ts_erro
     }
     for (uint64_t k = 0; m->uv && k < 2ull * m->n_vertices; k++)
         if (!isfinite(m->uv[k]))
-            return ts_error_set(err, TS_ERR_INVALID, "uvs[%llu]: expected a finite number", (unsigned long long)k);
+            return ts_error_set(err, TS_ERR_INVALID, "uvs[%llu]: expected a finite number",
+                                (unsigned long long)k);
     return TS_OK;
 }
 
@@ -486,8 +513,8 @@ static ts_status check_shape(const ts_scene_builder *b, const ts_shape_desc *d, 
     if (b->n_shapes >= b->lim.max_shapes)
         return ts_error_set(err, TS_ERR_LIMIT, "more than the limit of %u shapes", b->lim.max_shapes);
     if (d->material >= b->n_materials)
-        return ts_error_set(err, TS_ERR_INVALID, "material: no material of id %u (%u were added)", d->material,
-                            b->n_materials);
+        return ts_error_set(err, TS_ERR_INVALID, "material: no material of id %u (%u were added)",
+                            d->material, b->n_materials);
     /* Infinite channels are ts_lights_prepare's to refuse, as every light's colour. */
     if (!rgb_nonneg(d->emission)) return bad_rgb(err, "emission", "RGB ≥ 0", d->emission);
     /* Sizes and transforms too large for float are refused at finish, with the scene's
@@ -495,23 +522,29 @@ static ts_status check_shape(const ts_scene_builder *b, const ts_shape_desc *d, 
     switch (d->type) {
     case TS_SHAPE_SPHERE:
         if (!(d->sphere.radius > 0))
-            return ts_error_set(err, TS_ERR_INVALID, "radius: expected a positive number, got %g", d->sphere.radius);
+            return ts_error_set(err, TS_ERR_INVALID, "radius: expected a positive number, got %g",
+                                d->sphere.radius);
         break;
     case TS_SHAPE_DISK:
         if (!(d->disk.radius > 0))
-            return ts_error_set(err, TS_ERR_INVALID, "radius: expected a positive number, got %g", d->disk.radius);
+            return ts_error_set(err, TS_ERR_INVALID, "radius: expected a positive number, got %g",
+                                d->disk.radius);
         if (!(d->disk.inner_radius >= 0 && d->disk.inner_radius < d->disk.radius))
             return ts_error_set(err, TS_ERR_INVALID, "inner_radius: expected a number in [0, radius), got %g",
                                 d->disk.inner_radius);
         break;
     case TS_SHAPE_CYLINDER:
         if (!(d->cylinder.radius > 0))
-            return ts_error_set(err, TS_ERR_INVALID, "radius: expected a positive number, got %g", d->cylinder.radius);
+            return ts_error_set(err, TS_ERR_INVALID, "radius: expected a positive number, got %g",
+                                d->cylinder.radius);
         if (!(d->cylinder.height > 0))
-            return ts_error_set(err, TS_ERR_INVALID, "height: expected a positive number, got %g", d->cylinder.height);
+            return ts_error_set(err, TS_ERR_INVALID, "height: expected a positive number, got %g",
+                                d->cylinder.height);
         break;
-    case TS_SHAPE_MESH: return check_mesh(b, &d->mesh, err);
-    default: return ts_error_set(err, TS_ERR_INVALID, "type: unknown shape type %d", (int)d->type);
+    case TS_SHAPE_MESH:
+        return check_mesh(b, &d->mesh, err);
+    default:
+        return ts_error_set(err, TS_ERR_INVALID, "type: unknown shape type %d", (int)d->type);
     }
     return TS_OK;
 }
@@ -540,7 +573,8 @@ static ts_status place_mesh(ts_scene_builder *b, const ts_mesh *m, const ts_xfor
                 return ts_error_set(err, TS_ERR_INVALID, "a transformed vertex is not a finite float");
             p[3 * k] = (float)q.x, p[3 * k + 1] = (float)q.y, p[3 * k + 2] = (float)q.z;
             if (n) {
-                ts_dvec3 w = ts_dvec3_normalize(ts_xform_normal(xf, (ts_dvec3){n[3 * k], n[3 * k + 1], n[3 * k + 2]}));
+                ts_dvec3 w =
+                    ts_dvec3_normalize(ts_xform_normal(xf, (ts_dvec3){n[3 * k], n[3 * k + 1], n[3 * k + 2]}));
                 n[3 * k] = (float)w.x, n[3 * k + 1] = (float)w.y, n[3 * k + 2] = (float)w.z;
             }
         }
@@ -576,7 +610,9 @@ ts_status ts_scene_builder_add_shape(ts_scene_builder *b, const ts_shape_desc *d
     sh.emissive = !ts_rgb_is_black(d->emission);
     sh.two_sided = d->two_sided;
     switch (d->type) {
-    case TS_SHAPE_SPHERE: sh.sphere.radius = d->sphere.radius; break;
+    case TS_SHAPE_SPHERE:
+        sh.sphere.radius = d->sphere.radius;
+        break;
     case TS_SHAPE_DISK:
         sh.disk.radius = d->disk.radius;
         sh.disk.inner_radius = d->disk.inner_radius;
@@ -585,7 +621,9 @@ ts_status ts_scene_builder_add_shape(ts_scene_builder *b, const ts_shape_desc *d
         sh.cylinder.radius = d->cylinder.radius;
         sh.cylinder.height = d->cylinder.height;
         break;
-    case TS_SHAPE_MESH: TRY(place_mesh(b, &d->mesh, &d->to_world, &sh.mesh, err)); break;
+    case TS_SHAPE_MESH:
+        TRY(place_mesh(b, &d->mesh, &d->to_world, &sh.mesh, err));
+        break;
     }
     sh.to_world = d->type == TS_SHAPE_MESH ? ts_xform_identity() : d->to_world;
     sh.flip_normal = d->type != TS_SHAPE_MESH && ts_xform_swaps_handedness(&sh.to_world);
@@ -615,16 +653,18 @@ ts_status ts_scene_builder_add_light(ts_scene_builder *b, const ts_light_desc *d
     l.to_world = ts_xform_identity();
     bool same = d->from.x == d->to.x && d->from.y == d->to.y && d->from.z == d->to.z;
     switch (d->type) {
-    case TS_LIGHT_POINT: l.position = d->from; break;
+    case TS_LIGHT_POINT:
+        l.position = d->from;
+        break;
     case TS_LIGHT_SPOT: {
         double angle = d->cone_angle_deg, delta = d->cone_delta_deg;
         if (same) return ts_error_set(err, TS_ERR_INVALID, "to: must differ from 'from'");
         if (!(angle > 0 && angle <= 180))
-            return ts_error_set(err, TS_ERR_INVALID, "cone_angle: expected an angle in (0, 180] degrees, got %g",
-                                angle);
+            return ts_error_set(err, TS_ERR_INVALID,
+                                "cone_angle: expected an angle in (0, 180] degrees, got %g", angle);
         if (!(delta >= 0 && delta <= angle))
-            return ts_error_set(err, TS_ERR_INVALID, "cone_delta: expected an angle in [0, cone_angle], got %g",
-                                delta);
+            return ts_error_set(err, TS_ERR_INVALID,
+                                "cone_delta: expected an angle in [0, cone_angle], got %g", delta);
         l.position = d->from;
         l.direction = ts_vec3_normalize(ts_vec3_sub(d->to, d->from));
         l.cos_total = cosf(ts_radians((float)angle));
@@ -638,7 +678,8 @@ ts_status ts_scene_builder_add_light(ts_scene_builder *b, const ts_light_desc *d
     case TS_LIGHT_INFINITE:
         if (d->map) {
             uint32_t i = 0;
-            while (i < b->n_envmaps && b->envmaps[i] != d->map) i++;
+            while (i < b->n_envmaps && b->envmaps[i] != d->map)
+                i++;
             if (i == b->n_envmaps)
                 return ts_error_set(err, TS_ERR_INVALID, "map: the map was not loaded by this scene builder");
         }
@@ -647,7 +688,8 @@ ts_status ts_scene_builder_add_light(ts_scene_builder *b, const ts_light_desc *d
         break;
     case TS_LIGHT_AREA:
         return ts_error_set(err, TS_ERR_INVALID, "type: area lights come from shapes with an emission");
-    default: return ts_error_set(err, TS_ERR_INVALID, "type: unknown light type %d", (int)d->type);
+    default:
+        return ts_error_set(err, TS_ERR_INVALID, "type: unknown light type %d", (int)d->type);
     }
     if (!grow((void **)&b->lights, &b->cap_lights, (size_t)b->n_lights + 1, sizeof *b->lights))
         return nomem(err, "the lights");
@@ -678,7 +720,8 @@ static ts_status lay_out(ts_scene_builder *b, ts_error *err)
     s->envmaps = ts_arena_calloc(a, (size_t)b->n_envmaps + 1, sizeof *s->envmaps);
     if (!s->materials || !s->material_names || !s->shapes || !s->lights || !s->fourier_tables || !s->envmaps)
         return nomem(err, "the scene");
-    if (b->n_fourier_tables) memcpy(s->fourier_tables, b->fourier_tables, b->n_fourier_tables * sizeof *b->fourier_tables);
+    if (b->n_fourier_tables)
+        memcpy(s->fourier_tables, b->fourier_tables, b->n_fourier_tables * sizeof *b->fourier_tables);
     s->n_fourier_tables = b->n_fourier_tables;
     b->n_fourier_tables = 0;
     if (b->n_envmaps) memcpy(s->envmaps, b->envmaps, b->n_envmaps * sizeof *b->envmaps);
@@ -723,22 +766,24 @@ static ts_status build(ts_scene_builder *b, ts_error *err)
      * that, float spacing makes geometry meaningless. Refuse scenes that reach beyond. */
     const float limit = 1e15f;
     if (!ts_bounds3_is_empty(s->bounds) &&
-        !(fabsf(s->bounds.lo.x) <= limit && fabsf(s->bounds.lo.y) <= limit && fabsf(s->bounds.lo.z) <= limit &&
-          fabsf(s->bounds.hi.x) <= limit && fabsf(s->bounds.hi.y) <= limit && fabsf(s->bounds.hi.z) <= limit))
-        return ts_error_set(err, TS_ERR_INVALID,
-                            "shapes: the scene reaches beyond ±1e15 units from the origin (bounds [%g, %g, %g] to "
-                            "[%g, %g, %g]); scale or move it",
-                            s->bounds.lo.x, s->bounds.lo.y, s->bounds.lo.z, s->bounds.hi.x, s->bounds.hi.y,
-                            s->bounds.hi.z);
+        !(fabsf(s->bounds.lo.x) <= limit && fabsf(s->bounds.lo.y) <= limit &&
+          fabsf(s->bounds.lo.z) <= limit && fabsf(s->bounds.hi.x) <= limit &&
+          fabsf(s->bounds.hi.y) <= limit && fabsf(s->bounds.hi.z) <= limit))
+        return ts_error_set(
+            err, TS_ERR_INVALID,
+            "shapes: the scene reaches beyond ±1e15 units from the origin (bounds [%g, %g, %g] to "
+            "[%g, %g, %g]); scale or move it",
+            s->bounds.lo.x, s->bounds.lo.y, s->bounds.lo.z, s->bounds.hi.x, s->bounds.hi.y, s->bounds.hi.z);
     ts_vec3 from = s->camera.origin;
     if (!(fabsf(from.x) <= limit && fabsf(from.y) <= limit && fabsf(from.z) <= limit))
         return ts_error_set(err, TS_ERR_INVALID, "camera.from: farther than 1e15 units from the origin");
     TRY(ts_lights_prepare(s->lights, s->n_lights, s->shapes, s->bounds, err));
-    ts_light_sampling mode = s->integrator.type == TS_INTEGRATOR_PATH &&
-                                     s->integrator.light_sampling == TS_LIGHT_SELECT_UNIFORM
-                                 ? TS_LIGHT_SAMPLING_UNIFORM
-                                 : TS_LIGHT_SAMPLING_POWER;
-    TRY(ts_light_distribution_init(&s->light_distribution, s->lights, s->n_lights, s->shapes, mode, &s->arena, err));
+    ts_light_sampling mode =
+        s->integrator.type == TS_INTEGRATOR_PATH && s->integrator.light_sampling == TS_LIGHT_SELECT_UNIFORM
+            ? TS_LIGHT_SAMPLING_UNIFORM
+            : TS_LIGHT_SAMPLING_POWER;
+    TRY(ts_light_distribution_init(&s->light_distribution, s->lights, s->n_lights, s->shapes, mode, &s->arena,
+                                   err));
     s->infinite_lights = ts_arena_calloc(&s->arena, (size_t)s->n_lights + 1, sizeof *s->infinite_lights);
     if (!s->infinite_lights) return nomem(err, "the lights");
     for (uint32_t i = 0; i < s->n_lights; i++)
@@ -758,7 +803,8 @@ ts_status ts_scene_builder_finish(ts_scene_builder *b, ts_scene **out, ts_error 
                           : !b->has_integrator ? "integrator"
                           : !b->has_digest     ? "digest"
                                                : NULL;
-    if (missing) return ts_error_set(err, TS_ERR_INVALID, "%s: not set (the scene builder needs it)", missing);
+    if (missing)
+        return ts_error_set(err, TS_ERR_INVALID, "%s: not set (the scene builder needs it)", missing);
     if ((uint64_t)b->n_lights + b->n_area_lights > b->lim.max_lights)
         return ts_error_set(err, TS_ERR_LIMIT,
                             "lights: %llu lights (with emitting triangles) is more than the limit of %u",

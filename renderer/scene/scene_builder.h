@@ -11,16 +11,16 @@
  * disk's normal, a cylinder's p0/p1 — are the front end's to turn into a transform).
  *
  * Errors. Calls about the scene's settings (film, camera, sampler, integrator, job) write
- * sentences that name the setting ("film.crop: the window holds no pixel"). Calls adding
- * an element (material, shape, light) or reading a file write a sentence that names no
- * place; the front end prefixes where the element came from with ts_error_prefix
- * ("shapes[3]: a transformed vertex is not a finite float"). A few values are checked where
- * the renderer's components check them: the camera by ts_camera_init (at set_camera), the
- * finiteness of light colours, positions, directions and map transforms by
- * ts_lights_prepare, and the reach of every shape (±1e15 units) once the accelerator has
- * its bounds (both at finish, "lights[i]: …" with i the light's index: lights in the order
- * added, then one area light per emitting sphere, disk or cylinder and per emitting mesh
- * triangle, in shape order).
+ * sentences that name the setting ("film.crop: the window holds no pixel"). Calls that add
+ * an element (material, shape, light) or read a file write a sentence that names no place;
+ * the front end puts where the element came from in front with ts_error_prefix
+ * ("shapes[3]: a transformed vertex is not a finite float"). Some values are checked where
+ * the renderer's own components check them: the camera by ts_camera_init (at set_camera);
+ * at finish, the finiteness of light colours, positions, directions and map transforms by
+ * ts_lights_prepare ("lights[i]: …", i counting the lights in the order added, then one area
+ * light per emitting sphere, disk or cylinder and per emitting mesh triangle, in shape
+ * order), and shape sizes and transforms beyond the float range by the scene's bounds
+ * ("shapes: the scene reaches beyond ±1e15 units …").
  *
  * Memory. The scene's arena (limits->max_memory) is made at create; names and mesh arrays
  * go into it as they are added, the material, shape and light lists grow in the builder's
@@ -58,10 +58,10 @@ typedef struct ts_scene_limits {
     uint32_t max_width, max_height; /* film */
     uint64_t max_pixels;
     uint32_t max_spp;
-    uint64_t max_triangles; /* all meshes together */
+    uint64_t max_triangles;                         /* all meshes together */
     uint32_t max_shapes, max_lights, max_materials; /* max_lights counts area lights too */
-    uint64_t max_file_bytes; /* each referenced file */
-    uint64_t max_memory;     /* the scene arena */
+    uint64_t max_file_bytes;                        /* each referenced file */
+    uint64_t max_memory;                            /* the scene arena */
 } ts_scene_limits;
 
 /* Generous defaults for the CLI (a server sets its own). */
@@ -89,11 +89,11 @@ ts_status ts_scene_builder_set_name(ts_scene_builder *b, const char *name, ts_er
 ts_status ts_scene_builder_set_digest(ts_scene_builder *b, const char *hex, ts_error *err);
 
 typedef struct ts_film_desc {
-    uint32_t width, height;   /* pixels, within the limits */
-    float crop[4];            /* x0, x1, y0, y1 in [0, 1], x0 < x1, y0 < y1 ({0, 1, 0, 1}: all);
-                                 the pixels [ceil(width·x0), ceil(width·x1)) × … (pbrt's rule) */
+    uint32_t width, height; /* pixels, within the limits */
+    float crop[4];          /* x0, x1, y0, y1 in [0, 1], x0 < x1, y0 < y1 ({0, 1, 0, 1}: all);
+                               the pixels [ceil(width·x0), ceil(width·x1)) × … (pbrt's rule) */
     ts_filter_type filter;
-    float filter_radius;      /* pixels, in (0, 16] */
+    float filter_radius; /* pixels, in (0, 16] */
 } ts_film_desc;
 ts_status ts_scene_builder_set_film(ts_scene_builder *b, const ts_film_desc *film, ts_error *err);
 
@@ -123,8 +123,8 @@ ts_status ts_scene_builder_set_job(ts_scene_builder *b, const ts_job_desc *job, 
 ts_status ts_scene_builder_load_fourier(ts_scene_builder *b, const char *rel_path,
                                         const struct ts_fourier_table **out, ts_error *err);
 /* A lat-long environment map from an EXR file (envmap.h). */
-ts_status ts_scene_builder_load_envmap(ts_scene_builder *b, const char *rel_path, const struct ts_envmap **out,
-                                       ts_error *err);
+ts_status ts_scene_builder_load_envmap(ts_scene_builder *b, const char *rel_path,
+                                       const struct ts_envmap **out, ts_error *err);
 /* An OBJ or PLY mesh (mesh_file.h) into *out, in the file's object space, owned by the
  * caller (ts_mesh_data_free) and meant for ts_scene_builder_add_shape; bounded by what is
  * left of limits.max_triangles ("the scene's triangles exceed the limit of N"). */
@@ -138,25 +138,27 @@ ts_status ts_scene_builder_load_mesh(ts_scene_builder *b, const char *rel_path, 
  * [0, 1] (conductor eta and k finite ≥ 0); sigma in [0, 90] degrees; eta and roughness
  * finite (eta > 0, roughness ≥ 0); the distribution; a Fourier material's table loaded by
  * this builder. At most limits.max_materials. */
-ts_status ts_scene_builder_add_material(ts_scene_builder *b, const char *name, const ts_material *m, uint32_t *id,
-                                        ts_error *err);
+ts_status ts_scene_builder_add_material(ts_scene_builder *b, const char *name, const ts_material *m,
+                                        uint32_t *id, ts_error *err);
 /* The id of the material added under name, or TS_NONE. */
 uint32_t ts_scene_builder_find_material(const ts_scene_builder *b, const char *name);
 
 typedef struct ts_shape_desc {
     ts_shape_type type;
-    uint32_t material;  /* an id from ts_scene_builder_add_material */
-    ts_xform to_world;  /* object → world (shape.h's object spaces) */
-    ts_rgb emission;    /* radiance, each channel ≥ 0; not black: a diffuse area light */
-    bool two_sided;     /* an emitter emits on both sides */
+    uint32_t material; /* an id from ts_scene_builder_add_material */
+    ts_xform to_world; /* object → world (shape.h's object spaces) */
+    ts_rgb emission;   /* radiance, each channel ≥ 0; not black: a diffuse area light */
+    bool two_sided;    /* an emitter emits on both sides */
+    /* clang-format off */
     union {
-        struct { double radius; } sphere;                /* > 0 */
-        struct { double radius, inner_radius; } disk;    /* > 0; in [0, radius) */
-        struct { double radius, height; } cylinder;      /* > 0; > 0 */
+        struct { double radius; } sphere;              /* > 0 */
+        struct { double radius, inner_radius; } disk;  /* > 0; in [0, radius) */
+        struct { double radius, height; } cylinder;    /* > 0; > 0 */
         ts_mesh mesh; /* object space, copied: n_vertices, n_triangles ≥ 1, finite positions,
-                         indices < n_vertices, finite non-zero normals (or NULL), finite
-                         uvs (or NULL) */
+                         indices < n_vertices, finite non-zero normals (or NULL), finite uvs
+                         (or NULL) */
     };
+    /* clang-format on */
 } ts_shape_desc;
 
 /* Adds a shape and writes its id to *id (may be NULL). A mesh is copied into the arena and
@@ -164,18 +166,19 @@ typedef struct ts_shape_desc {
  * so each triangle keeps facing the way it faced in object space); "a transformed vertex is
  * not a finite float" when the transform takes a vertex beyond the float range. At most
  * limits.max_shapes shapes and limits.max_triangles triangles. */
-ts_status ts_scene_builder_add_shape(ts_scene_builder *b, const ts_shape_desc *shape, uint32_t *id, ts_error *err);
+ts_status ts_scene_builder_add_shape(ts_scene_builder *b, const ts_shape_desc *shape, uint32_t *id,
+                                     ts_error *err);
 
 typedef struct ts_light_desc {
-    ts_light_type type;      /* point, spot, distant or infinite (area lights come from shapes) */
-    ts_rgb color;            /* point/spot intensity, distant irradiance, infinite radiance (or
-                                the map's scale); each channel ≥ 0 */
-    ts_vec3 from, to;        /* point: from is the position; spot: from is the apex, aimed at
-                                to; distant: the light travels from → to (from ≠ to) */
-    double cone_angle_deg;   /* spot: in (0, 180] */
-    double cone_delta_deg;   /* spot: in [0, cone_angle_deg] */
+    ts_light_type type;          /* point, spot, distant or infinite (area lights come from shapes) */
+    ts_rgb color;                /* point/spot intensity, distant irradiance, infinite radiance (or
+                                    the map's scale); each channel ≥ 0 */
+    ts_vec3 from, to;            /* point: from is the position; spot: from is the apex, aimed at
+                                    to; distant: the light travels from → to (from ≠ to) */
+    double cone_angle_deg;       /* spot: in (0, 180] */
+    double cone_delta_deg;       /* spot: in [0, cone_angle_deg] */
     const struct ts_envmap *map; /* infinite: from ts_scene_builder_load_envmap, or NULL */
-    ts_xform to_world;       /* infinite: map space → world */
+    ts_xform to_world;           /* infinite: map space → world */
 } ts_light_desc;
 
 /* Adds a light (with the area lights of the shapes added so far, at most
