@@ -406,6 +406,7 @@ static void test_elements_refused(void **state)
     uint32_t anon = 0;
     ok(ts_scene_builder_add_material(b, NULL, &fine, &anon, &err), &err); /* anonymous */
     assert_int_equal(anon, 1);
+    assert_int_equal(ts_scene_builder_find_material(b, NULL), TS_NONE); /* no name finds it */
     assert_int_equal(ts_scene_builder_find_material(b, "m"), 0);
 
     static const float nan_p[] = {0, 0, 0, 1, 0, 0, 0, NAN, 0};

@@ -451,6 +451,7 @@ static ts_status check_material(const ts_scene_builder *b, const ts_material *m,
 
 uint32_t ts_scene_builder_find_material(const ts_scene_builder *b, const char *name)
 {
+    if (!name) return TS_NONE;
     for (uint32_t k = 0; k < b->n_materials; k++)
         if (b->material_names[k] && strcmp(b->material_names[k], name) == 0) return k;
     return TS_NONE;

@@ -140,7 +140,7 @@ ts_status ts_scene_builder_load_mesh(ts_scene_builder *b, const char *rel_path, 
  * this builder. At most limits.max_materials. */
 ts_status ts_scene_builder_add_material(ts_scene_builder *b, const char *name, const ts_material *m,
                                         uint32_t *id, ts_error *err);
-/* The id of the material added under name, or TS_NONE. */
+/* The id of the material added under name, or TS_NONE (also for name NULL). */
 uint32_t ts_scene_builder_find_material(const ts_scene_builder *b, const char *name);
 
 typedef struct ts_shape_desc {
