@@ -98,7 +98,7 @@ test-tsan:
 # $(FUZZ_BUILD)/fuzz-corpus. `make test` runs each for a few seconds (ctest fuzz_*).
 FUZZ_BUILD   ?= build-fuzz
 FUZZ_SECONDS ?= 60
-FUZZERS      ?= scene obj ply bsdf exr json http sse pbrt
+FUZZERS      ?= scene obj ply bsdf exr json http sse pbrt teximage
 
 $(FUZZ_BUILD)/CMakeCache.txt: | deps
 	CC=clang cmake -S . -B $(FUZZ_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTS_FUZZ=ON -DTS_WERROR=OFF

@@ -894,7 +894,10 @@ static void test_mipmap_refusals(void **state)
     ts_error err = {0};
     float tx[4] = {0, 1, NAN, 3};
     assert_int_equal(ts_mipmap_create(tx, 2, 2, 1, TS_TEXTURE_WRAP_REPEAT, 0, &m, &err), TS_ERR_INVALID);
-    assert_message(&err, "texel (0, 1) is not finite (nan)");
+    assert_message(&err, "texel (0, 1) is nan, not a finite number within ±1e30");
+    tx[2] = -2e30f;
+    assert_int_equal(ts_mipmap_create(tx, 2, 2, 1, TS_TEXTURE_WRAP_REPEAT, 0, &m, &err), TS_ERR_INVALID);
+    assert_message(&err, "texel (0, 1) is -2e+30, not a finite number within ±1e30");
     assert_null(m);
     assert_int_equal(ts_mipmap_create(tx, 0, 2, 1, TS_TEXTURE_WRAP_REPEAT, 0, &m, &err), TS_ERR_INVALID);
     assert_message(&err, "the image is empty (0 × 2 texels)");
@@ -1467,8 +1470,7 @@ static void test_pbrt_refusals(void **state)
          "size (0 × 4)"},
         {"Texture \"i\" \"color\" \"imagemap\" \"string filename\" \"nan.pfm\"\n", TS_ERR_INVALID,
          "t.pbrt:2:32: Texture \"i\": \"string filename\": texture image 'nan.pfm': pixel (0, 0) is not "
-         "finite (1, nan, "
-         "0) after scale 1"},
+         "finite or beyond ±1e30 (1, nan, 0, scale 1)"},
         {"Texture \"i\" \"color\" \"imagemap\" \"string filename\" \"../up.png\"\n", TS_ERR_INVALID,
          "t.pbrt:2:32: Texture \"i\": \"string filename\": texture image '../up.png': path leaves the "
          "scene's folder"},

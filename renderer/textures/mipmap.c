@@ -345,9 +345,10 @@ ts_status ts_mipmap_create(const float *texels, int32_t width, int32_t height, i
         return ts_error_set(err, TS_ERR_INVALID, "unknown wrap mode %d", (int)wrap);
     size_t n = (size_t)width * (size_t)height * (size_t)n_channels;
     for (size_t i = 0; i < n; i++)
-        if (!isfinite(texels[i])) {
+        if (!(fabsf(texels[i]) <= TS_MIPMAP_MAX_TEXEL)) {
             size_t px = i / (size_t)n_channels;
-            return ts_error_set(err, TS_ERR_INVALID, "texel (%zu, %zu) is not finite (%g)",
+            return ts_error_set(err, TS_ERR_INVALID,
+                                "texel (%zu, %zu) is %g, not a finite number within ±1e30",
                                 px % (size_t)width, px / (size_t)width, (double)texels[i]);
         }
     size_t bytes = ts_mipmap_bytes_for(width, height, n_channels);

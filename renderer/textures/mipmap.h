@@ -48,6 +48,9 @@ typedef enum ts_texture_wrap {
 #define TS_MIPMAP_MAX_LEVELS     32
 #define TS_MIPMAP_EWA_LUT_SIZE   128
 #define TS_MIPMAP_MAX_ANISOTROPY 64.0f
+/* The largest texel magnitude: sums of up to ~10^5 weighted texels (an EWA lookup) then
+ * stay far from float overflow, so a map of accepted texels gives finite lookups. */
+#define TS_MIPMAP_MAX_TEXEL 1e30f
 /* Width and height of a source image, each (TS_IMAGE_MAX_PIXELS bounds their product). */
 #define TS_MIPMAP_MAX_SIZE 65536
 
@@ -73,8 +76,9 @@ size_t ts_mipmap_bytes_for(int32_t width, int32_t height, int32_t n_channels);
 
 /* The pyramid of texels (width·height·n_channels floats, row t = 0 first; copied) with
  * wrap mode wrap. max_bytes (0 = none) bounds ts_mipmap_bytes_for before anything is
- * allocated (TS_ERR_LIMIT). Texels must be finite (TS_ERR_INVALID naming the first bad
- * one); width, height in 1 … TS_MIPMAP_MAX_SIZE; n_channels 1 or 3. On failure *out is NULL. */
+ * allocated (TS_ERR_LIMIT). Texels must be finite and within ±TS_MIPMAP_MAX_TEXEL
+ * (TS_ERR_INVALID naming the first bad one); width, height in 1 … TS_MIPMAP_MAX_SIZE; n_channels 1 or 3. On
+ * failure *out is NULL. */
 ts_status ts_mipmap_create(const float *texels, int32_t width, int32_t height, int32_t n_channels,
                            ts_texture_wrap wrap, size_t max_bytes, ts_mipmap **out, ts_error *err);
 /* Frees the map; NULL is a no-op. */

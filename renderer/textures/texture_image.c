@@ -8,6 +8,7 @@
 #include <strings.h>
 
 #include "image/exr.h"
+#include "textures/mipmap.h"
 #include "textures/pfm.h"
 #include "textures/png_decode.h"
 #include "textures/tga.h"
@@ -100,24 +101,25 @@ ts_status ts_texture_image_texels(const ts_image *img, const char *filename, int
             float rgb[3];
             for (int c = 0; c < 3; c++)
                 rgb[c] = ch[c] >= 0 ? src[x * nc + (size_t)ch[c]] : 0.0f;
-            bool finite = isfinite(rgb[0]) && isfinite(rgb[1]) && isfinite(rgb[2]);
+            bool finite = true; /* and within ±TS_MIPMAP_MAX_TEXEL: checked on the results */
             if (n_channels == 3) {
                 for (int c = 0; c < 3; c++) {
                     float v = gamma ? ts_texture_srgb_to_linear(rgb[c]) : rgb[c];
                     dst[x * 3 + (size_t)c] = scale * v;
-                    finite = finite && isfinite(dst[x * 3 + (size_t)c]);
+                    finite = finite && fabsf(dst[x * 3 + (size_t)c]) <= TS_MIPMAP_MAX_TEXEL;
                 }
             } else {
                 float lum = 0.212671f * rgb[0] + 0.715160f * rgb[1] + 0.072169f * rgb[2];
                 dst[x] = scale * (gamma ? ts_texture_srgb_to_linear(lum) : lum);
-                finite = finite && isfinite(dst[x]);
+                finite = finite && fabsf(dst[x]) <= TS_MIPMAP_MAX_TEXEL;
             }
             if (!finite) {
                 free(out);
-                return ts_error_set(
-                    err, TS_ERR_INVALID,
-                    "texture image '%s': pixel (%zu, %zu) is not finite (%g, %g, %g) after scale %g",
-                    filename, x, y, (double)rgb[0], (double)rgb[1], (double)rgb[2], (double)scale);
+                return ts_error_set(err, TS_ERR_INVALID,
+                                    "texture image '%s': pixel (%zu, %zu) is not finite or beyond ±1e30 (%g, "
+                                    "%g, %g, scale %g)",
+                                    filename, x, y, (double)rgb[0], (double)rgb[1], (double)rgb[2],
+                                    (double)scale);
             }
         }
     }

@@ -4,7 +4,9 @@
 # Each harness BUILD_DIR/fuzz_<h> runs for SECONDS (or, with runs:N, exactly N inputs from
 # the fixed seed 1, so the run is deterministic: what `make test` uses, so CI fails on a
 # regression but never by the luck of a new mutation) over its seed corpus
-# tests/fuzz/corpus/<h> (with the dictionary tests/fuzz/<h>.dict where there is one). New inputs go to a scratch folder (removed afterwards) or, with
+# tests/fuzz/corpus/<h> (with the dictionary tests/fuzz/<h>.dict where there is one, and
+# the seeds tests/fuzz/seeds_<h>.sh writes, where there is one). New inputs go to a
+# scratch folder (removed afterwards) or, with
 # --keep, to BUILD_DIR/fuzz-corpus/<h>, kept between runs; the seed corpus is never
 # written. Crash inputs are saved in BUILD_DIR/fuzz-artifacts/<h>/. Prints executions
 # and executions/s per harness and in total; exits 1 if any harness crashed, leaked, hit
@@ -40,10 +42,24 @@ for h in "$@"; do
     runs:*) budget="-runs=${seconds#runs:} -seed=1" ;;
     *) budget="-max_total_time=$seconds" ;;
   esac
-  # shellcheck disable=SC2086 # $budget and $dict are lists of options
+  # Binary seeds are not committed: tests/fuzz/seeds_<h>.sh writes them into a scratch
+  # folder, a second read-only seed corpus.
+  gen=
+  if [ -f "$src/tests/fuzz/seeds_$h.sh" ]; then
+    gen=$(mktemp -d "${TMPDIR:-/tmp}/ts_fuzz_seeds_XXXXXX")
+    if ! sh "$src/tests/fuzz/seeds_$h.sh" "$gen"; then
+      echo "fuzz $h: FAILED: tests/fuzz/seeds_$h.sh could not write its seeds" >&2
+      status=1
+      rm -rf "$gen" "$log"
+      [ $keep = 1 ] || rm -rf "$work"
+      continue
+    fi
+  fi
+  # shellcheck disable=SC2086 # $budget, $dict and $gen are lists of options / folders
   "$bin" $budget -timeout=25 -rss_limit_mb=2048 -print_final_stats=1 $dict \
-         -artifact_prefix="$art/" "$work" "$src/tests/fuzz/corpus/$h" >"$log" 2>&1
+         -artifact_prefix="$art/" "$work" "$src/tests/fuzz/corpus/$h" $gen >"$log" 2>&1
   rc=$?
+  [ -z "$gen" ] || rm -rf "$gen"
   runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
   rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log" | tail -1)
   cov=$(grep -o 'cov: [0-9]*' "$log" | tail -1)
