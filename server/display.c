@@ -1,0 +1,497 @@
+/* display.c — tev display-server streaming (display.h has the design note and the format).
+ *
+ * State: everything below `mu` in srv_display is guarded by it; the socket itself is used
+ * only by the display thread (destroy shuts it down, under mu, to interrupt a send). */
+#define _GNU_SOURCE
+#include "display.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <netdb.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <poll.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <time.h>
+#include <unistd.h>
+
+const char *const srv_display_channel_names[SRV_DISPLAY_CHANNELS] = {"R", "G", "B", "error"};
+
+#define BACKOFF_MIN_S 0.1
+#define BACKOFF_MAX_S 5.0
+#define CONNECT_TIMEOUT_MS 2000
+#define IDLE_CHECK_S 0.2  /* how often an idle thread looks for a closed connection */
+#define SEND_TIMEOUT_S 10 /* a viewer that accepts nothing for this long is dropped */
+
+struct srv_display {
+    char host[SRV_DISPLAY_ADDRESS_MAX + 1], port[8];
+    char name[SRV_DISPLAY_NAME_MAX];
+    pthread_t thread;
+    pthread_mutex_t mu;
+    pthread_cond_t cv;       /* work arrived, or stop */
+    pthread_cond_t idle_cv;  /* a flush may have completed */
+    /* guarded by mu */
+    bool stop;
+    int fd;                  /* -1 when not connected (written by the thread only) */
+    bool sending;            /* the thread is sending a tile it took off the queue */
+    ts_sched_job *job;       /* the display's job (a reference), NULL until the first tile */
+    int nx, ny, full_w, full_h, x0, y0, w, h;
+    int *queue;              /* ring of tile indices, capacity nx·ny */
+    bool *queued;            /* per tile: in the ring */
+    int head, count;
+    srv_display_stats stats;
+};
+
+static double now_s(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+static struct timespec deadline_in(double s)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    double ns = (double)t.tv_nsec + s * 1e9;
+    t.tv_sec += (time_t)(ns / 1e9);
+    t.tv_nsec = (long)fmod(ns, 1e9);
+    return t;
+}
+
+/* ---------------------------------------------------------------- address */
+
+static bool host_char(char c)
+{
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '.' || c == '-' || c == '_';
+}
+
+ts_status srv_display_parse_address(const char *address, char *host, char *port, ts_error *err)
+{
+    if (!address || !*address)
+        return ts_error_set(err, TS_ERR_INVALID, "display server: expected HOST:PORT, got an empty address");
+    size_t n = strnlen(address, SRV_DISPLAY_ADDRESS_MAX + 1);
+    if (n > SRV_DISPLAY_ADDRESS_MAX)
+        return ts_error_set(err, TS_ERR_INVALID, "display server: the address is longer than %d characters",
+                            SRV_DISPLAY_ADDRESS_MAX);
+    const char *colon = strrchr(address, ':');
+    if (!colon) return ts_error_set(err, TS_ERR_INVALID, "display server '%s': expected HOST:PORT", address);
+    const char *h0 = address, *h1 = colon;
+    if (*address == '[') { /* [IPv6]:port */
+        if (colon == address || colon[-1] != ']')
+            return ts_error_set(err, TS_ERR_INVALID, "display server '%s': an IPv6 address is written [ADDRESS]:PORT", address);
+        h0 = address + 1, h1 = colon - 1;
+        for (const char *c = h0; c < h1; c++)
+            if (!(*c == ':' || *c == '.' || (*c >= '0' && *c <= '9') || (*c >= 'a' && *c <= 'f') || (*c >= 'A' && *c <= 'F')))
+                return ts_error_set(err, TS_ERR_INVALID, "display server '%s': '%c' in an IPv6 address", address, *c);
+    } else {
+        for (const char *c = h0; c < h1; c++)
+            if (!host_char(*c))
+                return ts_error_set(err, TS_ERR_INVALID,
+                                    "display server '%s': the host may hold letters, digits, '.', '-' and '_', not '%c'",
+                                    address, *c);
+    }
+    if (h1 == h0) return ts_error_set(err, TS_ERR_INVALID, "display server '%s': the host is missing", address);
+    const char *p = colon + 1;
+    unsigned long v = 0;
+    size_t digits = 0;
+    for (; p[digits]; digits++) {
+        if (p[digits] < '0' || p[digits] > '9' || digits >= 5) {
+            digits = 0;
+            break;
+        }
+        v = v * 10 + (unsigned long)(p[digits] - '0');
+    }
+    if (digits == 0 || v < 1 || v > 65535)
+        return ts_error_set(err, TS_ERR_INVALID, "display server '%s': the port must be a number from 1 to 65535", address);
+    if (host) {
+        memcpy(host, h0, (size_t)(h1 - h0));
+        host[h1 - h0] = 0;
+    }
+    if (port) snprintf(port, 6, "%lu", v);
+    return TS_OK;
+}
+
+/* ---------------------------------------------------------------- packets */
+
+typedef struct buf {
+    uint8_t *p;
+    size_t n, cap;
+    bool failed;
+} buf;
+
+static void put(buf *b, const void *src, size_t n)
+{
+    if (b->failed) return;
+    if (b->n + n > b->cap) {
+        size_t cap = b->cap ? b->cap : 256;
+        while (cap < b->n + n) cap *= 2;
+        uint8_t *p = realloc(b->p, cap);
+        if (!p) {
+            b->failed = true;
+            return;
+        }
+        b->p = p, b->cap = cap;
+    }
+    memcpy(b->p + b->n, src, n);
+    b->n += n;
+}
+static void put_u8(buf *b, uint8_t v) { put(b, &v, 1); }
+static void put_le(buf *b, uint64_t v, int bytes)
+{
+    uint8_t o[8];
+    for (int i = 0; i < bytes; i++) o[i] = (uint8_t)(v >> (8 * i));
+    put(b, o, (size_t)bytes);
+}
+static void put_i32(buf *b, int32_t v) { put_le(b, (uint32_t)v, 4); }
+static void put_i64(buf *b, int64_t v) { put_le(b, (uint64_t)v, 8); }
+static void put_f32(buf *b, float v)
+{
+    uint32_t u;
+    memcpy(&u, &v, 4);
+    put_le(b, u, 4);
+}
+static void put_str(buf *b, const char *s) { put(b, s, strlen(s) + 1); }
+
+static void begin_packet(buf *b, srv_display_packet type)
+{
+    b->n = 0, b->failed = false;
+    put_le(b, 0, 4); /* the length, patched by end_packet */
+    put_u8(b, (uint8_t)type);
+}
+static bool end_packet(buf *b)
+{
+    if (b->failed || b->n > UINT32_MAX) return false;
+    for (int i = 0; i < 4; i++) b->p[i] = (uint8_t)(b->n >> (8 * i));
+    return true;
+}
+
+static bool encode_create(buf *b, const char *name, int w, int h)
+{
+    begin_packet(b, SRV_DISPLAY_CREATE_IMAGE);
+    put_u8(b, 1); /* grab focus: show the new render */
+    put_str(b, name);
+    put_i32(b, w);
+    put_i32(b, h);
+    put_i32(b, SRV_DISPLAY_CHANNELS);
+    for (int c = 0; c < SRV_DISPLAY_CHANNELS; c++) put_str(b, srv_display_channel_names[c]);
+    return end_packet(b);
+}
+
+float srv_display_relative_error(const float rgb[3], const float var[3])
+{
+    double y = 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2];
+    double v = 0.2126 * 0.2126 * var[0] + 0.7152 * 0.7152 * var[1] + 0.0722 * 0.0722 * var[2];
+    double e = v > 0 ? sqrt(v / (y * y + 1e-3)) : 0;
+    return (float)e;
+}
+
+/* UpdateImageV3 of one snapshot, at window coordinates (x, y), planar channels. */
+static bool encode_tile(buf *b, const char *name, const ts_tile_snapshot *t, int full_w, int full_h, int x, int y)
+{
+    ts_error err = {0};
+    ts_film *f = ts_tile_snapshot_film(t, full_w, full_h, &err);
+    if (!f) return false;
+    ts_image img;
+    ts_status st = ts_film_to_image(f, TS_FILM_IMAGE_STATS, &img, &err);
+    ts_film_destroy(f);
+    if (st) return false;
+    int64_t npx = (int64_t)t->w * t->h;
+    begin_packet(b, SRV_DISPLAY_UPDATE_IMAGE_V3);
+    put_u8(b, 0);
+    put_str(b, name);
+    put_i32(b, SRV_DISPLAY_CHANNELS);
+    for (int c = 0; c < SRV_DISPLAY_CHANNELS; c++) put_str(b, srv_display_channel_names[c]);
+    put_i32(b, x);
+    put_i32(b, y);
+    put_i32(b, t->w);
+    put_i32(b, t->h);
+    for (int c = 0; c < SRV_DISPLAY_CHANNELS; c++) put_i64(b, c * npx); /* offsets */
+    for (int c = 0; c < SRV_DISPLAY_CHANNELS; c++) put_i64(b, 1);       /* strides */
+    const int nc = img.n_channels;                                        /* R G B R.var G.var B.var count */
+    for (int c = 0; c < 3; c++)
+        for (int64_t i = 0; i < npx; i++) put_f32(b, img.data[i * nc + c]);
+    for (int64_t i = 0; i < npx; i++) put_f32(b, srv_display_relative_error(&img.data[i * nc], &img.data[i * nc + 3]));
+    ts_image_fini(&img);
+    return end_packet(b);
+}
+
+/* ---------------------------------------------------------------- the connection */
+
+static int connect_to(const char *host, const char *port)
+{
+    struct addrinfo hints = {0}, *ai = NULL;
+    hints.ai_family = AF_UNSPEC;
+    hints.ai_socktype = SOCK_STREAM;
+    if (getaddrinfo(host, port, &hints, &ai) != 0) return -1;
+    int fd = -1;
+    for (struct addrinfo *a = ai; a && fd < 0; a = a->ai_next) {
+        fd = socket(a->ai_family, a->ai_socktype | SOCK_CLOEXEC | SOCK_NONBLOCK, a->ai_protocol);
+        if (fd < 0) continue;
+        int r = connect(fd, a->ai_addr, a->ai_addrlen);
+        if (r < 0 && errno == EINPROGRESS) {
+            struct pollfd pfd = {fd, POLLOUT, 0};
+            int e = 0;
+            socklen_t len = sizeof e;
+            r = poll(&pfd, 1, CONNECT_TIMEOUT_MS) == 1 && getsockopt(fd, SOL_SOCKET, SO_ERROR, &e, &len) == 0 && e == 0 ? 0 : -1;
+        }
+        if (r < 0) {
+            close(fd);
+            fd = -1;
+        }
+    }
+    freeaddrinfo(ai);
+    if (fd < 0) return -1;
+    /* Blocking from here on (this thread has nothing else to do), with a send timeout. */
+    fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) & ~O_NONBLOCK);
+    struct timeval tv = {SEND_TIMEOUT_S, 0};
+    setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
+    int one = 1;
+    setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+    return fd;
+}
+
+static bool send_all(int fd, const uint8_t *p, size_t n)
+{
+    while (n) {
+        ssize_t r = send(fd, p, n, MSG_NOSIGNAL);
+        if (r < 0 && errno == EINTR) continue;
+        if (r <= 0) return false;
+        p += r, n -= (size_t)r;
+    }
+    return true;
+}
+
+/* tev never writes to us: a readable socket means the viewer closed it (or failed). */
+static bool peer_closed(int fd)
+{
+    char c;
+    ssize_t r = recv(fd, &c, 1, MSG_PEEK | MSG_DONTWAIT);
+    return r == 0 || (r < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR);
+}
+
+/* mu held. Queues every tile (after a new connection: the viewer has none of them). */
+static void queue_all(srv_display *d)
+{
+    int n = d->nx * d->ny;
+    for (int i = 0; i < n; i++)
+        if (!d->queued[i]) {
+            d->queue[(d->head + d->count++) % n] = i;
+            d->queued[i] = true;
+        }
+}
+
+static void disconnect(srv_display *d)
+{
+    pthread_mutex_lock(&d->mu);
+    int fd = d->fd;
+    d->fd = -1;
+    d->stats.disconnects++;
+    pthread_cond_broadcast(&d->idle_cv);
+    pthread_mutex_unlock(&d->mu);
+    close(fd);
+}
+
+static void *display_thread(void *arg)
+{
+    srv_display *d = arg;
+    buf b = {0};
+    double backoff = BACKOFF_MIN_S, next_attempt = 0;
+    bool created = false; /* CreateImage sent on this connection */
+    pthread_mutex_lock(&d->mu);
+    while (!d->stop) {
+        if (d->fd < 0) {
+            double wait = next_attempt - now_s();
+            if (wait > 0 || !d->job) { /* nothing to show yet, or backing off */
+                struct timespec t = deadline_in(wait > 0 ? wait : IDLE_CHECK_S);
+                pthread_cond_timedwait(&d->cv, &d->mu, &t);
+                continue;
+            }
+            pthread_mutex_unlock(&d->mu);
+            int fd = connect_to(d->host, d->port);
+            pthread_mutex_lock(&d->mu);
+            if (fd < 0) {
+                d->stats.failed_connects++;
+                next_attempt = now_s() + backoff;
+                backoff = backoff * 2 < BACKOFF_MAX_S ? backoff * 2 : BACKOFF_MAX_S;
+                continue;
+            }
+            if (d->stop) {
+                close(fd);
+                break;
+            }
+            d->fd = fd;
+            d->stats.connects++;
+            backoff = BACKOFF_MIN_S;
+            created = false;
+            queue_all(d);
+        }
+        int fd = d->fd;
+        if (!created) {
+            int w = d->w, h = d->h;
+            pthread_mutex_unlock(&d->mu);
+            bool ok = encode_create(&b, d->name, w, h) && send_all(fd, b.p, b.n);
+            if (!ok) {
+                disconnect(d);
+                pthread_mutex_lock(&d->mu);
+                next_attempt = now_s() + backoff;
+                continue;
+            }
+            pthread_mutex_lock(&d->mu);
+            d->stats.bytes_sent += b.n;
+            created = true;
+            continue;
+        }
+        if (d->count == 0) {
+            pthread_cond_broadcast(&d->idle_cv);
+            struct timespec t = deadline_in(IDLE_CHECK_S);
+            if (pthread_cond_timedwait(&d->cv, &d->mu, &t) == ETIMEDOUT && d->count == 0 && peer_closed(fd)) {
+                pthread_mutex_unlock(&d->mu);
+                disconnect(d);
+                pthread_mutex_lock(&d->mu);
+            }
+            continue;
+        }
+        int n = d->nx * d->ny, i = d->queue[d->head];
+        d->head = (d->head + 1) % n;
+        d->count--;
+        d->queued[i] = false;
+        d->sending = true;
+        int tx = i % d->nx, ty = i / d->nx;
+        pthread_mutex_unlock(&d->mu);
+        ts_tile_snapshot *t = ts_sched_job_tile(d->job, tx, ty);
+        bool ok = true, sent = false;
+        if (t) {
+            ok = encode_tile(&b, d->name, t, d->full_w, d->full_h, t->x - d->x0, t->y - d->y0);
+            ts_tile_snapshot_release(t);
+            /* An encoding failure (out of memory) skips this state of the tile only. */
+            if (ok) ok = sent = send_all(fd, b.p, b.n);
+            else ok = true;
+        }
+        if (!ok) disconnect(d); /* the next connection re-sends every tile */
+        pthread_mutex_lock(&d->mu);
+        d->sending = false;
+        if (sent) {
+            d->stats.tiles_sent++;
+            d->stats.bytes_sent += b.n;
+        }
+        if (!ok) next_attempt = now_s() + backoff;
+    }
+    int fd = d->fd;
+    d->fd = -1;
+    pthread_cond_broadcast(&d->idle_cv);
+    pthread_mutex_unlock(&d->mu);
+    if (fd >= 0) close(fd);
+    free(b.p);
+    return NULL;
+}
+
+/* ---------------------------------------------------------------- the public side */
+
+srv_display *srv_display_create(const char *address, const char *name, ts_error *err)
+{
+    char host[SRV_DISPLAY_ADDRESS_MAX + 1], port[8];
+    if (srv_display_parse_address(address, host, port, err)) return NULL;
+    srv_display *d = calloc(1, sizeof *d);
+    if (!d) {
+        ts_error_set(err, TS_ERR_NOMEM, "display server: out of memory");
+        return NULL;
+    }
+    memcpy(d->host, host, sizeof host);
+    memcpy(d->port, port, sizeof port);
+    snprintf(d->name, sizeof d->name, "%s", name && *name ? name : "tessera");
+    d->fd = -1;
+    pthread_mutex_init(&d->mu, NULL);
+    pthread_condattr_t ca;
+    pthread_condattr_init(&ca);
+    pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
+    pthread_cond_init(&d->cv, &ca);
+    pthread_cond_init(&d->idle_cv, &ca);
+    pthread_condattr_destroy(&ca);
+    if (pthread_create(&d->thread, NULL, display_thread, d) != 0) {
+        ts_error_set(err, TS_ERR_NOMEM, "display server: could not start its thread");
+        pthread_cond_destroy(&d->cv);
+        pthread_cond_destroy(&d->idle_cv);
+        pthread_mutex_destroy(&d->mu);
+        free(d);
+        return NULL;
+    }
+    return d;
+}
+
+void srv_display_tile(srv_display *d, ts_sched_job *job, const ts_tile_event *ev)
+{
+    pthread_mutex_lock(&d->mu);
+    if (!d->job && !d->stop) {
+        int nx, ny;
+        ts_sched_job_grid(job, &nx, &ny);
+        d->queue = malloc((size_t)nx * ny * sizeof *d->queue);
+        d->queued = calloc((size_t)nx * ny, sizeof *d->queued);
+        if (d->queue && d->queued && nx > 0 && ny > 0) {
+            ts_sched_job_retain(job);
+            d->job = job;
+            d->nx = nx, d->ny = ny;
+            ts_sched_job_window(job, &d->full_w, &d->full_h, &d->x0, &d->y0, &d->w, &d->h);
+        } else { /* out of memory: this display shows nothing (rendering is unaffected) */
+            free(d->queue), free(d->queued);
+            d->queue = NULL, d->queued = NULL;
+            d->stop = true;
+        }
+        pthread_cond_signal(&d->cv);
+    }
+    if (d->job == job && ev->tx >= 0 && ev->tx < d->nx && ev->ty >= 0 && ev->ty < d->ny) {
+        int i = ev->ty * d->nx + ev->tx, n = d->nx * d->ny;
+        if (!d->queued[i]) {
+            d->queue[(d->head + d->count++) % n] = i;
+            d->queued[i] = true;
+            if (d->fd >= 0) pthread_cond_signal(&d->cv);
+        }
+    }
+    pthread_mutex_unlock(&d->mu);
+}
+
+void srv_display_on_tile(void *user, ts_sched_job *job, const ts_tile_event *ev) { srv_display_tile(user, job, ev); }
+
+bool srv_display_flush(srv_display *d, double timeout_s)
+{
+    struct timespec t = deadline_in(timeout_s);
+    pthread_mutex_lock(&d->mu);
+    bool done;
+    /* The fd stays open while mu is held and fd >= 0 (disconnect clears it first). A viewer
+     * that closed the connection has received nothing of late: not done. */
+    while (!(done = d->job && d->fd >= 0 && d->count == 0 && !d->sending && !peer_closed(d->fd)) && !d->stop)
+        if (pthread_cond_timedwait(&d->idle_cv, &d->mu, &t) == ETIMEDOUT) break;
+    if (!d->job && !d->stop) done = true; /* nothing was ever rendered: nothing to send */
+    pthread_mutex_unlock(&d->mu);
+    return done;
+}
+
+void srv_display_get_stats(srv_display *d, srv_display_stats *out)
+{
+    pthread_mutex_lock(&d->mu);
+    *out = d->stats;
+    pthread_mutex_unlock(&d->mu);
+}
+
+void srv_display_destroy(srv_display *d)
+{
+    if (!d) return;
+    pthread_mutex_lock(&d->mu);
+    d->stop = true;
+    if (d->fd >= 0) shutdown(d->fd, SHUT_RDWR); /* interrupts a send under way */
+    pthread_cond_broadcast(&d->cv);
+    pthread_mutex_unlock(&d->mu);
+    pthread_join(d->thread, NULL);
+    ts_sched_job_release(d->job);
+    free(d->queue);
+    free(d->queued);
+    pthread_cond_destroy(&d->cv);
+    pthread_cond_destroy(&d->idle_cv);
+    pthread_mutex_destroy(&d->mu);
+    free(d);
+}
