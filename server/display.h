@@ -96,8 +96,8 @@ typedef struct srv_display_stats {
 } srv_display_stats;
 void srv_display_get_stats(srv_display *d, srv_display_stats *out);
 
-/* Stops the thread (interrupting a send or connect under way), closes the connection and
- * frees the display; NULL is fine. Call srv_display_flush first to send what is queued. */
+/* Stops the thread (interrupting a send under way; a connect attempt under way ends within
+ * its 2 s timeout), closes the connection and frees the display; NULL is fine. Call srv_display_flush first to send what is queued. */
 void srv_display_destroy(srv_display *d);
 
 /* The `error` channel of one pixel from its colour and variance of the mean (as above). */
