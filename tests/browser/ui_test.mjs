@@ -5,8 +5,9 @@
 //
 // Scenarios: submit the Cornell box and see the canvas change as tiles arrive; the plot
 // gains points; reload mid-render and see the image at once; overlay two jobs; cancel a
-// job and delete it; a broken scene's message beside its field; layout at 1280×800 and phone width;
-// labelled, keyboard-operable controls.
+// job and delete it; a broken scene's message beside its field; the preview's view (fit, 1:1,
+// zoom about the cursor, pan), pixel readout (against the EXR the API serves) and error and
+// sample-count channels; layout at 1280×800 and phone width; labelled, keyboard-operable controls.
 import { spawn } from 'node:child_process';
 import fs from 'node:fs';
 import net from 'node:net';
@@ -257,6 +258,133 @@ try {
     await page.click('#f-submit');
     await page.waitForFunction(() => document.getElementById('err-scene').textContent.includes('not valid JSON'));
     await shot('07-error-scene');
+  });
+
+  await check('preview: fit, 1:1, zoom about the cursor, pan, pixel readout against the EXR, error and sample-count channels', async () => {
+    // A finished job, so the EXR the API serves is the image on the canvas.
+    const W = 160, H = 120;
+    const job = await submit(page, { scene: small({ film: { ...cornell.film, width: W, height: H } }), spp: 16, name: 'preview-tools' });
+    assert(job.id, 'POST answered ' + JSON.stringify(job));
+    await jobRow(page, job.id).locator('.state-done').waitFor({ timeout: 30000 });
+    await page.getByRole('button', { name: 'show job preview-tools (' + job.id + ') in the preview' }).click();
+    // Every tile at its final 16 spp (5×4 tiles of 32 px).
+    await page.waitForFunction(() => Number(document.getElementById('canvas').dataset.painted) >= 20, null, { timeout: 10000 });
+    await page.waitForFunction((id) => document.getElementById('preview-status').textContent.startsWith('done'), job.id, { timeout: 10000 });
+    const vp = page.locator('#viewport'), stage = page.locator('#stage');
+    const viewState = () => page.evaluate(() => { const d = document.getElementById('viewport').dataset; return { s: Number(d.scale), tx: Number(d.tx), ty: Number(d.ty), mode: d.mode }; });
+    const rendering = () => page.evaluate(() => getComputedStyle(document.getElementById('canvas')).imageRendering);
+
+    // Fit: the whole image, as large as the view allows, centred.
+    let vb = await vp.boundingBox(), sb = await stage.boundingBox(), v = await viewState();
+    assert(v.mode === 'fit', 'a new job opens fitted, mode ' + v.mode);
+    assert(sb.x >= vb.x - 0.5 && sb.y >= vb.y - 0.5 && sb.x + sb.width <= vb.x + vb.width + 0.5 && sb.y + sb.height <= vb.y + vb.height + 0.5,
+      'fit: the image lies inside the view');
+    assert(Math.abs(sb.width - vb.width) < 1 || Math.abs(sb.height - vb.height) < 1, 'fit: the image fills the view along one axis');
+    assert(v.s > 2 && (await rendering()) === 'pixelated', 'a small film fitted is magnified with crisp pixels, scale ' + v.s);
+    await shot('11-preview-fit');
+
+    // 1:1: one image pixel per screen pixel.
+    await page.click('#view-1to1');
+    v = await viewState(); sb = await stage.boundingBox();
+    assert(v.mode === '1:1' && v.s === 1 && Math.abs(sb.width - W) < 0.01 && Math.abs(sb.height - H) < 0.01, '1:1: the stage is ' + sb.width + '×' + sb.height);
+    assert(Number.isInteger(v.tx) && Number.isInteger(v.ty), '1:1 sits on whole pixels');
+
+    // Zoom about the cursor: the image point under the cursor stays put; the view and the picture change.
+    const shotBefore = await vp.screenshot(); // (scrolls the view into the window first)
+    vb = await vp.boundingBox();
+    // Whole pixels: a wheel event's clientX/Y are rounded.
+    const cx = Math.round(vb.x + vb.width / 2 + 23), cy = Math.round(vb.y + Math.min(vb.height, 800 - vb.y) / 2 - 11);
+    await page.mouse.move(cx, cy);
+    // The image point under the cursor, from the view transform and where the view is on the page.
+    const under = async () => {
+      const st = await viewState(), r = await page.evaluate(() => { const b = document.getElementById('viewport').getBoundingClientRect(); return [b.left, b.top]; });
+      return { st, u: (cx - r[0] - st.tx) / st.s, v: (cy - r[1] - st.ty) / st.s };
+    };
+    const before = await under();
+    await page.mouse.wheel(0, -480); // 2 × 240: ×4
+    await page.waitForFunction((s0) => Number(document.getElementById('viewport').dataset.scale) > s0 * 3.9, before.st.s, { timeout: 3000 });
+    const after = await under(), shotAfter = await vp.screenshot();
+    assert(Math.abs(after.st.s / before.st.s - 4) < 1e-9, 'the wheel zoomed ×4, got ×' + after.st.s / before.st.s);
+    assert(Math.abs(before.u - after.u) < 1e-6 && Math.abs(before.v - after.v) < 1e-6,
+      `the point under the cursor moved: (${before.u}, ${before.v}) → (${after.u}, ${after.v})`);
+    assert(!shotBefore.equals(shotAfter), 'zooming changed the picture');
+    assert((await rendering()) === 'pixelated', 'zoomed in past 1:1: crisp pixels');
+    await page.mouse.wheel(0, -480); // ×4 again: 16 screen pixels per image pixel
+    await page.waitForFunction(() => Number(document.getElementById('viewport').dataset.scale) > 15.9, null, { timeout: 3000 });
+    assert(await page.isVisible('#hover'), 'the pixel under the cursor is outlined when zoomed in');
+    await shot('12-preview-zoomed');
+    // Zoomed out below 1:1: smooth scaling.
+    await page.mouse.wheel(0, 1440); // ÷64: 0.25
+    v = await viewState();
+    assert(Math.abs(v.s - 0.25) < 1e-9 && (await rendering()) === 'auto', 'zoomed out to ' + v.s + ': smooth, got ' + (await rendering()));
+    // Pan by dragging.
+    await page.click('#view-fit');
+    const p0 = await viewState();
+    await page.mouse.move(cx, cy);
+    await page.mouse.down();
+    await page.mouse.move(cx + 40, cy + 25, { steps: 4 });
+    await page.mouse.up();
+    const p1 = await viewState();
+    assert(Math.abs(p1.tx - p0.tx - 40) < 1e-6 && Math.abs(p1.ty - p0.ty - 25) < 1e-6 && p1.mode === 'free', 'drag panned by (40, 25)');
+    await page.click('#view-fit');
+
+    // Pixel readout under the cursor, compared with the EXR the API serves.
+    const { decodeExr } = await import(path.join(TS_SOURCE_DIR, 'web/src/exr.js'));
+    const exrBuf = await (await page.request.get(url + 'api/v1/jobs/' + job.id + '/image.exr')).body();
+    const exr = await decodeExr(exrBuf.buffer.slice(exrBuf.byteOffset, exrBuf.byteOffset + exrBuf.byteLength));
+    assert(exr.width === W && exr.height === H && exr.channels['R.var'] && exr.channels.count, 'image.exr holds colour, variance and count');
+    const pointAt = async (x, y) => {
+      const st = await viewState(), b = await vp.boundingBox();
+      await page.mouse.move(b.x + st.tx + (x + 0.5) * st.s, b.y + st.ty + (y + 0.5) * st.s);
+      return page.evaluate(() => ({ ...document.getElementById('readout').dataset, text: document.getElementById('readout').textContent }));
+    };
+    for (const [x, y] of [[80, 5], [37, 90], [W - 1, H - 1]]) { // the light, the left wall, the last pixel
+      const ro = await pointAt(x, y), i = y * W + x, c = exr.channels;
+      assert(Number(ro.x) === x && Number(ro.y) === y, `readout at (${ro.x}, ${ro.y}), expected (${x}, ${y})`);
+      const want = { r: c.R[i], g: c.G[i], b: c.B[i], vr: c['R.var'][i], vg: c['G.var'][i], vb: c['B.var'][i], spp: c.count[i] };
+      for (const [k, w] of Object.entries(want)) assert(Number(ro[k]) === w, `readout ${k} at (${x}, ${y}): ${ro[k]}, the EXR has ${w}`);
+      const Y = 0.2126 * want.r + 0.7152 * want.g + 0.0722 * want.b;
+      const vy = 0.2126 ** 2 * want.vr + 0.7152 ** 2 * want.vg + 0.0722 ** 2 * want.vb;
+      const e = Math.sqrt(vy / (Y * Y + 1e-3));
+      assert(Math.abs(Number(ro.err) - e) <= 1e-12 * e, `relative error at (${x}, ${y}): ${ro.err}, expected ${e}`);
+      assert(ro.text.includes('spp ' + want.spp) && /rel\. error/.test(ro.text), 'the readout text shows spp and error: ' + ro.text);
+    }
+    // Zoomed in on the light's brightest pixel, for the picture.
+    let best = 0;
+    for (let i = 1; i < W * H; i++) if (exr.channels.R[i] + exr.channels.G[i] > exr.channels.R[best] + exr.channels.G[best]) best = i;
+    const bx = best % W, by = Math.floor(best / W);
+    await pointAt(bx, by);
+    await page.mouse.wheel(0, -480);
+    await page.waitForFunction(() => document.getElementById('viewport').dataset.mode === 'free', null, { timeout: 3000 });
+    const ro = await pointAt(bx, by);
+    assert(Number(ro.x) === bx && Number(ro.y) === by && Number(ro.r) === exr.channels.R[best], 'readout on the light, zoomed in');
+    await shot('13-preview-readout');
+    await page.click('#view-fit');
+
+    // The error channel: false colour with a legend; brighter where the error is larger.
+    const rgbDigest = await canvasDigest(page);
+    await page.selectOption('#channel', 'error');
+    assert(await page.isVisible('#legend') && (await page.textContent('#legend')).includes('10%'), 'the error legend is shown');
+    const errDigest = await canvasDigest(page);
+    assert(errDigest.h !== rgbDigest.h && errDigest.lit > 0.9 * errDigest.n, 'the error channel repainted the canvas');
+    const corr = await page.evaluate((exrErr) => {
+      const c = document.getElementById('canvas'), d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+      const pairs = exrErr.map((e, i) => [e, 0.2126 * d[i * 4] + 0.7152 * d[i * 4 + 1] + 0.0722 * d[i * 4 + 2]]).filter(([e]) => e > 0);
+      pairs.sort((a, b) => a[0] - b[0]);
+      const half = Math.floor(pairs.length / 2), mean = (a) => a.reduce((s, p) => s + p[1], 0) / a.length;
+      return { low: mean(pairs.slice(0, half)), high: mean(pairs.slice(half)) };
+    }, Array.from({ length: W * H }, (_, i) => {
+      const c = exr.channels, Y = 0.2126 * c.R[i] + 0.7152 * c.G[i] + 0.0722 * c.B[i];
+      return Math.sqrt((0.2126 ** 2 * c['R.var'][i] + 0.7152 ** 2 * c['G.var'][i] + 0.0722 ** 2 * c['B.var'][i]) / (Y * Y + 1e-3));
+    }));
+    assert(corr.high > corr.low + 20, `noisier half brighter in false colour: ${corr.low.toFixed(1)} vs ${corr.high.toFixed(1)}`);
+    await shot('14-preview-error-channel');
+    await page.selectOption('#channel', 'count');
+    assert((await page.textContent('#legend')).includes('samples per pixel'), 'the count legend is shown');
+    assert((await canvasDigest(page)).h !== errDigest.h, 'the count channel repainted the canvas');
+    await shot('15-preview-sample-count');
+    await page.selectOption('#channel', 'rgb');
+    assert(await page.isHidden('#legend'), 'no legend for RGB');
   });
 
   await check('controls are labelled and keyboard-operable', async () => {

@@ -1,7 +1,9 @@
 // A small reader of the EXR files tessera serves (renderer/image/exr.c): single-part scan-line
 // images with NONE, ZIPS or ZIP compression and HALF/FLOAT channels. It returns the R, G, B
 // channels as linear floats, so the preview's exposure works on the real radiance rather
-// than on an 8-bit sRGB PNG. Anything else throws (the caller then uses the PNG).
+// than on an 8-bit sRGB PNG, and every channel by name (tessera's tiles also hold R.var,
+// G.var, B.var — the variance of each pixel's mean — and count, its samples). Anything
+// else throws (the caller then uses the PNG).
 
 const MAGIC = 20000630;
 
@@ -26,7 +28,8 @@ function unpredict(t) {
   return out;
 }
 
-/** Decodes an EXR ArrayBuffer into {width, height, x0, y0, rgb: Float32Array (w*h*3)}. */
+/** Decodes an EXR ArrayBuffer into {width, height, x0, y0, rgb: Float32Array (w*h*3),
+ *  channels: {name: Float32Array (w*h)}}; values are exactly the file's (HALF widened). */
 export async function decodeExr(buf) {
   const dv = new DataView(buf);
   const u8 = new Uint8Array(buf);
@@ -65,6 +68,7 @@ export async function decodeExr(buf) {
   const lineBytes = bytesPer.reduce((a, b) => a + b * w, 0);
   const want = { R: 0, G: 1, B: 2 };
   const rgb = new Float32Array(w * h * 3);
+  const planes = channels.map(() => new Float32Array(w * h));
   let table = p;
   for (let c = 0; c < chunks; c++) {
     const off = Number(dv.getBigUint64(table + 8 * c, true));
@@ -77,16 +81,15 @@ export async function decodeExr(buf) {
     for (let r = 0; r < n; r++) {
       const row = y - win[1] + r;
       channels.forEach((ch, k) => {
-        const dst = want[ch.name];
+        const dst = want[ch.name], plane = planes[k];
         for (let x = 0; x < w; x++) {
-          if (dst !== undefined) {
-            const v = ch.type === 1 ? halfToFloat(ddv.getUint16(q, true)) : ch.type === 2 ? ddv.getFloat32(q, true) : ddv.getUint32(q, true);
-            rgb[(row * w + x) * 3 + dst] = v;
-          }
+          const v = ch.type === 1 ? halfToFloat(ddv.getUint16(q, true)) : ch.type === 2 ? ddv.getFloat32(q, true) : ddv.getUint32(q, true);
+          plane[row * w + x] = v;
+          if (dst !== undefined) rgb[(row * w + x) * 3 + dst] = v;
           q += bytesPer[k];
         }
       });
     }
   }
-  return { width: w, height: h, x0: win[0], y0: win[1], rgb };
+  return { width: w, height: h, x0: win[0], y0: win[1], rgb, channels: Object.fromEntries(channels.map((c, k) => [c.name, planes[k]])) };
 }

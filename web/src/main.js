@@ -186,14 +186,20 @@ async function cancel(id) {
 }
 
 // ------------------------------------------------------------------ preview
-// The canvas shows linear radiance scaled by 2^exposure, encoded to sRGB. Tiles come as EXR
-// (the real floats, so darkening shows what was clipped); where the EXR cannot be read the
-// tile's 8-bit sRGB PNG is used instead. `base` keeps the unscaled pixels, so changing the
-// exposure repaints without refetching.
-const canvas = $('canvas'), overlay = $('overlay');
+// The canvas holds the film window at its own resolution, one canvas pixel per image pixel;
+// the view (fit, 1:1, zoom about the cursor, pan) is a CSS transform of the stage holding
+// it, smooth (bilinear) while an image pixel is smaller than a screen pixel and crisp
+// (nearest) once it is larger, as in tev. Tiles come as EXR (the real floats: R, G, B, the
+// variance of each pixel's mean R.var, G.var, B.var, and its sample count), so the exposure
+// works on linear radiance and the readout shows the numbers the API serves; where the EXR
+// cannot be read the tile's 8-bit sRGB PNG is used instead (colour only). `base` keeps the
+// unscaled pixels, so changing the exposure or the channel repaints without refetching.
+const canvas = $('canvas'), overlay = $('overlay'), viewport = $('viewport'), stage = $('stage');
 const ctx = canvas.getContext('2d', { willReadFrequently: true });
 const octx = overlay.getContext('2d');
-let base = null;                 // {w, h, rgb: Float32Array linear, alpha: Uint8Array} of the crop window
+// {w, h, rgb: Float32Array linear (w·h·3), vars: Float32Array (w·h·3, NaN when unknown),
+//  count: Float32Array (w·h, NaN when unknown), alpha: Uint8Array, maxCount}
+let base = null;
 let film = null;                 // the selected job's film
 let tileSpp = new Map();         // "tx,ty" -> spp painted
 let passSpp = 0, jobState = '';
@@ -201,33 +207,79 @@ let useExr = typeof DecompressionStream === 'function';
 
 const srgbToLinear = (c) => (c <= 0.04045 ? c / 12.92 : Math.pow((c + 0.055) / 1.055, 2.4));
 const linearToSrgb = (c) => (c <= 0.0031308 ? 12.92 * c : 1.055 * Math.pow(c, 1 / 2.4) - 0.055);
+
+// False colour: viridis, from its published control points, interpolated into 256 entries.
+const LUT = (() => {
+  const stops = [[0x44, 0x01, 0x54], [0x48, 0x28, 0x78], [0x3e, 0x4a, 0x89], [0x31, 0x68, 0x8e], [0x26, 0x82, 0x8e],
+    [0x1f, 0x9e, 0x89], [0x35, 0xb7, 0x79], [0x6e, 0xce, 0x58], [0xb5, 0xde, 0x2b], [0xfd, 0xe7, 0x25]];
+  const lut = new Uint8Array(256 * 3);
+  for (let i = 0; i < 256; i++) {
+    const t = (i / 255) * (stops.length - 1), k = Math.min(stops.length - 2, Math.floor(t)), f = t - k;
+    for (let c = 0; c < 3; c++) lut[i * 3 + c] = Math.round(stops[k][c] * (1 - f) + stops[k + 1][c] * f);
+  }
+  return lut;
+})();
+// The error channel: the pixel's relative standard error sqrt(Var[Y] / (Y² + 1e-3)), Y the
+// Rec. 709 luminance, Var[Y] the variance of its mean (channel covariances ignored) — the
+// per-pixel term of the job's error estimate (proto/error-estimate.md). Shown on a log scale
+// from 0.1 % to 100 %. null when unknown (a PNG tile, or fewer than two samples).
+const ERR_LO = -3, ERR_HI = 0;
+function relError(i) {
+  const v = base.vars, c = base.rgb;
+  if (!(base.count[i] >= 2)) return null;
+  const y = 0.2126 * c[i * 3] + 0.7152 * c[i * 3 + 1] + 0.0722 * c[i * 3 + 2];
+  const vy = 0.2126 * 0.2126 * v[i * 3] + 0.7152 * 0.7152 * v[i * 3 + 1] + 0.0722 * 0.0722 * v[i * 3 + 2];
+  return vy > 0 ? Math.sqrt(vy / (y * y + 1e-3)) : 0;
+}
+const channelMode = () => $('channel').value;
+
 function paintRegion(x, y, w, h) {
-  if (!base) return;
+  if (!base || w <= 0 || h <= 0) return;
+  const mode = channelMode();
   const k = Math.pow(2, Number($('exposure').value));
-  const out = ctx.createImageData(w, h);
+  const out = ctx.createImageData(w, h), d = out.data;
   const W = base.w;
+  const put = (di, t) => { const j = Math.max(0, Math.min(255, Math.round(255 * t))) * 3; d[di] = LUT[j]; d[di + 1] = LUT[j + 1]; d[di + 2] = LUT[j + 2]; };
   for (let r = 0; r < h; r++) {
     let si = (y + r) * W + x, di = r * w * 4;
     for (let c = 0; c < w; c++, si++, di += 4) {
-      for (let ch = 0; ch < 3; ch++) {
-        const v = k * base.rgb[si * 3 + ch];
-        out.data[di + ch] = v > 0 ? Math.round(255 * linearToSrgb(Math.min(1, v))) : 0;
+      d[di + 3] = base.alpha[si];
+      if (!base.alpha[si]) continue;
+      if (mode === 'rgb') {
+        for (let ch = 0; ch < 3; ch++) {
+          const v = k * base.rgb[si * 3 + ch];
+          d[di + ch] = v > 0 ? Math.round(255 * linearToSrgb(Math.min(1, v))) : 0;
+        }
+      } else if (mode === 'error') {
+        const e = relError(si);
+        if (e === null) { d[di] = d[di + 1] = d[di + 2] = 96; continue; }
+        put(di, e > 0 ? (Math.log10(e) - ERR_LO) / (ERR_HI - ERR_LO) : 0);
+      } else {
+        const n = base.count[si];
+        if (!(n >= 0)) { d[di] = d[di + 1] = d[di + 2] = 96; continue; }
+        put(di, base.maxCount > 0 ? n / base.maxCount : 0);
       }
-      out.data[di + 3] = base.alpha[si];
     }
   }
   ctx.putImageData(out, x, y);
 }
+const paintAll = () => { if (base) paintRegion(0, 0, base.w, base.h); };
 
-function storeTile(x, y, w, h, get) {
+// get(r, c) -> {rgb: [3], vars: [3] | null, count: number | null}
+function storeTile(x, y, w, h, rgb, vars, count) {
+  let grew = false;
   for (let r = 0; r < h; r++)
     for (let c = 0; c < w; c++) {
-      const i = (y + r) * base.w + x + c;
-      base.rgb[i * 3] = get(r, c, 0);
-      base.rgb[i * 3 + 1] = get(r, c, 1);
-      base.rgb[i * 3 + 2] = get(r, c, 2);
+      const i = (y + r) * base.w + x + c, s = r * w + c;
+      for (let ch = 0; ch < 3; ch++) {
+        base.rgb[i * 3 + ch] = rgb(s, ch);
+        base.vars[i * 3 + ch] = vars ? vars[ch][s] : NaN;
+      }
+      base.count[i] = count ? count[s] : NaN;
+      if (count && count[s] > base.maxCount) { base.maxCount = count[s]; grew = true; }
       base.alpha[i] = 255;
     }
+  return grew;
 }
 
 const scratch = document.createElement('canvas');
@@ -239,16 +291,175 @@ function paintTilePng(t, img) {
   sctx.clearRect(0, 0, t.w, t.h);
   sctx.drawImage(img, 0, 0);
   const px = sctx.getImageData(0, 0, t.w, t.h).data;
-  storeTile(x, y, t.w, t.h, (r, c, ch) => srgbToLinear(px[(r * t.w + c) * 4 + ch] / 255));
+  storeTile(x, y, t.w, t.h, (s, ch) => srgbToLinear(px[s * 4 + ch] / 255), null, null);
   paintRegion(x, y, t.w, t.h);
 }
 function paintTileExr(t, im) {
   if (!film) return;
   const x = t.x - film.x0, y = t.y - film.y0;
   if (im.width !== t.w || im.height !== t.h) throw new Error('tile EXR of an unexpected size');
-  storeTile(x, y, t.w, t.h, (r, c, ch) => { const v = im.rgb[(r * t.w + c) * 3 + ch]; return isFinite(v) ? v : 0; });
-  paintRegion(x, y, t.w, t.h);
+  const c = im.channels, vars = c['R.var'] && c['G.var'] && c['B.var'] ? [c['R.var'], c['G.var'], c['B.var']] : null;
+  const grew = storeTile(x, y, t.w, t.h, (s, ch) => { const v = im.rgb[s * 3 + ch]; return isFinite(v) ? v : 0; }, vars, c.count || null);
+  if (grew && channelMode() === 'count') paintAll(); // the scale changed
+  else paintRegion(x, y, t.w, t.h);
 }
+
+// ------------------------------------------------------------------ view: fit, 1:1, zoom, pan
+// screen = (tx, ty) + s · image, in CSS pixels of the viewport.
+const view = { s: 1, tx: 0, ty: 0, mode: 'fit' };
+const MAX_SCALE = 64;
+const fitScale = () => (base ? Math.min(viewport.clientWidth / base.w, viewport.clientHeight / base.h) : 1);
+function applyView() {
+  stage.style.transform = `translate(${view.tx}px, ${view.ty}px) scale(${view.s})`;
+  const device = view.s * (window.devicePixelRatio || 1);
+  // Smooth while zoomed out, crisp pixels once an image pixel covers more than a screen pixel.
+  stage.classList.toggle('crisp', device >= 0.999);
+  viewport.dataset.scale = String(view.s);
+  viewport.dataset.tx = String(view.tx);
+  viewport.dataset.ty = String(view.ty);
+  viewport.dataset.mode = view.mode;
+  $('zoom-level').textContent = (device >= 10 ? Math.round(device * 100) : Number((device * 100).toPrecision(3))) + '%';
+  placeHover();
+  $('view-fit').setAttribute('aria-pressed', String(view.mode === 'fit'));
+  $('view-1to1').setAttribute('aria-pressed', String(view.mode === '1:1'));
+}
+function fitView() {
+  if (!base) return;
+  const s = fitScale();
+  Object.assign(view, { s, tx: (viewport.clientWidth - base.w * s) / 2, ty: (viewport.clientHeight - base.h * s) / 2, mode: 'fit' });
+  applyView();
+}
+function setScaleAbout(cx, cy, s, mode = 'free') {
+  const lo = Math.min(1, fitScale()) / 4;
+  s = Math.max(lo, Math.min(MAX_SCALE, s));
+  view.tx = cx - ((cx - view.tx) * s) / view.s;
+  view.ty = cy - ((cy - view.ty) * s) / view.s;
+  view.s = s;
+  view.mode = mode;
+  applyView();
+}
+function oneToOne() {
+  if (!base) return;
+  const dpr = window.devicePixelRatio || 1;
+  setScaleAbout(viewport.clientWidth / 2, viewport.clientHeight / 2, 1 / dpr, '1:1');
+  // Whole device pixels, so each image pixel is exactly one screen pixel.
+  view.tx = Math.round(view.tx * dpr) / dpr;
+  view.ty = Math.round(view.ty * dpr) / dpr;
+  applyView();
+}
+const zoomStep = (f) => setScaleAbout(viewport.clientWidth / 2, viewport.clientHeight / 2, view.s * f);
+// The viewport takes the image's aspect ratio, within 200 px and 72 % of the window height.
+function sizeViewport() {
+  if (!base) return;
+  const h = Math.round(Math.max(200, Math.min(viewport.clientWidth * (base.h / base.w), 0.72 * window.innerHeight)));
+  viewport.style.height = h + 'px';
+}
+
+viewport.addEventListener('wheel', (e) => {
+  if (!base) return;
+  e.preventDefault();
+  const r = viewport.getBoundingClientRect();
+  const dy = e.deltaMode === 1 ? 16 * e.deltaY : e.deltaMode === 2 ? 400 * e.deltaY : e.deltaY;
+  setScaleAbout(e.clientX - r.left, e.clientY - r.top, view.s * Math.pow(2, -dy / 240));
+}, { passive: false });
+let drag = null;
+viewport.addEventListener('pointerdown', (e) => {
+  if (e.button !== 0 || !base) return;
+  drag = { x: e.clientX, y: e.clientY, tx: view.tx, ty: view.ty, id: e.pointerId };
+  viewport.setPointerCapture(e.pointerId);
+  viewport.classList.add('dragging');
+});
+viewport.addEventListener('pointermove', (e) => {
+  if (drag && e.pointerId === drag.id) {
+    view.tx = drag.tx + e.clientX - drag.x;
+    view.ty = drag.ty + e.clientY - drag.y;
+    view.mode = 'free';
+    applyView();
+  }
+  const r = viewport.getBoundingClientRect();
+  showReadout(Math.floor((e.clientX - r.left - view.tx) / view.s), Math.floor((e.clientY - r.top - view.ty) / view.s));
+});
+const endDrag = (e) => { if (drag && e.pointerId === drag.id) { drag = null; viewport.classList.remove('dragging'); } };
+viewport.addEventListener('pointerup', endDrag);
+viewport.addEventListener('pointercancel', endDrag);
+viewport.addEventListener('keydown', (e) => {
+  const pan = 48, keys = {
+    f: fitView, F: fitView, 1: oneToOne, '+': () => zoomStep(Math.SQRT2), '=': () => zoomStep(Math.SQRT2), '-': () => zoomStep(Math.SQRT1_2),
+    ArrowLeft: () => { view.tx += pan; }, ArrowRight: () => { view.tx -= pan; }, ArrowUp: () => { view.ty += pan; }, ArrowDown: () => { view.ty -= pan; },
+  };
+  const k = keys[e.key];
+  if (!k || e.ctrlKey || e.metaKey || e.altKey) return;
+  e.preventDefault();
+  k();
+  if (e.key.startsWith('Arrow')) { view.mode = 'free'; applyView(); }
+});
+$('view-fit').addEventListener('click', fitView);
+$('view-1to1').addEventListener('click', oneToOne);
+$('zoom-in').addEventListener('click', () => zoomStep(Math.SQRT2));
+$('zoom-out').addEventListener('click', () => zoomStep(Math.SQRT1_2));
+new ResizeObserver(() => {
+  if (!base) return;
+  const cx = viewport.clientWidth, cy = viewport.clientHeight;
+  sizeViewport();
+  if (view.mode === 'fit') fitView();
+  else if (cx !== viewport.clientWidth || cy !== viewport.clientHeight) applyView();
+}).observe(viewport.parentElement);
+
+// ------------------------------------------------------------------ pixel readout
+// The pixel under the cursor is outlined once pixels are large enough to see one.
+let hover = null;
+function placeHover() {
+  const hv = $('hover'), big = view.s * (window.devicePixelRatio || 1) >= 6;
+  hv.hidden = !hover || !big;
+  if (hv.hidden) return;
+  Object.assign(hv.style, { left: view.tx + hover[0] * view.s + 'px', top: view.ty + hover[1] * view.s + 'px', width: view.s + 'px', height: view.s + 'px' });
+}
+viewport.addEventListener('pointerleave', () => { hover = null; placeHover(); });
+const fmtVal = (v) => (v == null || Number.isNaN(v) ? '–' : v === 0 ? '0' : Math.abs(v) >= 1e4 || Math.abs(v) < 1e-3 ? v.toExponential(3) : v.toPrecision(4));
+function showReadout(x, y) {
+  const ro = $('readout');
+  if (!base || x < 0 || y < 0 || x >= base.w || y >= base.h) { hover = null; placeHover(); return; }
+  hover = [x, y];
+  placeHover();
+  const i = y * base.w + x;
+  // Full-image coordinates (the film window may be a crop of it), as the EXR's data window.
+  const fx = x + film.x0, fy = y + film.y0;
+  const d = { x: fx, y: fy };
+  if (!base.alpha[i]) {
+    ro.replaceChildren(el('span', { class: 'kv' }, el('b', {}, 'x '), String(fx)), el('span', { class: 'kv' }, el('b', {}, 'y '), String(fy)),
+      el('span', { class: 'muted' }, 'not rendered yet'));
+    Object.assign(ro.dataset, { x: fx, y: fy, r: '', g: '', b: '', spp: '', vr: '', vg: '', vb: '', err: '' });
+    return;
+  }
+  const rgb = [0, 1, 2].map((c) => base.rgb[i * 3 + c]), vars = [0, 1, 2].map((c) => base.vars[i * 3 + c]);
+  const e = relError(i), n = base.count[i];
+  Object.assign(d, { r: rgb[0], g: rgb[1], b: rgb[2], spp: n, vr: vars[0], vg: vars[1], vb: vars[2], err: e });
+  for (const [k, v] of Object.entries(d)) ro.dataset[k] = v == null || Number.isNaN(v) ? '' : String(v);
+  const kv = (k, v, cls = '') => el('span', { class: 'kv ' + cls }, el('b', {}, k + ' '), v);
+  ro.replaceChildren(
+    kv('x', String(fx)), kv('y', String(fy)),
+    kv('R', fmtVal(rgb[0]), 'r'), kv('G', fmtVal(rgb[1]), 'g'), kv('B', fmtVal(rgb[2]), 'b'),
+    kv('spp', Number.isNaN(n) ? '–' : String(n)),
+    kv('var', vars.map(fmtVal).join(' / ')),
+    kv('rel. error', e == null ? '–' : (100 * e).toPrecision(3) + '%'));
+}
+
+// ------------------------------------------------------------------ legend
+function drawLegend() {
+  const mode = channelMode(), lg = $('legend');
+  lg.hidden = mode === 'rgb' || !base;
+  if (lg.hidden) return;
+  const bar = $('legend-bar'), bctx = bar.getContext('2d'), img = bctx.createImageData(256, 1);
+  for (let i = 0; i < 256; i++) for (let c = 0; c < 3; c++) img.data[i * 4 + c] = LUT[i * 3 + c], img.data[i * 4 + 3] = 255;
+  for (let r = 0; r < bar.height; r++) bctx.putImageData(img, 0, r);
+  const ticks = mode === 'error'
+    ? ['0.1%', '1%', '10%', '≥100%'].map((t, k) => [k / 3, t])
+    : [[0, '0'], [0.5, fmtVal(base.maxCount / 2)], [1, fmtVal(base.maxCount)]];
+  $('legend-ticks').replaceChildren(...ticks.map(([p, t]) => el('span', { style: `left: ${100 * p}%` }, t)));
+  $('legend-title').textContent = mode === 'error' ? 'relative error √Var[Y] / Y, log scale' : 'samples per pixel';
+  lg.dataset.mode = mode;
+}
+$('channel').addEventListener('change', () => { paintAll(); drawLegend(); canvas.dataset.channel = channelMode(); });
 
 function drawOutlines() {
   octx.clearRect(0, 0, overlay.width, overlay.height);
@@ -366,12 +577,20 @@ function select(id) {
   passSpp = j.pass_spp || 0;
   jobState = j.state;
   for (const c of [canvas, overlay]) { c.width = film.crop_width; c.height = film.crop_height; }
+  stage.style.width = film.crop_width + 'px';
+  stage.style.height = film.crop_height + 'px';
   canvas.dataset.tiles = '0';
   canvas.dataset.painted = '0';
-  canvas.style.aspectRatio = film.crop_width + ' / ' + film.crop_height;
   ctx.clearRect(0, 0, canvas.width, canvas.height);
-  base = { w: film.crop_width, h: film.crop_height, rgb: new Float32Array(film.crop_width * film.crop_height * 3),
-    alpha: new Uint8Array(film.crop_width * film.crop_height) };
+  const n = film.crop_width * film.crop_height;
+  base = { w: film.crop_width, h: film.crop_height, rgb: new Float32Array(n * 3), vars: new Float32Array(n * 3).fill(NaN),
+    count: new Float32Array(n).fill(NaN), alpha: new Uint8Array(n), maxCount: 0 };
+  sizeViewport();
+  fitView();
+  drawLegend();
+  $('readout').textContent = 'Point at the image for pixel values.';
+  hover = null;
+  placeHover();
   $('preview-job').textContent = '— ' + jobLabel(j);
   $('preview-status').textContent = j.state;
   openStream(id);
@@ -381,7 +600,7 @@ function select(id) {
 
 $('exposure').addEventListener('input', () => {
   $('exposure-out').textContent = Number($('exposure').value).toFixed(1) + ' EV';
-  if (base) paintRegion(0, 0, base.w, base.h);
+  if (channelMode() === 'rgb') paintAll();
 });
 $('outline').addEventListener('change', drawOutlines);
 
