@@ -1,0 +1,224 @@
+/* display.c — what streaming to a tev display server costs a render (server/display.h).
+ *
+ *   bench_display [--reps R] [--spp N] [--threads T]
+ *
+ * Renders the built-in Cornell box (512×512, path) through the scheduler R times with a
+ * display attached and R times without, in pairs whose order alternates (with, without;
+ * without, with; …) so load changes on a shared machine hit both alike. The viewer is a
+ * thread of this process that reads every packet as tev would (length, then the payload)
+ * and discards it. Prints, per pair, both wall times (submit to on_done) and their ratio,
+ * then the medians. Wall time on a shared machine moves with other people's load, so it
+ * also reports the process's CPU time per render (workers + the display's thread; the
+ * viewer thread's own CPU time subtracted, as tev would be another process): on a machine
+ * whose cores the workers fill, the display's extra CPU is what it takes from them. And
+ * the time the workers spent inside the display's on_tile, as a fraction of worker time.
+ * Exit status 0, 1 when rendering fails, 2 on usage errors. */
+#define _GNU_SOURCE
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "display.h"
+
+static double now_s(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* ---------------------------------------------------------------- a viewer that reads */
+static atomic_bool g_stop;
+static atomic_ullong g_bytes;
+static atomic_ullong g_viewer_cpu_ns; /* CPU time of the viewer thread (not the renderer's) */
+static atomic_int g_connections_done;
+
+static double cpu_s(clockid_t c)
+{
+    struct timespec t;
+    clock_gettime(c, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+static void *viewer(void *arg)
+{
+    int lfd = *(int *)arg;
+    static char buf[1 << 16];
+    while (!atomic_load(&g_stop)) {
+        struct pollfd p = {lfd, POLLIN, 0};
+        if (poll(&p, 1, 50) != 1) continue;
+        int fd = accept(lfd, NULL, NULL);
+        if (fd < 0) continue;
+        for (;;) {
+            ssize_t r = recv(fd, buf, sizeof buf, 0);
+            if (r <= 0) break;
+            atomic_fetch_add(&g_bytes, (unsigned long long)r);
+        }
+        close(fd);
+        atomic_store(&g_viewer_cpu_ns, (unsigned long long)(cpu_s(CLOCK_THREAD_CPUTIME_ID) * 1e9));
+        atomic_fetch_add(&g_connections_done, 1);
+    }
+    return NULL;
+}
+
+/* ---------------------------------------------------------------- rendering */
+typedef struct run {
+    pthread_mutex_t mu;
+    pthread_cond_t cv;
+    bool done;
+    srv_display *d;
+    atomic_ullong callback_ns;
+} run;
+
+static void on_tile(void *user, ts_sched_job *j, const ts_tile_event *ev)
+{
+    run *r = user;
+    double t = now_s();
+    if (r->d) srv_display_tile(r->d, j, ev); /* without a display: the timing alone, as a baseline */
+    atomic_fetch_add(&r->callback_ns, (unsigned long long)((now_s() - t) * 1e9));
+}
+static void on_done(void *user, ts_sched_job *j, const ts_job_progress *p)
+{
+    (void)j, (void)p;
+    run *r = user;
+    pthread_mutex_lock(&r->mu);
+    r->done = true;
+    pthread_cond_signal(&r->cv);
+    pthread_mutex_unlock(&r->mu);
+}
+
+/* Wall seconds of one render; *cb_s the time spent in the display's on_tile, *cpu the
+ * process's CPU seconds from submit to the display's end, less the viewer thread's. */
+static double render(ts_scheduler *s, const char *address, uint32_t spp, double *cb_s, double *cpu)
+{
+    int conns = atomic_load(&g_connections_done);
+    double viewer0 = (double)atomic_load(&g_viewer_cpu_ns) * 1e-9, cpu0 = cpu_s(CLOCK_PROCESS_CPUTIME_ID);
+    ts_error err = {0};
+    ts_scene *scene = NULL;
+    if (ts_scene_load_builtin(NULL, &scene, &err)) {
+        fprintf(stderr, "bench_display: %s\n", err.message);
+        exit(1);
+    }
+    run r = {PTHREAD_MUTEX_INITIALIZER, PTHREAD_COND_INITIALIZER, false, NULL, 0};
+    if (address && !(r.d = srv_display_create(address, "bench", &err))) {
+        fprintf(stderr, "bench_display: %s\n", err.message);
+        exit(1);
+    }
+    ts_sched_job_desc desc = {0};
+    desc.scene = scene;
+    desc.integrator = TS_INTEGRATOR_PATH;
+    desc.spp = spp;
+    desc.callbacks = (ts_job_callbacks){on_tile, NULL, on_done, &r};
+    double t0 = now_s();
+    ts_sched_job *j = ts_scheduler_submit(s, &desc, &err);
+    if (!j) {
+        fprintf(stderr, "bench_display: %s\n", err.message);
+        exit(1);
+    }
+    pthread_mutex_lock(&r.mu);
+    while (!r.done) pthread_cond_wait(&r.cv, &r.mu);
+    pthread_mutex_unlock(&r.mu);
+    double t = now_s() - t0;
+    if (r.d) {
+        if (!srv_display_flush(r.d, 30)) fprintf(stderr, "bench_display: the display did not drain\n");
+        srv_display_destroy(r.d);
+        while (atomic_load(&g_connections_done) == conns) poll(NULL, 0, 5); /* the viewer saw EOF */
+    }
+    *cpu = cpu_s(CLOCK_PROCESS_CPUTIME_ID) - cpu0 - ((double)atomic_load(&g_viewer_cpu_ns) * 1e-9 - viewer0);
+    ts_sched_job_release(j);
+    *cb_s = (double)atomic_load(&r.callback_ns) * 1e-9;
+    return t;
+}
+
+static int cmp(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+static double median(double *v, int n)
+{
+    qsort(v, (size_t)n, sizeof *v, cmp);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+int main(int argc, char **argv)
+{
+    int reps = 7, threads = 2;
+    uint32_t spp = 16;
+    for (int i = 1; i < argc; i++) {
+        if (i + 1 < argc && strcmp(argv[i], "--reps") == 0) reps = atoi(argv[++i]);
+        else if (i + 1 < argc && strcmp(argv[i], "--spp") == 0) spp = (uint32_t)atoi(argv[++i]);
+        else if (i + 1 < argc && strcmp(argv[i], "--threads") == 0) threads = atoi(argv[++i]);
+        else {
+            fprintf(stderr, "usage: bench_display [--reps R] [--spp N] [--threads T]\n");
+            return 2;
+        }
+    }
+    if (reps < 1 || reps > 1000 || spp < 1 || threads < 1) {
+        fprintf(stderr, "bench_display: reps 1-1000, spp and threads positive\n");
+        return 2;
+    }
+    int lfd = socket(AF_INET, SOCK_STREAM, 0);
+    struct sockaddr_in a = {0};
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    socklen_t n = sizeof a;
+    if (lfd < 0 || bind(lfd, (struct sockaddr *)&a, sizeof a) || listen(lfd, 4) || getsockname(lfd, (struct sockaddr *)&a, &n)) {
+        perror("bench_display: listen");
+        return 1;
+    }
+    char address[64];
+    snprintf(address, sizeof address, "127.0.0.1:%d", ntohs(a.sin_port));
+    pthread_t vt;
+    pthread_create(&vt, NULL, viewer, &lfd);
+    ts_error err = {0};
+    ts_scheduler *s = ts_scheduler_create(threads, 1, &err);
+    if (!s) {
+        fprintf(stderr, "bench_display: %s\n", err.message);
+        return 1;
+    }
+    double cb, cpu, warm = render(s, NULL, 1, &cb, &cpu); /* warm-up: page in the scene, caches */
+    (void)warm;
+    double *cpu_ratio = calloc((size_t)reps, sizeof *cpu_ratio);
+    double *cb_base = calloc((size_t)reps, sizeof *cb_base);
+    double *with = calloc((size_t)reps, sizeof *with), *without = calloc((size_t)reps, sizeof *without);
+    double *ratio = calloc((size_t)reps, sizeof *ratio), *cb_frac = calloc((size_t)reps, sizeof *cb_frac);
+    printf("pair,with_s,without_s,ratio,cpu_with_s,cpu_without_s,cpu_ratio,on_tile_fraction,empty_on_tile_fraction\n");
+    for (int r = 0; r < reps; r++) {
+        double cb_with = 0, cb_none = 0, cpu_with = 0, cpu_none = 0;
+        if (r % 2 == 0) {
+            with[r] = render(s, address, spp, &cb_with, &cpu_with);
+            without[r] = render(s, NULL, spp, &cb_none, &cpu_none);
+        } else {
+            without[r] = render(s, NULL, spp, &cb_none, &cpu_none);
+            with[r] = render(s, address, spp, &cb_with, &cpu_with);
+        }
+        ratio[r] = with[r] / without[r];
+        cpu_ratio[r] = cpu_with / cpu_none;
+        cb_frac[r] = cb_with / (with[r] * threads);
+        cb_base[r] = cb_none / (without[r] * threads);
+        printf("%d,%.3f,%.3f,%.4f,%.3f,%.3f,%.4f,%.2e,%.2e\n", r, with[r], without[r], ratio[r], cpu_with, cpu_none,
+               cpu_ratio[r], cb_frac[r], cb_base[r]);
+        fflush(stdout);
+    }
+    printf("# %d pairs, %u spp, %d threads, 512x512 path: median with %.3f s, without %.3f s, "
+           "median wall ratio %.4f (%+.2f%%); median CPU ratio (renderer + display thread, viewer excluded) %.4f "
+           "(%+.2f%%); on_tile time %.2e of worker time (an empty callback timed alike: %.2e); %.1f MiB streamed\n",
+           reps, spp, threads, median(with, reps), median(without, reps), median(ratio, reps),
+           100 * (median(ratio, reps) - 1), median(cpu_ratio, reps), 100 * (median(cpu_ratio, reps) - 1),
+           median(cb_frac, reps), median(cb_base, reps), (double)atomic_load(&g_bytes) / (1 << 20));
+    atomic_store(&g_stop, true);
+    pthread_join(vt, NULL);
+    close(lfd);
+    ts_scheduler_destroy(s);
+    free(with), free(without), free(ratio), free(cb_frac), free(cpu_ratio), free(cb_base);
+    return 0;
+}
