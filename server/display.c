@@ -13,6 +13,7 @@
 #include <netinet/tcp.h>
 #include <poll.h>
 #include <pthread.h>
+#include <sched.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -26,6 +27,7 @@ const char *const srv_display_channel_names[SRV_DISPLAY_CHANNELS] = {"R", "G", "
 #define BACKOFF_MAX_S 5.0
 #define CONNECT_TIMEOUT_MS 2000
 #define IDLE_CHECK_S 0.2  /* how often an idle thread looks for a closed connection */
+#define BATCH_S 0.02      /* after draining the queue, the thread rests this long (≤ 50 wake-ups/s) */
 #define SEND_TIMEOUT_S 10 /* a viewer that accepts nothing for this long is dropped */
 
 struct srv_display {
@@ -39,6 +41,7 @@ struct srv_display {
     bool stop;
     int fd;                  /* -1 when not connected (written by the thread only) */
     bool sending;            /* the thread is sending a tile it took off the queue */
+    bool idle;               /* the thread waits for tiles: the next tile wakes it */
     ts_sched_job *job;       /* the display's job (a reference), NULL until the first tile */
     int nx, ny, full_w, full_h, x0, y0, w, h;
     int *queue;              /* ring of tile indices, capacity nx·ny */
@@ -303,6 +306,10 @@ static void *display_thread(void *arg)
     buf b = {0};
     double backoff = BACKOFF_MIN_S, next_attempt = 0;
     bool created = false; /* CreateImage sent on this connection */
+    bool rested = false;  /* rested since the queue last emptied */
+    /* A batch thread is not let preempt a worker when it wakes up. */
+    struct sched_param sp = {0};
+    pthread_setschedparam(pthread_self(), SCHED_BATCH, &sp);
     pthread_mutex_lock(&d->mu);
     while (!d->stop) {
         if (d->fd < 0) {
@@ -349,14 +356,26 @@ static void *display_thread(void *arg)
         }
         if (d->count == 0) {
             pthread_cond_broadcast(&d->idle_cv);
+            if (!rested) {
+                /* Let tiles gather for a moment: the workers then wake this thread at most
+                 * once per rest, not once per tile (each wake-up can cost a worker its CPU). */
+                struct timespec t = deadline_in(BATCH_S);
+                while (!d->stop && pthread_cond_timedwait(&d->cv, &d->mu, &t) != ETIMEDOUT) {}
+                rested = true;
+                continue;
+            }
+            d->idle = true;
             struct timespec t = deadline_in(IDLE_CHECK_S);
-            if (pthread_cond_timedwait(&d->cv, &d->mu, &t) == ETIMEDOUT && d->count == 0 && peer_closed(fd)) {
+            int r = pthread_cond_timedwait(&d->cv, &d->mu, &t);
+            d->idle = false;
+            if (r == ETIMEDOUT && d->count == 0 && peer_closed(fd)) {
                 pthread_mutex_unlock(&d->mu);
                 disconnect(d);
                 pthread_mutex_lock(&d->mu);
             }
             continue;
         }
+        rested = false;
         int n = d->nx * d->ny, i = d->queue[d->head];
         d->head = (d->head + 1) % n;
         d->count--;
@@ -444,15 +463,18 @@ void srv_display_tile(srv_display *d, ts_sched_job *job, const ts_tile_event *ev
         }
         pthread_cond_signal(&d->cv);
     }
+    bool wake = false;
     if (d->job == job && ev->tx >= 0 && ev->tx < d->nx && ev->ty >= 0 && ev->ty < d->ny) {
         int i = ev->ty * d->nx + ev->tx, n = d->nx * d->ny;
         if (!d->queued[i]) {
             d->queue[(d->head + d->count++) % n] = i;
             d->queued[i] = true;
-            if (d->fd >= 0) pthread_cond_signal(&d->cv);
+            wake = d->idle && d->fd >= 0;
+            if (wake) d->idle = false; /* one signal is enough */
         }
     }
     pthread_mutex_unlock(&d->mu);
+    if (wake) pthread_cond_signal(&d->cv);
 }
 
 void srv_display_on_tile(void *user, ts_sched_job *job, const ts_tile_event *ev) { srv_display_tile(user, job, ev); }

@@ -28,7 +28,10 @@
  * under a mutex held for that alone, in a queue of tile indices with one place per tile
  * (a tile already queued is not queued again), so the queue is bounded and never full.
  * The display's own thread takes tiles from it, reads the tile's latest immutable snapshot
- * (ts_sched_job_tile), encodes and sends it. A slow viewer therefore sees fewer
+ * (ts_sched_job_tile), encodes and sends it; once the queue is empty it rests 20 ms before
+ * waiting for more, so workers wake it at most once per rest rather than once per tile, and
+ * it runs as SCHED_BATCH, so its wake-ups never preempt a worker (on a loaded machine a
+ * preempted worker can lose a whole time slice). A slow viewer therefore sees fewer
  * intermediate states, never stale final ones. Connecting, resolving the host, sending and
  * waiting all happen on that thread: a viewer that is down, slow or restarting costs the
  * workers nothing. On a failed connect or send the thread closes the socket and tries
