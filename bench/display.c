@@ -114,8 +114,8 @@ static double render(ts_scheduler *s, const char *address, uint32_t spp, double 
     }
     ts_sched_job_desc desc = {0};
     desc.scene = scene;
-    desc.integrator = TS_INTEGRATOR_PATH;
-    desc.spp = spp;
+    desc.settings.integrator = TS_INTEGRATOR_PATH;
+    desc.settings.spp = spp;
     desc.callbacks = (ts_job_callbacks){on_tile, NULL, on_done, &r};
     double t0 = now_s();
     ts_sched_job *j = ts_scheduler_submit(s, &desc, &err);

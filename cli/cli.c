@@ -19,6 +19,7 @@
 #include <strings.h>
 #include <unistd.h>
 
+#include "display.h"
 #include "merge.h"
 #include "outputs.h"
 #include "serve.h"
@@ -64,6 +65,9 @@ static void render_usage(FILE *f)
             "  --checkpoint FILE.exr     save the shard's progress to FILE periodically and on SIGTERM or\n"
             "                            SIGINT, and resume from it when it exists\n"
             "  --checkpoint-interval S   seconds between checkpoints (default 60)\n"
+            "Viewing:\n"
+            "  --display-server HOST:PORT  stream tiles as they finish to a tev viewer listening there (tev's\n"
+            "                            default is 127.0.0.1:14158); an unreachable one costs only a note\n"
             "Exit status: 0 done, 1 bad input or a failed output, 2 usage error, 128+signal when stopped\n"
             "by a signal with --checkpoint (the checkpoint saved).\n");
 }
@@ -124,6 +128,7 @@ typedef struct render_opts {
     bool have_seed, quiet;
     double time_limit, target_error, checkpoint_interval;
     const char *scene_path, *shard_text, *checkpoint;
+    const char *display_server; /* --display-server HOST:PORT, or NULL */
 } render_opts;
 
 /* Fills o from the command line; -1 when the render should go ahead, else the exit status
@@ -131,7 +136,7 @@ typedef struct render_opts {
 static int parse_render_options(int argc, char **argv, render_opts *o)
 {
     enum { OPT_SPP = 256, OPT_THREADS, OPT_SEED, OPT_TIME, OPT_TARGET, OPT_QUIET, OPT_HELP, OPT_SHARD, OPT_SHARD_COUNT,
-           OPT_CHECKPOINT, OPT_CHECKPOINT_INTERVAL };
+           OPT_CHECKPOINT, OPT_CHECKPOINT_INTERVAL, OPT_DISPLAY };
     static const struct option opts[] = {
         {"output", required_argument, NULL, 'o'},    {"spp", required_argument, NULL, OPT_SPP},
         {"threads", required_argument, NULL, OPT_THREADS}, {"seed", required_argument, NULL, OPT_SEED},
@@ -140,6 +145,7 @@ static int parse_render_options(int argc, char **argv, render_opts *o)
         {"shard", required_argument, NULL, OPT_SHARD}, {"shard-count", required_argument, NULL, OPT_SHARD_COUNT},
         {"checkpoint", required_argument, NULL, OPT_CHECKPOINT},
         {"checkpoint-interval", required_argument, NULL, OPT_CHECKPOINT_INTERVAL},
+        {"display-server", required_argument, NULL, OPT_DISPLAY},
         {NULL, 0, NULL, 0}};
     memset(o, 0, sizeof *o);
     o->checkpoint_interval = 60;
@@ -185,6 +191,13 @@ static int parse_render_options(int argc, char **argv, render_opts *o)
             if (!parse_positive(optarg, &o->checkpoint_interval))
                 return render_usage_error("--checkpoint-interval: expected a positive number of seconds, got '%s'", optarg);
             break;
+        case OPT_DISPLAY: {
+            ts_error derr = {0};
+            if (srv_display_parse_address(optarg, NULL, NULL, &derr))
+                return render_usage_error("--display-server: %s", derr.message);
+            o->display_server = optarg;
+            break;
+        }
         case ':': return render_usage_error("option '%s' needs a value", argv[optind - 1]);
         default: return render_usage_error("unknown option '%s'", argv[optind - 1]);
         }
@@ -243,6 +256,7 @@ typedef struct render_run {
     double last_checkpoint;
     ts_status ckpt_status;
     ts_error ckpt_err;
+    srv_display *display;       /* --display-server: tiles stream to tev (thread-safe), or NULL */
 } render_run;
 
 /* "42 s", "3 min 20 s", "2 h 05 min". */
@@ -256,6 +270,7 @@ static void format_duration(double s, char *out, size_t len)
 static void on_tile(void *user, ts_sched_job *job, const ts_tile_event *ev)
 {
     render_run *r = user;
+    if (r->display) srv_display_tile(r->display, job, ev);
     ts_job_progress p;
     if (r->bar) ts_sched_job_progress(job, &p); /* takes the scheduler's lock: before ours */
     pthread_mutex_lock(&r->mu);
@@ -449,6 +464,17 @@ static ts_film *film_copy(const ts_film *f, ts_error *err)
     return c;
 }
 
+/* After the render: the last tiles reach the viewer if it is there (a few milliseconds;
+ * at most 10 s for a slow one); an unreachable one costs a note and at most one connect
+ * attempt (2 s). */
+static void finish_display(render_run *r, const char *address, bool quiet)
+{
+    bool shown = srv_display_flush(r->display, 10);
+    if (!shown && !quiet) fprintf(stderr, "tessera: display server %s: not reachable, the image was not shown there\n", address);
+    srv_display_destroy(r->display);
+    r->display = NULL;
+}
+
 static int cmd_render(int argc, char **argv)
 {
     render_opts o;
@@ -532,6 +558,10 @@ static int cmd_render(int argc, char **argv)
     sigaddset(&sigs, SIGTERM);
     if (o.checkpoint) pthread_sigmask(SIG_BLOCK, &sigs, NULL);
     if (!(sched = ts_scheduler_create(n_threads, 1, &err))) goto fail;
+    if (o.display_server && !(r.display = srv_display_create(o.display_server, scene->name, &err))) goto fail;
+    if (scene->job.display_server && !o.display_server && !o.quiet)
+        fprintf(stderr, "tessera: the scene's job.display_server is for tessera serve; tessera render streams to a "
+                        "display server only with --display-server\n");
     ts_sched_job_desc d = {0};
     d.scene = scene;
     d.settings = js;
@@ -545,6 +575,7 @@ static int cmd_render(int argc, char **argv)
     scene = NULL, film = NULL; /* the job's now */
     int stop_signal = wait_for_job(&r, job, &sigs);
     if (r.bar) fprintf(stderr, "\n");
+    if (r.display) finish_display(&r, o.display_server, o.quiet);
     if (r.ckpt_status) {
         err = r.ckpt_err;
         st = r.ckpt_status;
@@ -599,6 +630,7 @@ fail:
     fprintf(stderr, "tessera: %s\n", err.message);
     rc = 1;
 out:
+    srv_display_destroy(r.display);
     ts_sched_job_release(job); /* the scene goes with the job, once the scheduler lets it go */
     ts_scheduler_destroy(sched);
     ts_film_destroy(film);

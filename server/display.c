@@ -42,6 +42,8 @@ struct srv_display {
     int fd;                  /* -1 when not connected (written by the thread only) */
     bool sending;            /* the thread is sending a tile it took off the queue */
     bool idle;               /* the thread waits for tiles: the next tile wakes it */
+    bool ended;              /* the thread has returned */
+    bool finishing;          /* srv_display_finish: end once the queue is sent (or now, unconnected) */
     ts_sched_job *job;       /* the display's job (a reference), NULL until the first tile */
     int nx, ny, full_w, full_h, x0, y0, w, h;
     int *queue;              /* ring of tile indices, capacity nx·ny */
@@ -312,6 +314,7 @@ static void *display_thread(void *arg)
     pthread_setschedparam(pthread_self(), SCHED_BATCH, &sp);
     pthread_mutex_lock(&d->mu);
     while (!d->stop) {
+        if (d->finishing && (d->fd < 0 || (created && d->count == 0))) break;
         if (d->fd < 0) {
             double wait = next_attempt - now_s();
             if (wait > 0 || !d->job) { /* nothing to show yet, or backing off */
@@ -324,6 +327,7 @@ static void *display_thread(void *arg)
             pthread_mutex_lock(&d->mu);
             if (fd < 0) {
                 d->stats.failed_connects++;
+                pthread_cond_broadcast(&d->idle_cv); /* a flush may give up */
                 next_attempt = now_s() + backoff;
                 backoff = backoff * 2 < BACKOFF_MAX_S ? backoff * 2 : BACKOFF_MAX_S;
                 continue;
@@ -403,6 +407,7 @@ static void *display_thread(void *arg)
     }
     int fd = d->fd;
     d->fd = -1;
+    d->ended = true;
     pthread_cond_broadcast(&d->idle_cv);
     pthread_mutex_unlock(&d->mu);
     if (fd >= 0) close(fd);
@@ -479,16 +484,36 @@ void srv_display_tile(srv_display *d, ts_sched_job *job, const ts_tile_event *ev
 
 void srv_display_on_tile(void *user, ts_sched_job *job, const ts_tile_event *ev) { srv_display_tile(user, job, ev); }
 
+void srv_display_finish(srv_display *d)
+{
+    pthread_mutex_lock(&d->mu);
+    d->finishing = true;
+    pthread_cond_broadcast(&d->cv);
+    pthread_mutex_unlock(&d->mu);
+}
+
+bool srv_display_connected(srv_display *d)
+{
+    pthread_mutex_lock(&d->mu);
+    bool c = d->fd >= 0;
+    pthread_mutex_unlock(&d->mu);
+    return c;
+}
+
 bool srv_display_flush(srv_display *d, double timeout_s)
 {
     struct timespec t = deadline_in(timeout_s);
     pthread_mutex_lock(&d->mu);
     bool done;
+    uint64_t failed0 = d->stats.failed_connects;
     /* The fd stays open while mu is held and fd >= 0 (disconnect clears it first). A viewer
      * that closed the connection has received nothing of late: not done. */
-    while (!(done = d->job && d->fd >= 0 && d->count == 0 && !d->sending && !peer_closed(d->fd)) && !d->stop)
+    while (!(done = d->job && d->fd >= 0 && d->count == 0 && !d->sending && !peer_closed(d->fd)) && !d->stop && !d->ended) {
+        /* Not connected and known unreachable: give up now rather than wait for a retry. */
+        if (d->fd < 0 && d->job && (failed0 > 0 || d->stats.failed_connects > failed0)) break;
         if (pthread_cond_timedwait(&d->idle_cv, &d->mu, &t) == ETIMEDOUT) break;
-    if (!d->job && !d->stop) done = true; /* nothing was ever rendered: nothing to send */
+    }
+    if (!d->job && !d->stop && !d->ended) done = true; /* nothing was ever rendered: nothing to send */
     pthread_mutex_unlock(&d->mu);
     return done;
 }

@@ -87,8 +87,18 @@ void srv_display_tile(srv_display *d, ts_sched_job *job, const ts_tile_event *ev
 void srv_display_on_tile(void *user, ts_sched_job *job, const ts_tile_event *ev);
 
 /* Waits until every tile recorded so far has been sent on a live connection, at most
- * timeout_s seconds. True when everything was sent; false on timeout (e.g. no viewer). */
+ * timeout_s seconds. True when everything was sent; false on timeout, or at once when not
+ * connected and an attempt to connect has failed (before or during the wait): an
+ * unreachable viewer is not waited for. */
 bool srv_display_flush(srv_display *d, double timeout_s);
+
+/* No more tiles will come (call from on_done): the thread sends what is queued if it is
+ * connected, then ends without reconnecting; srv_display_destroy then returns at once.
+ * Quick, never blocks (may run on a render thread). */
+void srv_display_finish(srv_display *d);
+
+/* True while connected to the viewer. */
+bool srv_display_connected(srv_display *d);
 
 typedef struct srv_display_stats {
     uint64_t connects;        /* connections made */

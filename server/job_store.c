@@ -30,6 +30,7 @@ srv_store *srv_store_create(const srv_store_config *cfg)
 
 static void job_free(srv_job *j)
 {
+    srv_display_destroy(j->display); /* finished by on_done: returns at once */
     ts_sched_job_release(j->sj);
     srv_events_destroy(j->events);
     pthread_mutex_destroy(&j->ckpt_mu);
@@ -171,9 +172,9 @@ char *srv_job_tile_event(const srv_job *j, const ts_tile_event *ev)
 
 static void on_tile(void *user, ts_sched_job *sj, const ts_tile_event *ev)
 {
-    (void)sj;
     srv_job *j = user;
     atomic_fetch_add(&j->version, 1);
+    if (j->display) srv_display_tile(j->display, sj, ev);
     char *e = srv_job_tile_event(j, ev);
     if (e) srv_events_publish_frame(j->events, e, ev->ty * j->nx + ev->tx);
     free(e);
@@ -307,10 +308,32 @@ static void on_done(void *user, ts_sched_job *sj, const ts_job_progress *p)
     publish_json(j, "progress", srv_job_progress_json(j, p), -1);
     publish_json(j, "done", srv_job_progress_json(j, p), -1);
     srv_events_close(j->events);
+    if (j->display) srv_display_finish(j->display);
     if (j->store->cfg.on_job_finished) j->store->cfg.on_job_finished(j->store->cfg.user);
 }
 
 /* ---------------------------------------------------------------- creation */
+
+/* The display server a job of scene s streams to, or NULL; a job.display_server this
+ * server does not allow gives NULL (at submit it was refused before; a restored job keeps
+ * rendering without it when the server was restarted with other options). */
+static const char *display_for(const srv_store_config *cfg, const ts_scene *s)
+{
+    const char *want = s ? s->job.display_server : NULL;
+    if (!want) return cfg->display_server;
+    if (cfg->allow_job_display_server || (cfg->display_server && strcmp(cfg->display_server, want) == 0)) return want;
+    return NULL;
+}
+
+/* Starts j's display (when it has one): the image is called "NAME (ID)" or "ID". */
+static bool start_display(srv_job *j, const char *address, ts_error *err)
+{
+    if (!address) return true;
+    char name[SRV_DISPLAY_NAME_MAX];
+    if (j->name) snprintf(name, sizeof name, "%s (%s)", j->name, j->id);
+    else snprintf(name, sizeof name, "%s", j->id);
+    return (j->display = srv_display_create(address, name, err)) != NULL;
+}
 
 static void make_id(char *out, size_t n)
 {
@@ -484,9 +507,24 @@ static srv_job *submit(srv_store *st, const char *text, size_t len, int *http_st
                      work, rays, spp, (unsigned long long)pixels, cfg->max_work);
         goto fail_scene;
     }
+    if (s->job.display_server) {
+        ts_error derr = {0};
+        if (srv_display_parse_address(s->job.display_server, NULL, NULL, &derr)) {
+            *http_status = 400;
+            ts_error_set(err, TS_ERR_INVALID, "job.display_server: %s", derr.message);
+            goto fail_scene;
+        }
+        if (!display_for(cfg, s)) {
+            *http_status = 403;
+            ts_error_set(err, TS_ERR_UNSUPPORTED,
+                         "job.display_server: this server does not let a job choose where it connects (its operator can "
+                         "name one with --display-server, or allow any with --allow-job-display-server)");
+            goto fail_scene;
+        }
+    }
     *http_status = 500;
     srv_job *j = job_new(st, NULL, text, len);
-    if (!j || !describe_scene(j, s)) {
+    if (!j || !describe_scene(j, s) || !start_display(j, display_for(cfg, s), err)) {
         ts_error_set(err, TS_ERR_NOMEM, "out of memory for a job");
         if (j) job_free(j);
         goto fail_scene;
@@ -543,6 +581,10 @@ srv_job *srv_store_restore(srv_store *st, const srv_restore *r, ts_error *err)
         return NULL;
     }
     if (r->failure) snprintf(j->failure, sizeof j->failure, "%s", r->failure);
+    if (r->scene && !r->failure && !ts_job_state_finished(r->state) && !start_display(j, display_for(&st->cfg, r->scene), err)) {
+        job_free(j);
+        return NULL;
+    }
     if (r->history) history_restore(j, r->history);
     if (!r->scene && r->film) {
         j->full_w = r->film->full_width, j->full_h = r->film->full_height;

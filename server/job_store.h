@@ -16,6 +16,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "display.h"
 #include "events.h"
 #include "log.h"
 #include "tessera.h"
@@ -27,6 +28,7 @@ typedef struct srv_job {
     char *name;                  /* may be NULL */
     char *scene_text;            /* the posted document */
     size_t scene_len;
+    srv_display *display;        /* streaming to a tev display server, or NULL (thread-safe itself) */
     char integrator[16];
     char effects[256];           /* "diffuse, area_lights, …" */
     ts_job_settings settings;    /* what the job renders: integrator, spp target, priority, halting bounds */
@@ -71,6 +73,12 @@ typedef struct srv_store_config {
     void (*on_job_finished)(void *user);
     void *user;
     srv_log *log;             /* job events (submitted, started, pass, finished, restored); NULL: none */
+    /* tev display server (display.h): every job streams to display_server when set; a
+     * job's own job.display_server is refused (403) unless it names that same address or
+     * allow_job_display_server is set (docs/security.md: a job must not make the server
+     * connect to addresses its operator did not choose). */
+    const char *display_server;
+    bool allow_job_display_server;
 } srv_store_config;
 
 /* NULL when out of memory. */
@@ -79,7 +87,8 @@ srv_store *srv_store_create(const srv_store_config *cfg);
 void srv_store_destroy(srv_store *st);
 
 /* Loads, checks and queues a posted scene; file references resolve inside config.assets_dir
- * (none without it). On failure NULL, *http_status (400, 413, 422, 500, or 503 when the
+ * (none without it). On failure NULL, *http_status (400, 403 for a job.display_server this
+ * server does not allow, 413, 422, 500, or 503 when the
  * store already holds config.max_jobs jobs — checked before the document is parsed) and
  * err's sentence say why. The returned job carries a reference for the caller. */
 srv_job *srv_store_submit(srv_store *st, const char *text, size_t len, int *http_status, ts_error *err);

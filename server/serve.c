@@ -57,6 +57,9 @@ static void usage(FILE *f)
             "  --log-format text|json      job events as text lines or JSON lines on stderr (default text)\n"
             "  --log-level LEVEL           error, warn, info (job events; default) or debug (and every request)\n"
             "  --queue-builtin             queue the built-in Cornell box as the first job (make run)\n"
+            "  --display-server HOST:PORT  stream every job to a tev viewer there, as tiles finish (default: none)\n"
+            "  --allow-job-display-server  let a job's job.display_server name any address (default: only the\n"
+            "                              --display-server one; others get 403)\n"
             "docs/security.md has the threat model and every limit.\n");
 }
 
@@ -200,7 +203,8 @@ bool srv_server_start(srv_server *srv, int *port_out, char *err, size_t err_len)
     srv->metrics = srv_metrics_create();
     srv->offload = srv_offload_create(2);
     srv->sched = ts_scheduler_create(cfg->threads, cfg->max_running, &e);
-    srv_store_config sc = {cfg->limits, cfg->assets_dir, cfg->max_jobs, cfg->max_work, srv->sched, on_job_finished, srv, &srv->log};
+    srv_store_config sc = {cfg->limits, cfg->assets_dir, cfg->max_jobs, cfg->max_work, srv->sched, on_job_finished, srv,
+                           &srv->log, cfg->display_server, cfg->allow_job_display_server};
     srv->store = srv->sched ? srv_store_create(&sc) : NULL;
     if (!srv->metrics || !srv->store || !srv->offload || !srv->sched) {
         snprintf(err, err_len, "%s", e.message[0] ? e.message : "out of memory");
@@ -288,7 +292,7 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
         OPT_BIND = 256, OPT_PORT, OPT_THREADS, OPT_DATA, OPT_TOKEN, OPT_MAX_RUNNING, OPT_HTTP_THREADS, OPT_MAX_BODY,
         OPT_MAX_PIXELS, OPT_MAX_RES, OPT_MAX_SPP, OPT_MAX_TRIS, OPT_MAX_SHAPES, OPT_CKPT, OPT_CORS, OPT_BUILTIN, OPT_HELP,
         OPT_TOKEN_FILE, OPT_ASSETS, OPT_MAX_ASSET_BYTES, OPT_MAX_JOBS, OPT_CLIENT_TIMEOUT, OPT_MAX_CLIENT_CONNS,
-        OPT_LOG_FORMAT, OPT_LOG_LEVEL, OPT_MAX_WORK, OPT_MAX_SUBS, OPT_MAX_JOB_SUBS, OPT_ALLOWED_HOSTS
+        OPT_LOG_FORMAT, OPT_LOG_LEVEL, OPT_MAX_WORK, OPT_MAX_SUBS, OPT_MAX_JOB_SUBS, OPT_ALLOWED_HOSTS, OPT_DISPLAY, OPT_ALLOW_JOB_DISPLAY
     };
     static const struct option opts[] = {
         {"bind", required_argument, NULL, OPT_BIND},
@@ -317,6 +321,8 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
         {"checkpoint-interval", required_argument, NULL, OPT_CKPT},
         {"cors-origin", required_argument, NULL, OPT_CORS},
         {"queue-builtin", no_argument, NULL, OPT_BUILTIN},
+        {"display-server", required_argument, NULL, OPT_DISPLAY},
+        {"allow-job-display-server", no_argument, NULL, OPT_ALLOW_JOB_DISPLAY},
         {"log-format", required_argument, NULL, OPT_LOG_FORMAT},
         {"log-level", required_argument, NULL, OPT_LOG_LEVEL},
         {"help", no_argument, NULL, OPT_HELP},
@@ -443,6 +449,13 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
             break;
         }
         case OPT_BUILTIN: cfg->queue_builtin = true; break;
+        case OPT_DISPLAY: {
+            ts_error derr = {0};
+            if (srv_display_parse_address(optarg, NULL, NULL, &derr)) return usage_error("--display-server: %s", derr.message);
+            cfg->display_server = optarg;
+            break;
+        }
+        case OPT_ALLOW_JOB_DISPLAY: cfg->allow_job_display_server = true; break;
         case OPT_LOG_FORMAT:
             if (!srv_log_parse_format(optarg, &cfg->log_format))
                 return usage_error("--log-format: expected text or json, got '%s'", optarg);

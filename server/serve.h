@@ -43,6 +43,8 @@ typedef struct srv_config {
     double checkpoint_interval_s;
     ts_scene_limits limits;      /* resolution, spp, scene size; max_file_bytes: --max-asset-bytes */
     bool queue_builtin;          /* queue the Cornell box at start (make run) */
+    const char *display_server;  /* --display-server HOST:PORT: every job streams to tev there; NULL = none */
+    bool allow_job_display_server; /* --allow-job-display-server: a job's job.display_server may name any address */
     srv_log_format log_format;   /* --log-format text|json */
     srv_log_level log_level;     /* --log-level: info (job events) by default, debug adds requests */
 } srv_config;

@@ -9,7 +9,11 @@
  * viewer drops the connection mid-render and comes back (the stream resumes on a new
  * connection, whose image alone is complete); no viewer at all, and a viewer that never
  * reads (the render finishes with the same pixels, bit for bit, as without a display, and
- * destroying the display does not hang); and the HOST:PORT syntax. */
+ * destroying the display does not hang); the HOST:PORT syntax; and through the binary:
+ * `tessera render --display-server` (the image equals its -o EXR; unreachable: the same
+ * pixels, exit 0), `tessera serve --display-server` (every job, equal to image.exr) and the
+ * job.display_server policy (403 unless the server's own address or
+ * --allow-job-display-server; 400 for bad syntax). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -24,11 +28,15 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <signal.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
+#include "cli_support.h"
 #include "display.h"
+#include "server_harness.h"
 
 static double now_s(void)
 {
@@ -49,6 +57,7 @@ typedef struct viewer {
     pthread_mutex_t mu;
     bool stop;
     int connections, creates, updates, updates_this_connection;
+    int eofs;           /* connections the display closed (it finished or was destroyed) */
     char name[SRV_DISPLAY_NAME_MAX];
     int w, h;
     float *img;          /* w·h·4 of the current connection's image, planar per channel */
@@ -243,7 +252,13 @@ static void *viewer_thread(void *arg)
             close(fd);
             break;
         }
-        if (!serve(v, fd, budget)) {
+        bool whole = serve(v, fd, budget);
+        if (whole) {
+            pthread_mutex_lock(&v->mu);
+            v->eofs++;
+            pthread_mutex_unlock(&v->mu);
+        }
+        if (!whole) {
             /* A viewer that quits mid-stream and is started again a little later. */
             close(fd);
             close(v->lfd);
@@ -316,8 +331,8 @@ static ts_sched_job *render_window(ts_scheduler *s, srv_display *d, ts_integrato
     done_wait w = {PTHREAD_MUTEX_INITIALIZER, PTHREAD_COND_INITIALIZER, false, d};
     ts_sched_job_desc desc = {0};
     desc.scene = scene;
-    desc.integrator = integ;
-    desc.spp = spp;
+    desc.settings.integrator = integ;
+    desc.settings.spp = spp;
     desc.callbacks = (ts_job_callbacks){on_tile, NULL, on_done, &w};
     ts_sched_job *j = ts_scheduler_submit(s, &desc, &err);
     assert_non_null(j);
@@ -425,7 +440,10 @@ static void test_reconnect(void **state)
     assert_non_null(d);
     ts_scheduler *s = ts_scheduler_create(2, 1, &err);
     ts_sched_job *j = render(s, d, TS_INTEGRATOR_PATH, 64);
-    assert_true(srv_display_flush(d, 20));
+    /* The viewer may be between its two lives now: flush gives up at once then; retry. */
+    double until = now_s() + 20;
+    while (!srv_display_flush(d, 1) && now_s() < until) poll(NULL, 0, 50);
+    assert_true(srv_display_flush(d, 1));
     srv_display_stats st;
     srv_display_get_stats(d, &st);
     srv_display_destroy(d);
@@ -512,6 +530,183 @@ static void test_stalled_viewer(void **state)
     viewer_free(&v);
 }
 
+/* ---------------------------------------------------------------- through the binary */
+
+/* Waits until the display closed n connections (it has sent all it will). */
+static void wait_eofs(viewer *v, int n)
+{
+    double until = now_s() + 20;
+    for (;;) {
+        pthread_mutex_lock(&v->mu);
+        int e = v->eofs;
+        pthread_mutex_unlock(&v->mu);
+        if (e >= n) return;
+        if (now_s() > until) fail_msg("the display closed %d connections in 20 s, expected %d", e, n);
+        poll(NULL, 0, 20);
+    }
+}
+
+static void read_exr_file(const char *path, ts_image *out)
+{
+    ts_error err = {0};
+    if (ts_exr_read(path, out, &err)) fail_msg("%s: %s", path, err.message);
+}
+
+/* The test scene with "job": {"display_server": address} (malloc'd). */
+static char *scene_with_display(const char *name, const char *address)
+{
+    char *base = ts_ao_scene(name, 80, 48, 8); /* 3×2 tiles, the last column partial */
+    char *s = malloc(strlen(base) + 128);
+    assert_non_null(s);
+    sprintf(s, "{\"job\":{\"display_server\":\"%s\"},%s", address, base + 1);
+    free(base);
+    return s;
+}
+
+/* tessera render --display-server: the viewer gets the image the -o EXR holds. And with
+ * nothing listening, the same pixels and exit 0 with a note. */
+static void test_cli(void **state)
+{
+    (void)state;
+    viewer v = {0};
+    viewer_start(&v);
+    char addr[64], dir[] = "/tmp/tessera-display-XXXXXX", scene[128], out[128], out2[128], log[128];
+    snprintf(addr, sizeof addr, "127.0.0.1:%d", v.port);
+    assert_non_null(mkdtemp(dir));
+    snprintf(scene, sizeof scene, "%s/scene.json", dir);
+    snprintf(out, sizeof out, "%s/out.exr", dir);
+    snprintf(out2, sizeof out2, "%s/unreached.exr", dir);
+    snprintf(log, sizeof log, "%s/log", dir);
+    char *text = ts_ao_scene("cli-stream", 80, 48, 8);
+    cli_write_file(scene, text);
+    free(text);
+    const char *args[] = {"render", scene, "--threads", "2", "-o", out, "--display-server", addr, NULL};
+    assert_int_equal(cli_run(log, args, NULL), 0);
+    wait_eofs(&v, 1);
+    viewer_stop(&v);
+    ts_image exr;
+    read_exr_file(out, &exr);
+    assert_int_equal(v.creates, 1);
+    assert_string_equal(v.name, "cli-stream");
+    assert_matches(&v, &exr);
+
+    int fd = listen_on(0), port = port_of(fd);
+    close(fd);
+    snprintf(addr, sizeof addr, "127.0.0.1:%d", port);
+    const char *args2[] = {"render", scene, "--threads", "2", "-o", out2, "--display-server", addr, NULL};
+    assert_int_equal(cli_run(log, args2, NULL), 0);
+    assert_non_null(strstr(cli_read_log(log), "not reachable"));
+    ts_image again;
+    read_exr_file(out2, &again);
+    assert_memory_equal(exr.data, again.data, sizeof(float) * (size_t)exr.width * exr.height * exr.n_channels);
+    const char *bad[] = {"render", scene, "--display-server", "no-port", NULL};
+    assert_int_equal(cli_run(log, bad, NULL), 2);
+    assert_non_null(strstr(cli_read_log(log), "--display-server"));
+    ts_image_fini(&exr);
+    ts_image_fini(&again);
+    viewer_free(&v);
+    unlink(scene), unlink(out), unlink(out2), unlink(log), rmdir(dir);
+}
+
+static long post(const test_server *srv, const char *scene, char *message, size_t n)
+{
+    http_resp r;
+    ts_http(srv, "POST", "/api/v1/jobs", scene, strlen(scene), NULL, &r);
+    long status = r.status;
+    snprintf(message, n, "%s", r.body ? r.body : "");
+    ts_http_free(&r);
+    return status;
+}
+
+/* tessera serve --display-server: every job streams there; image.exr matches. A job's own
+ * job.display_server is refused unless it is that address. */
+static void test_serve(void **state)
+{
+    (void)state;
+    viewer v = {0};
+    viewer_start(&v);
+    char addr[64], other[64], msg[1024];
+    snprintf(addr, sizeof addr, "127.0.0.1:%d", v.port);
+    int fd = listen_on(0);
+    snprintf(other, sizeof other, "127.0.0.1:%d", port_of(fd));
+    close(fd);
+    test_server srv;
+    const char *args[] = {"--threads", "2", "--display-server", addr, NULL};
+    ts_server_start(&srv, args);
+    char *text = ts_ao_scene("served", 80, 48, 8), id[64];
+    ts_submit(&srv, text, id, sizeof id);
+    free(text);
+    cJSON *st = ts_wait_done(&srv, id, 30);
+    cJSON_Delete(st);
+    wait_eofs(&v, 1);
+    char path[128];
+    snprintf(path, sizeof path, "/api/v1/jobs/%s/image.exr", id);
+    http_resp r;
+    ts_http(&srv, "GET", path, NULL, 0, NULL, &r);
+    assert_int_equal(r.status, 200);
+    ts_image exr;
+    ts_error err = {0};
+    assert_int_equal(ts_exr_read_memory((const unsigned char *)r.body, r.len, &exr, &err), TS_OK);
+    ts_http_free(&r);
+    pthread_mutex_lock(&v.mu);
+    char want[128];
+    snprintf(want, sizeof want, "served (%s)", id);
+    assert_string_equal(v.name, want);
+    assert_matches(&v, &exr);
+    pthread_mutex_unlock(&v.mu);
+    ts_image_fini(&exr);
+
+    /* The server's own address is fine in a job; another is not (403); bad syntax is 400. */
+    text = scene_with_display("same", addr);
+    assert_int_equal(post(&srv, text, msg, sizeof msg), 201);
+    free(text);
+    text = scene_with_display("elsewhere", other);
+    assert_int_equal(post(&srv, text, msg, sizeof msg), 403);
+    assert_non_null(strstr(msg, "job.display_server: this server does not let a job choose"));
+    free(text);
+    text = scene_with_display("bad", "no port");
+    assert_int_equal(post(&srv, text, msg, sizeof msg), 400);
+    assert_non_null(strstr(msg, "job.display_server:"));
+    free(text);
+    ts_server_stop(&srv, SIGTERM);
+    viewer_stop(&v);
+    viewer_free(&v);
+
+    /* No display options: every job.display_server is refused. */
+    const char *plain[] = {"--threads", "1", NULL};
+    ts_server_start(&srv, plain);
+    text = scene_with_display("refused", "127.0.0.1:14158");
+    assert_int_equal(post(&srv, text, msg, sizeof msg), 403);
+    free(text);
+    ts_server_stop(&srv, SIGTERM);
+
+    /* --allow-job-display-server: a job streams where it says. */
+    viewer w = {0};
+    viewer_start(&w);
+    snprintf(addr, sizeof addr, "127.0.0.1:%d", w.port);
+    const char *allow[] = {"--threads", "2", "--allow-job-display-server", NULL};
+    ts_server_start(&srv, allow);
+    text = scene_with_display("chosen", addr);
+    ts_submit(&srv, text, id, sizeof id);
+    free(text);
+    st = ts_wait_done(&srv, id, 30);
+    cJSON_Delete(st);
+    wait_eofs(&w, 1);
+    pthread_mutex_lock(&w.mu);
+    assert_int_equal(w.creates, 1);
+    assert_true(w.updates >= 6);
+    assert_string_equal(w.problem, "");
+    pthread_mutex_unlock(&w.mu);
+    ts_server_stop(&srv, SIGTERM);
+    viewer_stop(&w);
+    viewer_free(&w);
+
+    const char *badarg[] = {"serve", "--display-server", "[::1]", NULL};
+    char log[] = "/tmp/tessera-display-serve.log";
+    assert_int_equal(cli_run(log, badarg, NULL), 2);
+    unlink(log);
+}
+
 static void test_address(void **state)
 {
     (void)state;
@@ -547,7 +742,8 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_address),       cmocka_unit_test(test_stream_exact), cmocka_unit_test(test_reconnect),
-        cmocka_unit_test(test_unreachable),   cmocka_unit_test(test_stalled_viewer),
+        cmocka_unit_test(test_unreachable),   cmocka_unit_test(test_stalled_viewer), cmocka_unit_test(test_cli),
+        cmocka_unit_test(test_serve),
     };
     if (getenv("TS_TEST_FILTER")) cmocka_set_test_filter(getenv("TS_TEST_FILTER"));
     return cmocka_run_group_tests(tests, NULL, NULL);

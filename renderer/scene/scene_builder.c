@@ -315,8 +315,12 @@ ts_status ts_scene_builder_set_job(ts_scene_builder *b, const ts_job_desc *job, 
     if (!(job->target_error >= 0 && isfinite(job->target_error)))
         return ts_error_set(err, TS_ERR_INVALID, "job.target_error: expected a finite number ≥ 0, got %g",
                             job->target_error);
+    if (job->display_server && (!job->display_server[0] || strlen(job->display_server) > 255))
+        return ts_error_set(err, TS_ERR_INVALID, "job.display_server: expected HOST:PORT of 1 to 255 characters");
     ts_job_desc j = *job;
     if (job->name && !(j.name = ts_arena_strdup(&b->s->arena, job->name))) return nomem(err, "job.name");
+    if (job->display_server && !(j.display_server = ts_arena_strdup(&b->s->arena, job->display_server)))
+        return nomem(err, "job.display_server");
     b->s->job = j;
     return TS_OK;
 }
