@@ -1,7 +1,15 @@
 /* display.c — tev display-server streaming (display.h has the design note and the format).
  *
- * State: everything below `mu` in srv_display is guarded by it; the socket itself is used
- * only by the display thread (destroy shuts it down, under mu, to interrupt a send). */
+ * State: the fields marked "guarded" are under `mu`; the socket itself is used only by the
+ * display thread (destroy shuts it down, under mu, to interrupt a send). The tile queue is
+ * lock-free, so a worker's on_tile never waits for the display thread (on a loaded machine
+ * waiting for a mutex means sleeping, and a woken thread may wait a time slice for a CPU):
+ * per tile a `pending` flag (set by on_tile, cleared by the thread before it reads the tile's
+ * snapshot, so a later state sets it again) and a stamp ordering tiles by their last
+ * change; `queued` counts set flags. The thread takes every pending tile in stamp order
+ * (the order they finished). It says it is going to sleep in `idle`; a worker that finds it
+ * so takes mu to signal it (seq_cst on both sides: either the worker sees idle, or the
+ * thread sees the flag before sleeping). */
 #define _GNU_SOURCE
 #include "display.h"
 
@@ -14,6 +22,7 @@
 #include <poll.h>
 #include <pthread.h>
 #include <sched.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -40,16 +49,21 @@ struct srv_display {
     /* guarded by mu */
     bool stop;
     int fd;                  /* -1 when not connected (written by the thread only) */
-    bool sending;            /* the thread is sending a tile it took off the queue */
-    bool idle;               /* the thread waits for tiles: the next tile wakes it */
+    bool sending;            /* the thread is sending tiles it took off the queue */
     bool ended;              /* the thread has returned */
     bool finishing;          /* srv_display_finish: end once the queue is sent (or now, unconnected) */
+    srv_display_stats stats;
+    /* set once under mu by the first srv_display_tile, then immutable; published by `ready` */
     ts_sched_job *job;       /* the display's job (a reference), NULL until the first tile */
     int nx, ny, full_w, full_h, x0, y0, w, h;
-    int *queue;              /* ring of tile indices, capacity nx·ny */
-    bool *queued;            /* per tile: in the ring */
-    int head, count;
-    srv_display_stats stats;
+    atomic_uchar *pending;   /* per tile: changed since the thread last took it */
+    atomic_uint_fast64_t *stamp; /* per tile: when it was last marked pending */
+    int *order;              /* the thread's scratch: pending tiles in stamp order */
+    atomic_bool ready;
+    /* lock-free */
+    atomic_int queued;       /* pending flags set (transiently −1 while a worker is between steps) */
+    atomic_uint_fast64_t seq;
+    atomic_bool idle;        /* the thread sleeps until a tile arrives */
 };
 
 static double now_s(void)
@@ -280,15 +294,27 @@ static bool peer_closed(int fd)
     return r == 0 || (r < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR);
 }
 
-/* mu held. Queues every tile (after a new connection: the viewer has none of them). */
+/* Marks tile i pending (any thread); true when it was not. */
+static bool mark(srv_display *d, int i)
+{
+    if (atomic_exchange(&d->pending[i], 1)) return false;
+    atomic_store_explicit(&d->stamp[i], atomic_fetch_add(&d->seq, 1), memory_order_relaxed);
+    atomic_fetch_add(&d->queued, 1);
+    return true;
+}
+
+/* Marks every tile (after a new connection: the viewer has none of them). */
 static void queue_all(srv_display *d)
 {
-    int n = d->nx * d->ny;
-    for (int i = 0; i < n; i++)
-        if (!d->queued[i]) {
-            d->queue[(d->head + d->count++) % n] = i;
-            d->queued[i] = true;
-        }
+    for (int i = 0; i < d->nx * d->ny; i++) mark(d, i);
+}
+
+static int by_stamp(const void *a, const void *b, void *arg)
+{
+    const srv_display *d = arg;
+    uint_fast64_t x = atomic_load_explicit(&d->stamp[*(const int *)a], memory_order_relaxed);
+    uint_fast64_t y = atomic_load_explicit(&d->stamp[*(const int *)b], memory_order_relaxed);
+    return (x > y) - (x < y);
 }
 
 static void disconnect(srv_display *d)
@@ -314,7 +340,7 @@ static void *display_thread(void *arg)
     pthread_setschedparam(pthread_self(), SCHED_BATCH, &sp);
     pthread_mutex_lock(&d->mu);
     while (!d->stop) {
-        if (d->finishing && (d->fd < 0 || (created && d->count == 0))) break;
+        if (d->finishing && (d->fd < 0 || (created && atomic_load(&d->queued) <= 0))) break;
         if (d->fd < 0) {
             double wait = next_attempt - now_s();
             if (wait > 0 || !d->job) { /* nothing to show yet, or backing off */
@@ -358,7 +384,7 @@ static void *display_thread(void *arg)
             created = true;
             continue;
         }
-        if (d->count == 0) {
+        if (atomic_load(&d->queued) <= 0) {
             pthread_cond_broadcast(&d->idle_cv);
             if (!rested) {
                 /* Let tiles gather for a moment: the workers then wake this thread at most
@@ -368,11 +394,15 @@ static void *display_thread(void *arg)
                 rested = true;
                 continue;
             }
-            d->idle = true;
+            atomic_store(&d->idle, true);
+            if (atomic_load(&d->queued) > 0) { /* a tile came meanwhile */
+                atomic_store(&d->idle, false);
+                continue;
+            }
             struct timespec t = deadline_in(IDLE_CHECK_S);
             int r = pthread_cond_timedwait(&d->cv, &d->mu, &t);
-            d->idle = false;
-            if (r == ETIMEDOUT && d->count == 0 && peer_closed(fd)) {
+            atomic_store(&d->idle, false);
+            if (r == ETIMEDOUT && atomic_load(&d->queued) <= 0 && peer_closed(fd)) {
                 pthread_mutex_unlock(&d->mu);
                 disconnect(d);
                 pthread_mutex_lock(&d->mu);
@@ -380,29 +410,30 @@ static void *display_thread(void *arg)
             continue;
         }
         rested = false;
-        int n = d->nx * d->ny, i = d->queue[d->head];
-        d->head = (d->head + 1) % n;
-        d->count--;
-        d->queued[i] = false;
         d->sending = true;
-        int tx = i % d->nx, ty = i / d->nx;
         pthread_mutex_unlock(&d->mu);
-        ts_tile_snapshot *t = ts_sched_job_tile(d->job, tx, ty);
-        bool ok = true, sent = false;
-        if (t) {
-            ok = encode_tile(&b, d->name, t, d->full_w, d->full_h, t->x - d->x0, t->y - d->y0);
-            ts_tile_snapshot_release(t);
+        int n = 0;
+        for (int i = 0; i < d->nx * d->ny; i++)
+            if (atomic_load(&d->pending[i])) d->order[n++] = i;
+        qsort_r(d->order, (size_t)n, sizeof *d->order, by_stamp, d);
+        bool ok = true;
+        uint64_t sent = 0, bytes = 0;
+        for (int k = 0; k < n && ok; k++) {
+            int i = d->order[k];
+            if (!atomic_exchange(&d->pending[i], 0)) continue;
+            atomic_fetch_sub(&d->queued, 1);
+            ts_tile_snapshot *t = ts_sched_job_tile(d->job, i % d->nx, i / d->nx);
+            if (!t) continue; /* not rendered yet */
             /* An encoding failure (out of memory) skips this state of the tile only. */
-            if (ok) ok = sent = send_all(fd, b.p, b.n);
-            else ok = true;
+            bool encoded = encode_tile(&b, d->name, t, d->full_w, d->full_h, t->x - d->x0, t->y - d->y0);
+            ts_tile_snapshot_release(t);
+            if (encoded && (ok = send_all(fd, b.p, b.n))) sent++, bytes += b.n;
         }
         if (!ok) disconnect(d); /* the next connection re-sends every tile */
         pthread_mutex_lock(&d->mu);
         d->sending = false;
-        if (sent) {
-            d->stats.tiles_sent++;
-            d->stats.bytes_sent += b.n;
-        }
+        d->stats.tiles_sent += sent;
+        d->stats.bytes_sent += bytes;
         if (!ok) next_attempt = now_s() + backoff;
     }
     int fd = d->fd;
@@ -448,38 +479,44 @@ srv_display *srv_display_create(const char *address, const char *name, ts_error 
     return d;
 }
 
-void srv_display_tile(srv_display *d, ts_sched_job *job, const ts_tile_event *ev)
+/* The first tile: the job's geometry and the queue (once; under mu). */
+static void first_tile(srv_display *d, ts_sched_job *job)
 {
     pthread_mutex_lock(&d->mu);
-    if (!d->job && !d->stop) {
+    if (!atomic_load(&d->ready) && !d->stop) {
         int nx, ny;
         ts_sched_job_grid(job, &nx, &ny);
-        d->queue = malloc((size_t)nx * ny * sizeof *d->queue);
-        d->queued = calloc((size_t)nx * ny, sizeof *d->queued);
-        if (d->queue && d->queued && nx > 0 && ny > 0) {
+        size_t n = nx > 0 && ny > 0 ? (size_t)nx * (size_t)ny : 0;
+        d->pending = n ? calloc(n, sizeof *d->pending) : NULL;
+        d->stamp = n ? calloc(n, sizeof *d->stamp) : NULL;
+        d->order = n ? malloc(n * sizeof *d->order) : NULL;
+        if (d->pending && d->stamp && d->order) {
             ts_sched_job_retain(job);
             d->job = job;
             d->nx = nx, d->ny = ny;
             ts_sched_job_window(job, &d->full_w, &d->full_h, &d->x0, &d->y0, &d->w, &d->h);
+            atomic_store(&d->ready, true);
         } else { /* out of memory: this display shows nothing (rendering is unaffected) */
-            free(d->queue), free(d->queued);
-            d->queue = NULL, d->queued = NULL;
             d->stop = true;
         }
         pthread_cond_signal(&d->cv);
     }
-    bool wake = false;
-    if (d->job == job && ev->tx >= 0 && ev->tx < d->nx && ev->ty >= 0 && ev->ty < d->ny) {
-        int i = ev->ty * d->nx + ev->tx, n = d->nx * d->ny;
-        if (!d->queued[i]) {
-            d->queue[(d->head + d->count++) % n] = i;
-            d->queued[i] = true;
-            wake = d->idle && d->fd >= 0;
-            if (wake) d->idle = false; /* one signal is enough */
-        }
-    }
     pthread_mutex_unlock(&d->mu);
-    if (wake) pthread_cond_signal(&d->cv);
+}
+
+void srv_display_tile(srv_display *d, ts_sched_job *job, const ts_tile_event *ev)
+{
+    if (!atomic_load(&d->ready)) {
+        first_tile(d, job);
+        if (!atomic_load(&d->ready)) return;
+    }
+    if (d->job != job || ev->tx < 0 || ev->tx >= d->nx || ev->ty < 0 || ev->ty >= d->ny) return;
+    if (!mark(d, ev->ty * d->nx + ev->tx)) return;
+    if (atomic_load(&d->idle) && atomic_exchange(&d->idle, false)) { /* one signal is enough */
+        pthread_mutex_lock(&d->mu);
+        pthread_cond_signal(&d->cv);
+        pthread_mutex_unlock(&d->mu);
+    }
 }
 
 void srv_display_on_tile(void *user, ts_sched_job *job, const ts_tile_event *ev) { srv_display_tile(user, job, ev); }
@@ -508,7 +545,8 @@ bool srv_display_flush(srv_display *d, double timeout_s)
     uint64_t failed0 = d->stats.failed_connects;
     /* The fd stays open while mu is held and fd >= 0 (disconnect clears it first). A viewer
      * that closed the connection has received nothing of late: not done. */
-    while (!(done = d->job && d->fd >= 0 && d->count == 0 && !d->sending && !peer_closed(d->fd)) && !d->stop && !d->ended) {
+    while (!(done = d->job && d->fd >= 0 && atomic_load(&d->queued) <= 0 && !d->sending && !peer_closed(d->fd)) && !d->stop &&
+           !d->ended) {
         /* Not connected and known unreachable: give up now rather than wait for a retry. */
         if (d->fd < 0 && d->job && (failed0 > 0 || d->stats.failed_connects > failed0)) break;
         if (pthread_cond_timedwait(&d->idle_cv, &d->mu, &t) == ETIMEDOUT) break;
@@ -535,8 +573,9 @@ void srv_display_destroy(srv_display *d)
     pthread_mutex_unlock(&d->mu);
     pthread_join(d->thread, NULL);
     ts_sched_job_release(d->job);
-    free(d->queue);
-    free(d->queued);
+    free(d->pending);
+    free(d->stamp);
+    free(d->order);
     pthread_cond_destroy(&d->cv);
     pthread_cond_destroy(&d->idle_cv);
     pthread_mutex_destroy(&d->mu);

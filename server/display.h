@@ -24,9 +24,9 @@
  * RMS of the channel over the image is the job's error estimate. Pixels sent are exactly
  * the floats of the STATS EXR of the same film (ts_film_to_image), planar per channel.
  *
- * Never slowing the render: on_tile (a worker thread) only records that a tile changed,
- * under a mutex held for that alone, in a queue of tile indices with one place per tile
- * (a tile already queued is not queued again), so the queue is bounded and never full.
+ * Never slowing the render: on_tile (a worker thread) only records that a tile changed, in
+ * a lock-free queue with one place per tile (a flag and a stamp: a tile already queued is
+ * not queued again), so the queue is bounded, never full, and a worker never waits on it.
  * The display's own thread takes tiles from it, reads the tile's latest immutable snapshot
  * (ts_sched_job_tile), encodes and sends it; once the queue is empty it rests 20 ms before
  * waiting for more, so workers wake it at most once per rest rather than once per tile, and
@@ -80,8 +80,9 @@ ts_status srv_display_parse_address(const char *address, char *host, char *port,
 srv_display *srv_display_create(const char *address, const char *name, ts_error *err);
 
 /* Records that a tile of `job` changed (call from the job's on_tile). The first job seen is
- * the display's (it takes a reference to it); tiles of other jobs are ignored. Quick: a
- * mutex held for a few stores, no I/O, no allocation after the first call. */
+ * the display's (it takes a reference to it); tiles of other jobs are ignored. Quick: a few
+ * atomic operations, no lock (but a signal when the display's thread sleeps), no I/O, no
+ * allocation after the first call. */
 void srv_display_tile(srv_display *d, ts_sched_job *job, const ts_tile_event *ev);
 /* The same with the signature of ts_job_callbacks.on_tile (user = the display). */
 void srv_display_on_tile(void *user, ts_sched_job *job, const ts_tile_event *ev);
