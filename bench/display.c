@@ -76,6 +76,7 @@ typedef struct run {
     bool done;
     srv_display *d;
     atomic_ullong callback_ns;
+    atomic_ullong max_ns; /* the longest single call */
 } run;
 
 static void on_tile(void *user, ts_sched_job *j, const ts_tile_event *ev)
@@ -83,7 +84,9 @@ static void on_tile(void *user, ts_sched_job *j, const ts_tile_event *ev)
     run *r = user;
     double t = now_s();
     if (r->d) srv_display_tile(r->d, j, ev); /* without a display: the timing alone, as a baseline */
-    atomic_fetch_add(&r->callback_ns, (unsigned long long)((now_s() - t) * 1e9));
+    unsigned long long ns = (unsigned long long)((now_s() - t) * 1e9), m = atomic_load(&r->max_ns);
+    atomic_fetch_add(&r->callback_ns, ns);
+    while (ns > m && !atomic_compare_exchange_weak(&r->max_ns, &m, ns)) {}
 }
 static void on_done(void *user, ts_sched_job *j, const ts_job_progress *p)
 {
@@ -107,7 +110,7 @@ static double render(ts_scheduler *s, const char *address, uint32_t spp, double 
         fprintf(stderr, "bench_display: %s\n", err.message);
         exit(1);
     }
-    run r = {PTHREAD_MUTEX_INITIALIZER, PTHREAD_COND_INITIALIZER, false, NULL, 0};
+    run r = {PTHREAD_MUTEX_INITIALIZER, PTHREAD_COND_INITIALIZER, false, NULL, 0, 0};
     if (address && !(r.d = srv_display_create(address, "bench", &err))) {
         fprintf(stderr, "bench_display: %s\n", err.message);
         exit(1);
@@ -135,6 +138,9 @@ static double render(ts_scheduler *s, const char *address, uint32_t spp, double 
     *cpu = cpu_s(CLOCK_PROCESS_CPUTIME_ID) - cpu0 - ((double)atomic_load(&g_viewer_cpu_ns) * 1e-9 - viewer0);
     ts_sched_job_release(j);
     *cb_s = (double)atomic_load(&r.callback_ns) * 1e-9;
+    if (getenv("BENCH_DISPLAY_VERBOSE"))
+        fprintf(stderr, "  %s: on_tile total %.3f ms, longest %.3f ms\n", address ? "with" : "without",
+                (double)atomic_load(&r.callback_ns) * 1e-6, (double)atomic_load(&r.max_ns) * 1e-6);
     return t;
 }
 

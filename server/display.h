@@ -28,10 +28,10 @@
  * a lock-free queue with one place per tile (a flag and a stamp: a tile already queued is
  * not queued again), so the queue is bounded, never full, and a worker never waits on it.
  * The display's own thread takes tiles from it, reads the tile's latest immutable snapshot
- * (ts_sched_job_tile), encodes and sends it; once the queue is empty it rests 20 ms before
- * waiting for more, so workers wake it at most once per rest rather than once per tile, and
- * it runs as SCHED_BATCH, so its wake-ups never preempt a worker (on a loaded machine a
- * preempted worker can lose a whole time slice). A slow viewer therefore sees fewer
+ * (ts_sched_job_tile), encodes and sends it. Workers never wake it (a wake-up is a system
+ * call that can cost a worker its CPU on a loaded machine): it looks at the queue every
+ * 20 ms while tiles come, every 0.2 s when none do, and runs as SCHED_BATCH, so its own
+ * wake-ups do not preempt workers either. A slow viewer therefore sees fewer
  * intermediate states, never stale final ones. Connecting, resolving the host, sending and
  * waiting all happen on that thread: a viewer that is down, slow or restarting costs the
  * workers nothing. On a failed connect or send the thread closes the socket and tries
@@ -81,8 +81,8 @@ srv_display *srv_display_create(const char *address, const char *name, ts_error 
 
 /* Records that a tile of `job` changed (call from the job's on_tile). The first job seen is
  * the display's (it takes a reference to it); tiles of other jobs are ignored. Quick: a few
- * atomic operations, no lock (but a signal when the display's thread sleeps), no I/O, no
- * allocation after the first call. */
+ * atomic operations, no lock, no system call, no allocation after the first call (which
+ * takes a mutex once). */
 void srv_display_tile(srv_display *d, ts_sched_job *job, const ts_tile_event *ev);
 /* The same with the signature of ts_job_callbacks.on_tile (user = the display). */
 void srv_display_on_tile(void *user, ts_sched_job *job, const ts_tile_event *ev);
@@ -94,7 +94,8 @@ void srv_display_on_tile(void *user, ts_sched_job *job, const ts_tile_event *ev)
 bool srv_display_flush(srv_display *d, double timeout_s);
 
 /* No more tiles will come (call from on_done): the thread sends what is queued if it is
- * connected, then ends without reconnecting; srv_display_destroy then returns at once.
+ * connected (or connects first, when it has not tried yet), then ends without reconnecting;
+ * srv_display_destroy then returns at once.
  * Quick, never blocks (may run on a render thread). */
 void srv_display_finish(srv_display *d);
 
