@@ -77,11 +77,18 @@ typedef struct run {
     srv_display *d;
     atomic_ullong callback_ns;
     atomic_ullong max_ns; /* the longest single call */
+    atomic_ullong worker_cpu_ns; /* workers' CPU time from their first to their last tile */
 } run;
 
 static void on_tile(void *user, ts_sched_job *j, const ts_tile_event *ev)
 {
     run *r = user;
+    /* The workers' own CPU time, summed between consecutive tiles of this run per thread. */
+    static _Thread_local const run *seen;
+    static _Thread_local double last_cpu;
+    double cpu = cpu_s(CLOCK_THREAD_CPUTIME_ID);
+    if (seen == r) atomic_fetch_add(&r->worker_cpu_ns, (unsigned long long)((cpu - last_cpu) * 1e9));
+    seen = r, last_cpu = cpu;
     double t = now_s();
     if (r->d) srv_display_tile(r->d, j, ev); /* without a display: the timing alone, as a baseline */
     unsigned long long ns = (unsigned long long)((now_s() - t) * 1e9), m = atomic_load(&r->max_ns);
@@ -110,7 +117,7 @@ static double render(ts_scheduler *s, const char *address, uint32_t spp, double 
         fprintf(stderr, "bench_display: %s\n", err.message);
         exit(1);
     }
-    run r = {PTHREAD_MUTEX_INITIALIZER, PTHREAD_COND_INITIALIZER, false, NULL, 0, 0};
+    run r = {PTHREAD_MUTEX_INITIALIZER, PTHREAD_COND_INITIALIZER, false, NULL, 0, 0, 0};
     if (address && !(r.d = srv_display_create(address, "bench", &err))) {
         fprintf(stderr, "bench_display: %s\n", err.message);
         exit(1);
@@ -132,6 +139,9 @@ static double render(ts_scheduler *s, const char *address, uint32_t spp, double 
     double t = now_s() - t0;
     if (r.d) {
         if (!srv_display_flush(r.d, 30)) fprintf(stderr, "bench_display: the display did not drain\n");
+        srv_display_stats st;
+        srv_display_get_stats(r.d, &st);
+        if (getenv("BENCH_DISPLAY_VERBOSE")) fprintf(stderr, "  display thread CPU %.3f s, %llu tiles\n", st.thread_cpu_s, (unsigned long long)st.tiles_sent);
         srv_display_destroy(r.d);
         while (atomic_load(&g_connections_done) == conns) poll(NULL, 0, 5); /* the viewer saw EOF */
     }
@@ -139,8 +149,9 @@ static double render(ts_scheduler *s, const char *address, uint32_t spp, double 
     ts_sched_job_release(j);
     *cb_s = (double)atomic_load(&r.callback_ns) * 1e-9;
     if (getenv("BENCH_DISPLAY_VERBOSE"))
-        fprintf(stderr, "  %s: on_tile total %.3f ms, longest %.3f ms\n", address ? "with" : "without",
-                (double)atomic_load(&r.callback_ns) * 1e-6, (double)atomic_load(&r.max_ns) * 1e-6);
+        fprintf(stderr, "  %s: on_tile total %.3f ms, longest %.3f ms; workers' CPU %.3f s, process %.3f s\n",
+                address ? "with" : "without", (double)atomic_load(&r.callback_ns) * 1e-6,
+                (double)atomic_load(&r.max_ns) * 1e-6, (double)atomic_load(&r.worker_cpu_ns) * 1e-9, *cpu);
     return t;
 }
 

@@ -41,6 +41,7 @@ const char *const srv_display_channel_names[SRV_DISPLAY_CHANNELS] = {"R", "G", "
 #define CONNECT_TIMEOUT_MS 2000
 #define IDLE_CHECK_S 0.2  /* how often an idle thread looks for a closed connection */
 #define FIRST_TILE_CHECK_S 0.05 /* how often a display without a job yet looks for one */
+#define DUTY 0.02         /* the display thread's CPU budget while a job renders: 2 % of one core */
 #define BATCH_S 0.02      /* the queue is looked at this often while tiles come (≤ 50 wake-ups/s) */
 #define SEND_TIMEOUT_S 10 /* a viewer that accepts nothing for this long is dropped */
 
@@ -56,6 +57,7 @@ struct srv_display {
     int fd;                  /* -1 when not connected (written by the thread only) */
     bool sending;            /* the thread is sending tiles it took off the queue */
     bool ended;              /* the thread has returned */
+    bool hurry;              /* a flush waits: no pacing rests */
     bool finishing;          /* srv_display_finish: end once the queue is sent (or now, unconnected) */
     srv_display_stats stats;
     /* set once under mu by the first srv_display_tile, then immutable; published by `ready` */
@@ -69,6 +71,13 @@ struct srv_display {
     atomic_int queued;       /* pending flags set (transiently −1 while a worker is between steps) */
     atomic_uint_fast64_t seq;
 };
+
+static double thread_cpu_s(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
 
 static double now_s(void)
 {
@@ -148,19 +157,21 @@ typedef struct buf {
     bool failed;
 } buf;
 
+/* Room for n more bytes; false (and b->failed) when memory runs out. */
+static bool reserve(buf *b, size_t n)
+{
+    if (b->failed) return false;
+    if (b->n + n <= b->cap) return true;
+    size_t cap = b->cap ? b->cap : 256;
+    while (cap < b->n + n) cap *= 2;
+    uint8_t *p = realloc(b->p, cap);
+    if (!p) return !(b->failed = true);
+    b->p = p, b->cap = cap;
+    return true;
+}
 static void put(buf *b, const void *src, size_t n)
 {
-    if (b->failed) return;
-    if (b->n + n > b->cap) {
-        size_t cap = b->cap ? b->cap : 256;
-        while (cap < b->n + n) cap *= 2;
-        uint8_t *p = realloc(b->p, cap);
-        if (!p) {
-            b->failed = true;
-            return;
-        }
-        b->p = p, b->cap = cap;
-    }
+    if (!reserve(b, n)) return;
     memcpy(b->p + b->n, src, n);
     b->n += n;
 }
@@ -173,13 +184,19 @@ static void put_le(buf *b, uint64_t v, int bytes)
 }
 static void put_i32(buf *b, int32_t v) { put_le(b, (uint32_t)v, 4); }
 static void put_i64(buf *b, int64_t v) { put_le(b, (uint64_t)v, 8); }
-static void put_f32(buf *b, float v)
-{
-    uint32_t u;
-    memcpy(&u, &v, 4);
-    put_le(b, u, 4);
-}
 static void put_str(buf *b, const char *s) { put(b, s, strlen(s) + 1); }
+/* n floats, src[0], src[stride], …, little-endian. */
+static void put_f32s(buf *b, const float *src, size_t n, size_t stride)
+{
+    if (!reserve(b, 4 * n)) return;
+    uint8_t *o = b->p + b->n;
+    for (size_t i = 0; i < n; i++, o += 4) {
+        uint32_t u;
+        memcpy(&u, &src[i * stride], 4);
+        o[0] = (uint8_t)u, o[1] = (uint8_t)(u >> 8), o[2] = (uint8_t)(u >> 16), o[3] = (uint8_t)(u >> 24);
+    }
+    b->n += 4 * n;
+}
 
 static void begin_packet(buf *b, srv_display_packet type)
 {
@@ -217,13 +234,12 @@ float srv_display_relative_error(const float rgb[3], const float var[3])
 /* UpdateImageV3 of one snapshot, at window coordinates (x, y), planar channels. */
 static bool encode_tile(buf *b, const char *name, const ts_tile_snapshot *t, int full_w, int full_h, int x, int y)
 {
+    /* The snapshot read in place as a film of its tile (it is immutable and only read), so
+     * the floats are those of the EXR encoder's ts_film_to_image, with no copy. */
+    ts_film view = {full_w, full_h, t->x, t->y, t->w, t->h, (ts_film_pixel *)t->pixels};
     ts_error err = {0};
-    ts_film *f = ts_tile_snapshot_film(t, full_w, full_h, &err);
-    if (!f) return false;
     ts_image img;
-    ts_status st = ts_film_to_image(f, TS_FILM_IMAGE_STATS, &img, &err);
-    ts_film_destroy(f);
-    if (st) return false;
+    if (ts_film_to_image(&view, TS_FILM_IMAGE_STATS, &img, &err)) return false;
     int64_t npx = (int64_t)t->w * t->h;
     begin_packet(b, SRV_DISPLAY_UPDATE_IMAGE_V3);
     put_u8(b, 0);
@@ -237,9 +253,10 @@ static bool encode_tile(buf *b, const char *name, const ts_tile_snapshot *t, int
     for (int c = 0; c < SRV_DISPLAY_CHANNELS; c++) put_i64(b, c * npx); /* offsets */
     for (int c = 0; c < SRV_DISPLAY_CHANNELS; c++) put_i64(b, 1);       /* strides */
     const int nc = img.n_channels;                                        /* R G B R.var G.var B.var count */
-    for (int c = 0; c < 3; c++)
-        for (int64_t i = 0; i < npx; i++) put_f32(b, img.data[i * nc + c]);
-    for (int64_t i = 0; i < npx; i++) put_f32(b, srv_display_relative_error(&img.data[i * nc], &img.data[i * nc + 3]));
+    for (int c = 0; c < 3; c++) put_f32s(b, img.data + c, (size_t)npx, (size_t)nc);
+    /* The error channel, computed into the image's count channel (not sent) in place. */
+    for (int64_t i = 0; i < npx; i++) img.data[i * nc + 6] = srv_display_relative_error(&img.data[i * nc], &img.data[i * nc + 3]);
+    put_f32s(b, img.data + 6, (size_t)npx, (size_t)nc);
     ts_image_fini(&img);
     return end_packet(b);
 }
@@ -339,6 +356,7 @@ static void *display_thread(void *arg)
     double backoff = BACKOFF_MIN_S, next_attempt = 0;
     bool created = false; /* CreateImage sent on this connection */
     double poll_s = BATCH_S; /* how long to wait before looking at the queue again */
+    double rest_until = 0;   /* pacing: no batch before this (now_s) */
     /* A batch thread is not let preempt a worker when it wakes up. */
     struct sched_param sp = {0};
     pthread_setschedparam(pthread_self(), SCHED_BATCH, &sp);
@@ -407,8 +425,18 @@ static void *display_thread(void *arg)
             continue;
         }
         poll_s = BATCH_S;
+        /* Pacing: this thread uses at most DUTY of one core while the job renders (its
+         * batches are followed by rests 1/DUTY as long as their CPU time); never once the
+         * job is finished or someone waits in flush. */
+        double wait = rest_until - now_s();
+        if (wait > 0 && !d->finishing && !d->hurry) {
+            struct timespec t = deadline_in(wait);
+            pthread_cond_timedwait(&d->cv, &d->mu, &t);
+            continue;
+        }
         d->sending = true;
         pthread_mutex_unlock(&d->mu);
+        double batch_start = now_s(), cpu_start = thread_cpu_s();
         int n = 0;
         for (int i = 0; i < d->nx * d->ny; i++)
             if (atomic_load(&d->pending[i])) d->order[n++] = i;
@@ -431,6 +459,8 @@ static void *display_thread(void *arg)
         d->sending = false;
         d->stats.tiles_sent += sent;
         d->stats.bytes_sent += bytes;
+        d->stats.thread_cpu_s = thread_cpu_s();
+        rest_until = batch_start + (d->stats.thread_cpu_s - cpu_start) / DUTY;
         if (!ok) next_attempt = now_s() + backoff;
     }
     int fd = d->fd;
@@ -535,6 +565,8 @@ bool srv_display_flush(srv_display *d, double timeout_s)
     pthread_mutex_lock(&d->mu);
     bool done;
     uint64_t failed0 = d->stats.failed_connects;
+    d->hurry = true;
+    pthread_cond_broadcast(&d->cv);
     /* The fd stays open while mu is held and fd >= 0 (disconnect clears it first). A viewer
      * that closed the connection has received nothing of late: not done. */
     while (!(done = d->job && d->fd >= 0 && atomic_load(&d->queued) <= 0 && !d->sending && !peer_closed(d->fd)) && !d->stop &&
@@ -543,6 +575,7 @@ bool srv_display_flush(srv_display *d, double timeout_s)
         if (d->fd < 0 && d->job && (failed0 > 0 || d->stats.failed_connects > failed0)) break;
         if (pthread_cond_timedwait(&d->idle_cv, &d->mu, &t) == ETIMEDOUT) break;
     }
+    d->hurry = false;
     if (!d->job && !d->stop && !d->ended) done = true; /* nothing was ever rendered: nothing to send */
     pthread_mutex_unlock(&d->mu);
     return done;

@@ -31,7 +31,12 @@
  * (ts_sched_job_tile), encodes and sends it. Workers never wake it (a wake-up is a system
  * call that can cost a worker its CPU on a loaded machine): it looks at the queue every
  * 20 ms while tiles come, every 0.2 s when none do, and runs as SCHED_BATCH, so its own
- * wake-ups do not preempt workers either. A slow viewer therefore sees fewer
+ * wake-ups do not preempt workers either. It paces itself to at most 2 % of one core while
+ * the job renders (after a batch taking c seconds of its CPU it rests until 50·c after the
+ * batch began; encoding and sending a 32×32 tile costs about 0.1 ms), so it can slow a
+ * render whose workers fill the machine by at most 2 %; early passes (1, 2 spp) then show
+ * up in steps rather than tile by tile on large images. Once the job is finished, or while
+ * a flush waits, it sends without rests. A slow viewer therefore sees fewer
  * intermediate states, never stale final ones. Connecting, resolving the host, sending and
  * waiting all happen on that thread: a viewer that is down, slow or restarting costs the
  * workers nothing. On a failed connect or send the thread closes the socket and tries
@@ -108,6 +113,7 @@ typedef struct srv_display_stats {
     uint64_t disconnects;     /* connections lost (send failed, peer closed) */
     uint64_t tiles_sent;      /* UpdateImage packets sent in full */
     uint64_t bytes_sent;
+    double thread_cpu_s;      /* CPU time of the display's thread so far (encoding, sending) */
 } srv_display_stats;
 void srv_display_get_stats(srv_display *d, srv_display_stats *out);
 
