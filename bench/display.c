@@ -10,8 +10,11 @@
  * then the medians. Wall time on a shared machine moves with other people's load, so it
  * also reports the process's CPU time per render (workers + the display's thread; the
  * viewer thread's own CPU time subtracted, as tev would be another process): on a machine
- * whose cores the workers fill, the display's extra CPU is what it takes from them. And
- * the time the workers spent inside the display's on_tile, as a fraction of worker time.
+ * whose cores the workers fill, the display's extra CPU is what it takes from them. Both
+ * are at the mercy of other processes; two figures are not: the display thread's own CPU
+ * time as a fraction of the process's (srv_display_stats.thread_cpu_s; the display paces
+ * itself to at most 2 % of one core), and the time the workers spent inside the display's
+ * on_tile as a fraction of worker time (an empty callback timed the same way beside it).
  * Exit status 0, 1 when rendering fails, 2 on usage errors. */
 #define _GNU_SOURCE
 #include <arpa/inet.h>
@@ -107,8 +110,11 @@ static void on_done(void *user, ts_sched_job *j, const ts_job_progress *p)
 
 /* Wall seconds of one render; *cb_s the time spent in the display's on_tile, *cpu the
  * process's CPU seconds from submit to the display's end, less the viewer thread's. */
+static double g_display_cpu; /* the last render's display thread CPU seconds */
+
 static double render(ts_scheduler *s, const char *address, uint32_t spp, double *cb_s, double *cpu)
 {
+    g_display_cpu = 0;
     int conns = atomic_load(&g_connections_done);
     double viewer0 = (double)atomic_load(&g_viewer_cpu_ns) * 1e-9, cpu0 = cpu_s(CLOCK_PROCESS_CPUTIME_ID);
     ts_error err = {0};
@@ -141,6 +147,7 @@ static double render(ts_scheduler *s, const char *address, uint32_t spp, double 
         if (!srv_display_flush(r.d, 30)) fprintf(stderr, "bench_display: the display did not drain\n");
         srv_display_stats st;
         srv_display_get_stats(r.d, &st);
+        g_display_cpu = st.thread_cpu_s;
         if (getenv("BENCH_DISPLAY_VERBOSE")) fprintf(stderr, "  display thread CPU %.3f s, %llu tiles\n", st.thread_cpu_s, (unsigned long long)st.tiles_sent);
         srv_display_destroy(r.d);
         while (atomic_load(&g_connections_done) == conns) poll(NULL, 0, 5); /* the viewer saw EOF */
@@ -205,37 +212,42 @@ int main(int argc, char **argv)
     double cb, cpu, warm = render(s, NULL, 1, &cb, &cpu); /* warm-up: page in the scene, caches */
     (void)warm;
     double *cpu_ratio = calloc((size_t)reps, sizeof *cpu_ratio);
-    double *cb_base = calloc((size_t)reps, sizeof *cb_base);
+    double *cb_base = calloc((size_t)reps, sizeof *cb_base), *disp_frac = calloc((size_t)reps, sizeof *disp_frac);
     double *with = calloc((size_t)reps, sizeof *with), *without = calloc((size_t)reps, sizeof *without);
     double *ratio = calloc((size_t)reps, sizeof *ratio), *cb_frac = calloc((size_t)reps, sizeof *cb_frac);
-    printf("pair,with_s,without_s,ratio,cpu_with_s,cpu_without_s,cpu_ratio,on_tile_fraction,empty_on_tile_fraction\n");
+    printf("pair,with_s,without_s,ratio,cpu_with_s,cpu_without_s,cpu_ratio,display_cpu_fraction,on_tile_fraction,"
+           "empty_on_tile_fraction\n");
     for (int r = 0; r < reps; r++) {
         double cb_with = 0, cb_none = 0, cpu_with = 0, cpu_none = 0;
         if (r % 2 == 0) {
             with[r] = render(s, address, spp, &cb_with, &cpu_with);
+            disp_frac[r] = g_display_cpu / cpu_with;
             without[r] = render(s, NULL, spp, &cb_none, &cpu_none);
         } else {
             without[r] = render(s, NULL, spp, &cb_none, &cpu_none);
             with[r] = render(s, address, spp, &cb_with, &cpu_with);
+            disp_frac[r] = g_display_cpu / cpu_with;
         }
         ratio[r] = with[r] / without[r];
         cpu_ratio[r] = cpu_with / cpu_none;
         cb_frac[r] = cb_with / (with[r] * threads);
         cb_base[r] = cb_none / (without[r] * threads);
-        printf("%d,%.3f,%.3f,%.4f,%.3f,%.3f,%.4f,%.2e,%.2e\n", r, with[r], without[r], ratio[r], cpu_with, cpu_none,
-               cpu_ratio[r], cb_frac[r], cb_base[r]);
+        printf("%d,%.3f,%.3f,%.4f,%.3f,%.3f,%.4f,%.4f,%.2e,%.2e\n", r, with[r], without[r], ratio[r], cpu_with, cpu_none,
+               cpu_ratio[r], disp_frac[r], cb_frac[r], cb_base[r]);
         fflush(stdout);
     }
     printf("# %d pairs, %u spp, %d threads, 512x512 path: median with %.3f s, without %.3f s, "
            "median wall ratio %.4f (%+.2f%%); median CPU ratio (renderer + display thread, viewer excluded) %.4f "
-           "(%+.2f%%); on_tile time %.2e of worker time (an empty callback timed alike: %.2e); %.1f MiB streamed\n",
+           "(%+.2f%%); the display thread's CPU %.2f%% of the process's; on_tile time %.2e of worker time (an "
+           "empty callback timed alike: %.2e); %.1f MiB streamed\n",
            reps, spp, threads, median(with, reps), median(without, reps), median(ratio, reps),
            100 * (median(ratio, reps) - 1), median(cpu_ratio, reps), 100 * (median(cpu_ratio, reps) - 1),
+           100 * median(disp_frac, reps),
            median(cb_frac, reps), median(cb_base, reps), (double)atomic_load(&g_bytes) / (1 << 20));
     atomic_store(&g_stop, true);
     pthread_join(vt, NULL);
     close(lfd);
     ts_scheduler_destroy(s);
-    free(with), free(without), free(ratio), free(cb_frac), free(cpu_ratio), free(cb_base);
+    free(with), free(without), free(ratio), free(cb_frac), free(cpu_ratio), free(cb_base), free(disp_frac);
     return 0;
 }

@@ -265,7 +265,9 @@ function paintRegion(x, y, w, h) {
 }
 const paintAll = () => { if (base) paintRegion(0, 0, base.w, base.h); };
 
-// get(r, c) -> {rgb: [3], vars: [3] | null, count: number | null}
+// Stores a w×h tile at (x, y) of the window: rgb(s, ch) gives sample s's colour channel ch;
+// vars ([R.var, G.var, B.var] planes) and count (a plane) may be null (a PNG tile). True
+// when the largest sample count grew (the count channel's scale changed).
 function storeTile(x, y, w, h, rgb, vars, count) {
   let grew = false;
   for (let r = 0; r < h; r++)
