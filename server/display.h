@@ -55,8 +55,8 @@
 
 #include "tessera.h"
 
-/* The longest HOST:PORT accepted (a DNS name is at most 253 characters). */
-#define SRV_DISPLAY_ADDRESS_MAX 260
+/* The longest HOST:PORT accepted: 255, the longest string a posted document may hold. */
+#define SRV_DISPLAY_ADDRESS_MAX 255
 #define SRV_DISPLAY_NAME_MAX 256
 
 /* tev's packet types (include/tev/Ipc.h). */

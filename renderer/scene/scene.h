@@ -55,7 +55,7 @@ typedef struct ts_job_desc {
     double time_limit_s;  /* 0 = none */
     double target_error;  /* 0 = none */
     /* "HOST:PORT" of a tev display server to stream the render to (job.display_server), or
-     * NULL: a string of 1–260 characters here; its syntax, and whether a server honours it,
+     * NULL: a string of 1–255 characters here; its syntax, and whether a server honours it,
      * are for the program rendering the scene (server/display.h, docs/security.md). */
     const char *display_server;
 } ts_job_desc;
