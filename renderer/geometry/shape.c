@@ -36,6 +36,7 @@
 
 #include <float.h>
 #include <math.h>
+#include <string.h>
 
 /* Double-precision round-off slack of the object-space solve (32 unit roundoffs). */
 #define DBL_SLACK 0x1p-48
@@ -55,11 +56,16 @@
 static inline double dmax(double a, double b) { return a > b ? a : b; }
 static inline double dmin(double a, double b) { return a < b ? a : b; }
 
-/* Smallest float ≥ x (x ≥ 0, finite). */
+/* Smallest float ≥ x (x ≥ 0). When the rounded f is below x it is finite and ≥ +0, and
+ * the next float up is its bit pattern plus one (ts_next_float_up for such f); added
+ * without a branch, because which way the rounding went is a coin toss. */
 static float round_up_f(double x)
 {
     float f = (float)x;
-    if ((double)f < x) f = ts_next_float_up(f);
+    uint32_t u;
+    memcpy(&u, &f, sizeof u);
+    u += (uint32_t)((double)f < x);
+    memcpy(&f, &u, sizeof f);
     return f;
 }
 
@@ -574,7 +580,9 @@ static void triangle_interaction(const ts_shape *s, const ts_tri_cache *c, uint3
     }
     si->dpdu = c->dpdu;
     si->dpdv = c->dpdv;
-    si->wo = to_unit_f(ts_dvec3_scale(d, -1));
+    /* to_unit_f(−d), whose length is d_len bit for bit ((−x)² = x²). */
+    ts_dvec3 wo = ts_dvec3_scale(d, -1);
+    si->wo = ts_dvec3_to_vec3(d_len > 0 ? ts_dvec3_scale(wo, 1.0 / d_len) : wo);
     si->t = (float)t;
     si->prim = prim;
 }

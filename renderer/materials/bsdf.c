@@ -93,7 +93,13 @@ bool ts_bsdf_sample_f(const ts_bsdf *b, ts_vec3 wo_world, float u_lobe, ts_vec2 
             if (i != comp) pdf += ts_bxdf_pdf(&b->bxdfs[i], wo, s.wi);
         out->pdf = pdf / (float)n;
         bool reflect = ts_vec3_dot(wi_world, b->ng) * ts_vec3_dot(wo_world, b->ng) > 0;
-        out->f = sum_f(b, wo, s.wi, reflect);
+        /* sum_f of a single lobe is its ts_bxdf_f(wo, wi), which s.f is already (bxdf.h's
+         * sampling contract; exactly so for every lobe but the tabulated Fourier one,
+         * whose sampled f comes from its own inversion). */
+        if (n == 1 && x->type != TS_BXDF_FOURIER)
+            out->f = (x->flags & (reflect ? TS_BXDF_REFLECTION : TS_BXDF_TRANSMISSION)) ? s.f : (ts_rgb){0, 0, 0};
+        else
+            out->f = sum_f(b, wo, s.wi, reflect);
     }
     if (!(out->pdf > 0) || !isfinite(out->pdf) || ts_rgb_is_black(out->f) || !ts_rgb_is_finite(out->f)) return false;
     return true;
