@@ -116,6 +116,7 @@ ts_status ts_shape_sample_info_init(const ts_shape *s, uint32_t prim, ts_triangl
         ts_dvec3 N = ts_dvec3_cross(ts_dvec3_sub(v[1], v[0]), ts_dvec3_sub(v[2], v[0]));
         info->area = 0.5 * ts_dvec3_length(N);
         info->tri_n = ts_dvec3_normalize(N);
+        info->tri_pdf_area = (float)(1.0 / info->area);
         info->similarity = true;
         info->det_abs = 1;
         return TS_OK;
@@ -188,7 +189,7 @@ bool ts_shape_sample_area(const ts_shape *s, uint32_t prim, const ts_shape_sampl
         out->p = ts_dvec3_to_vec3(p);
         out->p_error = ts_vec3_scale(ts_dvec3_to_vec3(e), ts_gamma(6));
         out->n = ts_dvec3_to_vec3(n);
-        out->pdf = (float)(1.0 / info->area);
+        out->pdf = info->tri_pdf_area;
         return isfinite(out->pdf) && out->pdf > 0;
     }
     ts_dvec3 p_obj, n_obj;
@@ -232,7 +233,7 @@ float ts_shape_pdf_area(const ts_shape *s, uint32_t prim, const ts_shape_sample_
 {
     (void)prim;
     if (!(info->area > 0)) return 0;
-    if (s->type == TS_SHAPE_MESH) return (float)(1.0 / info->area);
+    if (s->type == TS_SHAPE_MESH) return info->tri_pdf_area;
     ts_dvec3 n_obj = object_normal(s, ts_xform_point_inv(&s->to_world, dv(p)));
     double pdf = 1.0 / (object_area(s) * area_jacobian(s, info, n_obj));
     return isfinite(pdf) ? (float)pdf : 0.0f;

@@ -50,6 +50,7 @@ typedef struct ts_shape_sample_info {
     ts_triangle_sampling triangle_mode;
     ts_dvec3 tri_p[3];        /* mesh: triangle prim's vertices (the float positions, in double) */
     ts_dvec3 tri_n;           /* mesh: its unit normal, normalize((p1 − p0) × (p2 − p0)) in double */
+    float tri_pdf_area;       /* mesh: (float)(1 / area) */
 } ts_shape_sample_info;
 
 /* A point on a shape: world position with its error bound, unit normal on the shape's
