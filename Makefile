@@ -1,7 +1,8 @@
 # tessera — the README's two commands, set-up included.
 #   make run    install what is missing, build, serve with the built-in Cornell box queued
 #   make test   install what is missing, build, run the whole suite through ctest
-# Also: make build, make deps, make test-asan, make test-tsan, make fuzz, make bench (+ bench-deps), make clean.
+# Also: make build, make deps, make test-asan, make test-tsan, make fuzz, make bench (+ bench-deps),
+#       make bench-compare, make clean.
 
 BUILD      ?= build
 BUILD_TYPE ?= Release
@@ -24,7 +25,7 @@ BENCH_PACKAGES := blender bc valgrind gnuplot-nox
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: all run test build deps test-asan test-tsan fuzz fuzz-build bench bench-deps clean
+.PHONY: all run test build deps test-asan test-tsan fuzz fuzz-build bench bench-compare bench-deps clean
 
 all: build
 
@@ -108,6 +109,11 @@ bench-deps:
 
 bench: build bench-deps
 	@if [ -x bench/run ]; then bench/run $(BUILD); else echo "bench: no benchmarks yet"; fi
+
+# The speed targets in one table (bench/compare.sh): render ÷ Embree rays/s per scene, 2 threads
+# ÷ 1 thread, and tessera ÷ Cycles at equal RMSE where Blender is installed.
+bench-compare: build
+	bench/compare.sh $(BUILD)
 
 clean:
 	rm -rf build build-asan build-tsan build-fuzz cornell.exr cornell.png
