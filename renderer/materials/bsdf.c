@@ -1,12 +1,15 @@
 /* bsdf.c — see bsdf.h (pbrt-v3 §9.1 BSDF, §14.1.6 sampling of the mixture). */
 #include "materials/bsdf.h"
 
+#include <string.h>
+
 #include "sampling/sampling.h"
 
 void ts_bsdf_init(ts_bsdf *b, ts_vec3 ng, ts_vec3 ns, ts_vec3 dpdu, float eta)
 {
     b->ng = ts_vec3_normalize(ng);
-    b->ns = ts_vec3_normalize(ns);
+    /* Without shading normals ns is ng, bit for bit: its normalisation is b->ng's. */
+    b->ns = memcmp(&ns, &ng, sizeof ns) == 0 ? b->ng : ts_vec3_normalize(ns);
     if (!(ts_vec3_length_sq(b->ns) > 0.5f) || !ts_vec3_is_finite(b->ns)) b->ns = b->ng;
     /* Gram–Schmidt dpdu against ns; fall back to an arbitrary tangent. */
     ts_vec3 s = ts_vec3_sub(dpdu, ts_vec3_scale(b->ns, ts_vec3_dot(b->ns, dpdu)));
