@@ -2,7 +2,7 @@
 #   make run    install what is missing, build, serve with the built-in Cornell box queued
 #   make test   install what is missing, build, run the whole suite through ctest
 # Also: make build, make deps, make test-asan, make test-tsan, make fuzz, make bench (+ bench-deps),
-#       make image (+ image-deps), make clean.
+#       make bench-compare, make image (+ image-deps), make clean.
 
 BUILD      ?= build
 BUILD_TYPE ?= Release
@@ -30,7 +30,7 @@ IMAGE_PACKAGES := podman runc catatonit debootstrap
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: all run test build deps test-asan test-tsan fuzz fuzz-build bench bench-deps image image-deps clean
+.PHONY: all run test build deps test-asan test-tsan fuzz fuzz-build bench bench-compare bench-deps image image-deps clean
 
 all: build
 
@@ -125,6 +125,11 @@ image-deps:
 
 image: image-deps
 	docker/build-image.sh $(IMAGE)
+
+# The speed targets in one table (bench/compare.sh): render ÷ Embree rays/s per scene, 2 threads
+# ÷ 1 thread, and tessera ÷ Cycles at equal RMSE where Blender is installed.
+bench-compare: build
+	bench/compare.sh $(BUILD)
 
 clean:
 	rm -rf build build-asan build-tsan build-fuzz cornell.exr cornell.png

@@ -34,7 +34,8 @@
  * Columns: scene, integrator, threads, spp, width, height, samples, rays, rays_per_sample,
  * render_s, samples_per_s, rays_per_s, accel_rays_per_s, embree_rays_per_s, efficiency
  * (render rays/s ÷ embree rays/s), accel_efficiency (accel ÷ embree), peak_rss_mib,
- * logged_rays, reps. Rates are per second of wall time over all threads.
+ * logged_rays, reps, scaling (samples/s at this thread count ÷ at 1 thread, per repetition,
+ * median). Rates are per second of wall time over all threads.
  *
  * Exit status 0, 1 when a scene fails to load or render, 2 on usage errors. */
 #include <embree3/rtcore.h>
@@ -378,11 +379,14 @@ static int bench_integrator(const char *path, ts_scene *s, ts_integrator_type in
     for (int c = 0; c < n_cfg; c++) {
         double secs = median(r_secs[c], o->reps), sps = median(r_samples[c], o->reps);
         double rps = median(r_rays[c], o->reps);
-        printf("%s,%s,%d,%u,%d,%d,%llu,%llu,%.3f,%.3f,%.0f,%.0f,%.0f,%.0f,%.3f,%.3f,%.1f,%zu,%d\n", name,
+        /* Thread scaling: samples/s at this count ÷ at 1 thread, within each repetition. */
+        double scale[MAX_REPS];
+        for (int k = 0; k < o->reps; k++) scale[k] = r_samples[c][k] / r_samples[0][k];
+        printf("%s,%s,%d,%u,%d,%d,%llu,%llu,%.3f,%.3f,%.0f,%.0f,%.0f,%.0f,%.3f,%.3f,%.1f,%zu,%d,%.3f\n", name,
                integrator_name(integ), threads[c], spp, s->crop_x1 - s->crop_x0, s->crop_y1 - s->crop_y0,
                (unsigned long long)pixels * spp, (unsigned long long)llround(rps * secs), rps / sps, secs,
                sps, rps, median(r_accel[c], o->reps), median(r_embree[c], o->reps), median(r_eff[c], o->reps),
-               median(r_aeff[c], o->reps), peak_mib, n, o->reps);
+               median(r_aeff[c], o->reps), peak_mib, n, o->reps, median(scale, o->reps));
     }
     fflush(stdout);
     return 0;
@@ -496,7 +500,7 @@ int main(int argc, char **argv)
         printf(
             "scene,integrator,threads,spp,width,height,samples,rays,rays_per_sample,render_s,samples_per_s,"
             "rays_per_s,accel_rays_per_s,embree_rays_per_s,efficiency,accel_efficiency,peak_rss_mib,"
-            "logged_rays,reps\n");
+            "logged_rays,reps,scaling\n");
     /* One child process per (scene, integrator): each loads its scene afresh, so its peak
      * memory is its own, and no Embree thread pool is ever forked. */
     int status = 0;

@@ -128,6 +128,51 @@ static void check_order_independent(ts_sampler_type type)
     }
 }
 
+/* Streams begun in a pixel's seed cache draw exactly what ts_sampler_begin's draw, whatever
+ * dimensions earlier samples reached or skipped, past the cache's end too, in any index
+ * order; the independent sampler (which shares nothing) the same. */
+static void check_pixel_cache(ts_sampler_type type)
+{
+    enum { DIMS = TS_SAMPLER_PIXEL_DIMS + 9 };
+    ts_sampler s = {type, 777u};
+    ts_sampler_pixel pixel;
+    ts_sampler_pixel_init(&s, 40, 3, &pixel);
+    const uint32_t indices[] = {5, 0, 1, 63, 2, 2, 1000000u, 7};
+    for (size_t k = 0; k < sizeof indices / sizeof indices[0]; k++) {
+        uint32_t index = indices[k];
+        ts_sample_stream a, b;
+        ts_sampler_begin(&s, 40, 3, index, &a);
+        ts_sampler_begin_in_pixel(&pixel, index, &b);
+        /* A pattern that differs per sample: how far it goes, what it skips, 1-D or 2-D. */
+        uint32_t n = (uint32_t)(3 + (k * 11) % DIMS);
+        for (uint32_t d = 0; d < n; d++) {
+            uint32_t kind = (uint32_t)(d + k) % 4;
+            if (kind == 0) {
+                a.dim++, b.dim++; /* a dimension not drawn */
+            } else if (kind == 1) {
+                assert_true(ts_sample_1d(&a) == ts_sample_1d(&b));
+            } else {
+                ts_vec2 va = ts_sample_2d(&a), vb = ts_sample_2d(&b);
+                assert_true(va.x == vb.x && va.y == vb.y);
+            }
+        }
+        assert_int_equal(a.dim, b.dim);
+    }
+    if (type == TS_SAMPLER_SOBOL) assert_true(pixel.filled != 0);
+}
+
+static void test_pixel_cache_sobol(void **state)
+{
+    (void)state;
+    check_pixel_cache(TS_SAMPLER_SOBOL);
+}
+
+static void test_pixel_cache_independent(void **state)
+{
+    (void)state;
+    check_pixel_cache(TS_SAMPLER_INDEPENDENT);
+}
+
 static void test_sobol_order_independent(void **state)
 {
     (void)state;
@@ -329,6 +374,8 @@ int main(void)
         cmocka_unit_test(test_sobol_nets),
         cmocka_unit_test(test_sobol_unaligned_not_net),
         cmocka_unit_test(test_sobol_order_independent),
+        cmocka_unit_test(test_pixel_cache_sobol),
+        cmocka_unit_test(test_pixel_cache_independent),
         cmocka_unit_test(test_independent_deterministic),
         cmocka_unit_test(test_sobol_decorrelated),
         cmocka_unit_test(test_sobol_cross_dimension_uniform),

@@ -14,6 +14,10 @@
  * (ts_shape_triangle_ahead) — Embree's float triangle test can report the coplanar
  * neighbour of the triangle a ray leaves. Rays without skip ids cost the filter one test.
  *
+ * Each mesh triangle has a ts_tri_cache (shape.h: its normal, edge lengths, ∂p/∂u, ∂p/∂v),
+ * made at build time, 72 bytes a triangle; the filter and the hit's interaction read it
+ * instead of recomputing those per hit, with bit-identical results.
+ *
  * Embree errors during the build are caught by the device error callback into the
  * accel's (build-time only) message and returned as a ts_error sentence. Queries are
  * thread-safe (the scene is immutable after rtcCommitScene, the context lives on the
@@ -45,11 +49,19 @@
 #define EMBREE_DEVICE_CONFIG NULL
 #endif
 
+/* What a mesh's Embree geometry points to (its user data): the shape and its triangles'
+ * caches (shape.h), one per triangle, owned by the accel. */
+typedef struct mesh_geom {
+    const ts_shape *shape;
+    ts_tri_cache *tri;
+} mesh_geom;
+
 struct ts_accel {
     RTCDevice device;       /* immutable after create */
     RTCScene scene;         /* immutable after rtcCommitScene */
     const ts_shape *shapes; /* caller-owned, outlives the accel */
     uint32_t n_shapes;
+    mesh_geom *meshes;      /* n_shapes entries (tri NULL for analytic shapes); immutable after create */
     ts_bounds3 bounds;
     ts_ray_log *log; /* NULL, or set by ts_accel_set_ray_log while no query runs */
     /* Written only by the Embree error callback while the creating thread builds; never
@@ -152,22 +164,33 @@ static void triangle_filter(const struct RTCFilterFunctionNArguments *args)
     const query_ctx *q = (const query_ctx *)args->context;
     const ts_ray *ray = q->ray;
     if (!ray || ray->skip_shape == TS_NONE) return;
-    const ts_shape *s = args->geometryUserPtr;
+    const mesh_geom *g = args->geometryUserPtr;
     const unsigned *hit = (const unsigned *)args->hit;
     unsigned N = args->N;
     for (unsigned i = 0; i < N; i++) {
         if (args->valid[i] != -1) continue;
         unsigned prim = hit[5 * N + i], geom = hit[6 * N + i];
-        if ((geom == ray->skip_shape && prim == ray->skip_prim) || !ts_shape_triangle_ahead(s, prim, ray))
+        if ((geom == ray->skip_shape && prim == ray->skip_prim) ||
+            !ts_shape_triangle_ahead_cached(g->shape, &g->tri[prim], prim, ray))
             args->valid[i] = 0;
     }
 }
 
 /* ---- build ---- */
 
-static RTCGeometry make_mesh(ts_accel *a, const ts_shape *s)
+static RTCGeometry make_mesh(ts_accel *a, uint32_t i)
 {
+    const ts_shape *s = &a->shapes[i];
     const ts_mesh *m = &s->mesh;
+    mesh_geom *mg = &a->meshes[i];
+    mg->shape = s;
+    mg->tri = malloc(sizeof *mg->tri * (size_t)m->n_triangles);
+    if (!mg->tri) {
+        a->build_code = RTC_ERROR_OUT_OF_MEMORY;
+        snprintf(a->build_error, sizeof a->build_error, "out of memory for %u triangles' data", m->n_triangles);
+        return NULL;
+    }
+    for (uint32_t k = 0; k < m->n_triangles; k++) ts_shape_triangle_cache_init(s, k, &mg->tri[k]);
     RTCGeometry g = rtcNewGeometry(a->device, RTC_GEOMETRY_TYPE_TRIANGLE);
     if (!g) return NULL;
     float *v = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
@@ -181,18 +204,26 @@ static RTCGeometry make_mesh(ts_accel *a, const ts_shape *s)
                                m->n_triangles);
     rtcSetGeometryIntersectFilterFunction(g, triangle_filter);
     rtcSetGeometryOccludedFilterFunction(g, triangle_filter);
+    rtcSetGeometryUserData(g, mg);
     return g;
 }
 
-static RTCGeometry make_user(ts_accel *a)
+static RTCGeometry make_user(ts_accel *a, const ts_shape *s)
 {
     RTCGeometry g = rtcNewGeometry(a->device, RTC_GEOMETRY_TYPE_USER);
     if (!g) return NULL;
+    rtcSetGeometryUserData(g, (void *)s);
     rtcSetGeometryUserPrimitiveCount(g, 1);
     rtcSetGeometryBoundsFunction(g, user_bounds, NULL);
     rtcSetGeometryIntersectFunction(g, user_intersect);
     rtcSetGeometryOccludedFunction(g, user_occluded);
     return g;
+}
+
+static void free_meshes(ts_accel *a)
+{
+    for (uint32_t i = 0; i < a->n_shapes; i++) free(a->meshes[i].tri);
+    free(a->meshes);
 }
 
 ts_accel *ts_accel_create(const ts_shape *shapes, uint32_t n_shapes, ts_error *err)
@@ -205,6 +236,12 @@ ts_accel *ts_accel_create(const ts_shape *shapes, uint32_t n_shapes, ts_error *e
     a->shapes = shapes;
     a->n_shapes = n_shapes;
     a->bounds = ts_bounds3_empty();
+    a->meshes = calloc(n_shapes ? n_shapes : 1, sizeof *a->meshes);
+    if (!a->meshes) {
+        free(a);
+        ts_error_set(err, TS_ERR_NOMEM, "out of memory creating the ray-intersection structure");
+        return NULL;
+    }
 
     a->device = rtcNewDevice(EMBREE_DEVICE_CONFIG);
     if (!a->device) {
@@ -225,12 +262,11 @@ ts_accel *ts_accel_create(const ts_shape *shapes, uint32_t n_shapes, ts_error *e
         RTCGeometry g;
         if (s->type == TS_SHAPE_MESH) {
             if (s->mesh.n_triangles == 0 || s->mesh.n_vertices == 0) continue; /* nothing to hit */
-            g = make_mesh(a, s);
+            g = make_mesh(a, i);
         } else {
-            g = make_user(a);
+            g = make_user(a, s);
         }
         if (!g) goto fail_embree;
-        rtcSetGeometryUserData(g, (void *)s);
         rtcCommitGeometry(g);
         rtcAttachGeometryByID(a->scene, g, i);
         rtcReleaseGeometry(g); /* the scene holds it */
@@ -252,6 +288,7 @@ fail_embree:
     if (a->scene) rtcReleaseScene(a->scene);
     rtcReleaseDevice(a->device);
 fail_device:
+    free_meshes(a);
     free(a);
     return NULL;
 }
@@ -261,6 +298,7 @@ void ts_accel_destroy(ts_accel *a)
     if (!a) return;
     rtcReleaseScene(a->scene);
     rtcReleaseDevice(a->device);
+    free_meshes(a);
     free(a);
 }
 
@@ -315,7 +353,13 @@ bool ts_accel_intersect(const ts_accel *a, const ts_ray *ray, ts_interaction *si
     rtcIntersect1(a->scene, &q.rtc, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID || rh.hit.geomID >= a->n_shapes) return false;
     const ts_shape *s = &a->shapes[rh.hit.geomID];
-    ts_shape_interaction(s, rh.hit.geomID, s->type == TS_SHAPE_MESH ? rh.hit.primID : 0, ray, rh.ray.tfar, si);
+    if (s->type == TS_SHAPE_MESH) {
+        const mesh_geom *g = &a->meshes[rh.hit.geomID];
+        ts_shape_triangle_interaction_cached(s, &g->tri[rh.hit.primID], rh.hit.geomID, rh.hit.primID, ray,
+                                             rh.ray.tfar, si);
+    } else {
+        ts_shape_interaction(s, rh.hit.geomID, 0, ray, rh.ray.tfar, si);
+    }
     return true;
 }
 

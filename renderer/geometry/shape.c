@@ -36,6 +36,7 @@
 
 #include <float.h>
 #include <math.h>
+#include <string.h>
 
 /* Double-precision round-off slack of the object-space solve (32 unit roundoffs). */
 #define DBL_SLACK 0x1p-48
@@ -55,11 +56,16 @@
 static inline double dmax(double a, double b) { return a > b ? a : b; }
 static inline double dmin(double a, double b) { return a < b ? a : b; }
 
-/* Smallest float ≥ x (x ≥ 0, finite). */
+/* Smallest float ≥ x (x ≥ 0). When the rounded f is below x it is finite and ≥ +0, and
+ * the next float up is its bit pattern plus one (ts_next_float_up for such f); added
+ * without a branch, because which way the rounding went is a coin toss. */
 static float round_up_f(double x)
 {
     float f = (float)x;
-    if ((double)f < x) f = ts_next_float_up(f);
+    uint32_t u;
+    memcpy(&u, &f, sizeof u);
+    u += (uint32_t)((double)f < x);
+    memcpy(&f, &u, sizeof f);
     return f;
 }
 
@@ -312,21 +318,33 @@ bool ts_shape_triangle_intersect(const ts_shape *s, uint32_t prim, const ts_ray 
     return true;
 }
 
+/* tri_mt without the barycentrics, which this test does not need; e1_len and e2_len are
+ * |e1| and |e2| (tri_num_noise's first two factors). */
+static inline bool triangle_ahead(const tri_d *tr, const ts_ray *ray, double e1_len, double e2_len)
+{
+    ts_dvec3 o = ts_dvec3_from(ray->o), d = ts_dvec3_from(ray->d);
+    ts_dvec3 e1 = ts_dvec3_sub(tr->p1, tr->p0), e2 = ts_dvec3_sub(tr->p2, tr->p0);
+    double det = ts_dvec3_dot(e1, ts_dvec3_cross(d, e2));
+    if (det == 0 || !isfinite(det)) return false;
+    ts_dvec3 tvec = ts_dvec3_sub(o, tr->p0);
+    double num = ts_dvec3_dot(e2, ts_dvec3_cross(tvec, e1));
+    double t = num * (1.0 / det);
+    return t > 0 && fabs(num) > T_GUARD * e1_len * e2_len * ts_dvec3_length(tvec);
+}
+
 bool ts_shape_triangle_ahead(const ts_shape *s, uint32_t prim, const ts_ray *ray)
 {
     if (s->type != TS_SHAPE_MESH || prim >= s->mesh.n_triangles) return false;
     tri_d tr = tri_load(&s->mesh, prim);
-    /* tri_mt without the barycentrics, which this test does not need. */
-    ts_dvec3 o = ts_dvec3_from(ray->o), d = ts_dvec3_from(ray->d);
-    tri_solve m;
-    m.e1 = ts_dvec3_sub(tr.p1, tr.p0);
-    m.e2 = ts_dvec3_sub(tr.p2, tr.p0);
-    m.det = ts_dvec3_dot(m.e1, ts_dvec3_cross(d, m.e2));
-    if (m.det == 0 || !isfinite(m.det)) return false;
-    m.tvec = ts_dvec3_sub(o, tr.p0);
-    m.num = ts_dvec3_dot(m.e2, ts_dvec3_cross(m.tvec, m.e1));
-    m.t = m.num * (1.0 / m.det);
-    return m.t > 0 && fabs(m.num) > tri_num_noise(&m);
+    return triangle_ahead(&tr, ray, ts_dvec3_length(ts_dvec3_sub(tr.p1, tr.p0)),
+                          ts_dvec3_length(ts_dvec3_sub(tr.p2, tr.p0)));
+}
+
+bool ts_shape_triangle_ahead_cached(const ts_shape *s, const ts_tri_cache *c, uint32_t prim, const ts_ray *ray)
+{
+    if (s->type != TS_SHAPE_MESH || prim >= s->mesh.n_triangles) return false;
+    tri_d tr = tri_load(&s->mesh, prim);
+    return triangle_ahead(&tr, ray, c->e1_len, c->e2_len);
 }
 
 /* ---- public: intersection ---- */
@@ -448,15 +466,57 @@ static void analytic_interaction(const ts_shape *s, const ts_ray *ray, const obj
     si->prim = 0;
 }
 
-static void triangle_interaction(const ts_shape *s, uint32_t prim, const ts_ray *ray, float t_hint,
-                                 ts_interaction *si)
+/* The ray-independent part of a triangle's interaction (shape.h, ts_tri_cache): computed
+ * per hit by ts_shape_interaction, once per triangle by the accelerator. One routine for
+ * both, so a cached value is the very value the per-hit path would compute. */
+void ts_shape_triangle_cache_init(const ts_shape *s, uint32_t prim, ts_tri_cache *c)
+{
+    const ts_mesh *mesh = &s->mesh;
+    tri_d tr = tri_load(mesh, prim);
+    ts_dvec3 e1 = ts_dvec3_sub(tr.p1, tr.p0), e2 = ts_dvec3_sub(tr.p2, tr.p0);
+    ts_dvec3 N = ts_dvec3_cross(e1, e2);
+    double N_len = ts_dvec3_length(N);
+    c->n_len = N_len;
+    c->e1_len = ts_dvec3_length(e1);
+    c->e2_len = ts_dvec3_length(e2);
+    c->inv_sin = N_len > 0 ? c->e1_len * c->e2_len / N_len : INFINITY;
+    ts_dvec3 n_d = N_len > 0 ? ts_dvec3_scale(N, 1 / N_len) : (ts_dvec3){0, 0, 1};
+    c->n = ts_dvec3_to_vec3(n_d);
+
+    /* ∂p/∂u, ∂p/∂v as pbrt-v3 (default uvs (0,0), (1,0), (1,1)). */
+    double uv[3][2] = {{0, 0}, {1, 0}, {1, 1}};
+    if (mesh->uv) {
+        uint32_t ids[3] = {tr.i0, tr.i1, tr.i2};
+        for (int k = 0; k < 3; k++) {
+            uv[k][0] = mesh->uv[2 * ids[k]];
+            uv[k][1] = mesh->uv[2 * ids[k] + 1];
+        }
+    }
+    double du02 = uv[0][0] - uv[2][0], dv02 = uv[0][1] - uv[2][1];
+    double du12 = uv[1][0] - uv[2][0], dv12 = uv[1][1] - uv[2][1];
+    ts_dvec3 dp02 = ts_dvec3_sub(tr.p0, tr.p2), dp12 = ts_dvec3_sub(tr.p1, tr.p2);
+    double uv_det = du02 * dv12 - dv02 * du12;
+    bool degenerate = fabs(uv_det) < 1e-8;
+    ts_dvec3 dpdu = {0, 0, 0}, dpdv = {0, 0, 0};
+    if (!degenerate) {
+        double inv = 1 / uv_det;
+        dpdu = ts_dvec3_scale(ts_dvec3_sub(ts_dvec3_scale(dp02, dv12), ts_dvec3_scale(dp12, dv02)), inv);
+        dpdv = ts_dvec3_scale(ts_dvec3_sub(ts_dvec3_scale(dp12, du02), ts_dvec3_scale(dp02, du12)), inv);
+    }
+    if (degenerate || ts_dvec3_length(ts_dvec3_cross(dpdu, dpdv)) == 0) {
+        ts_coordinate_system(c->n, &c->dpdu, &c->dpdv);
+    } else {
+        c->dpdu = ts_dvec3_to_vec3(dpdu);
+        c->dpdv = ts_dvec3_to_vec3(dpdv);
+    }
+}
+
+static void triangle_interaction(const ts_shape *s, const ts_tri_cache *c, uint32_t prim, const ts_ray *ray,
+                                 float t_hint, ts_interaction *si)
 {
     const ts_mesh *mesh = &s->mesh;
     tri_d tr = tri_load(mesh, prim);
     ts_dvec3 o = ts_dvec3_from(ray->o), d = ts_dvec3_from(ray->d);
-    ts_dvec3 e1 = ts_dvec3_sub(tr.p1, tr.p0), e2 = ts_dvec3_sub(tr.p2, tr.p0);
-    ts_dvec3 N = ts_dvec3_cross(e1, e2);
-    double N_len = ts_dvec3_length(N), e1_len = ts_dvec3_length(e1), e2_len = ts_dvec3_length(e2);
     double b1, b2, t;
     tri_solve ms;
     if (tri_mt(&tr, o, d, &ms)) {
@@ -466,6 +526,7 @@ static void triangle_interaction(const ts_shape *s, uint32_t prim, const ts_ray 
     } else {
         /* Ray in the plane (traversal should not report that): barycentrics of the point
          * at t_hint projected onto the plane. */
+        ts_dvec3 e1 = ts_dvec3_sub(tr.p1, tr.p0), e2 = ts_dvec3_sub(tr.p2, tr.p0);
         t = t_hint;
         ts_dvec3 q = ts_dvec3_sub(ts_dvec3_add(o, ts_dvec3_scale(d, t)), tr.p0);
         double d00 = ts_dvec3_dot(e1, e1), d01 = ts_dvec3_dot(e1, e2), d11 = ts_dvec3_dot(e2, e2);
@@ -485,19 +546,20 @@ static void triangle_interaction(const ts_shape *s, uint32_t prim, const ts_ray 
                    fabs(b0 * tr.p0.y) + fabs(b1 * tr.p1.y) + fabs(b2 * tr.p2.y),
                    fabs(b0 * tr.p0.z) + fabs(b1 * tr.p1.z) + fabs(b2 * tr.p2.z)};
     double d_len = ts_dvec3_length(d);
-    double inv_sin = N_len > 0 ? e1_len * e2_len / N_len : INFINITY;
-    double delta = DBL_SLACK * (ts_dvec3_length(ts_dvec3_sub(o, tr.p0)) + fabs(t) * d_len + e1_len + e2_len) * inv_sin;
+    double N_len = c->n_len;
+    double delta =
+        DBL_SLACK * (ts_dvec3_length(ts_dvec3_sub(o, tr.p0)) + fabs(t) * d_len + c->e1_len + c->e2_len) * c->inv_sin;
+    ts_dvec3 N = ts_dvec3_cross(ts_dvec3_sub(tr.p1, tr.p0), ts_dvec3_sub(tr.p2, tr.p0));
     double cos_theta = N_len > 0 && d_len > 0 ? fabs(ts_dvec3_dot(N, d)) / (N_len * d_len) : 0;
     double slide = slide_bound(delta, cos_theta, INFINITY);
     si->p = ts_dvec3_to_vec3(p);
     si->p_error = round_up_v((ts_dvec3){g7 * ab.x + slide, g7 * ab.y + slide, g7 * ab.z + slide});
-
-    ts_dvec3 n_d = N_len > 0 ? ts_dvec3_scale(N, 1 / N_len) : (ts_dvec3){0, 0, 1};
-    si->n = ts_dvec3_to_vec3(n_d);
+    si->n = c->n;
 
     /* Shading normal: interpolated vertex normals, on n's side. */
     si->ns = si->n;
     if (mesh->n) {
+        ts_dvec3 n_d = N_len > 0 ? ts_dvec3_scale(N, 1 / N_len) : (ts_dvec3){0, 0, 1};
         const float *n0 = mesh->n + 3 * tr.i0, *n1 = mesh->n + 3 * tr.i1, *n2 = mesh->n + 3 * tr.i2;
         ts_dvec3 ns = {b0 * n0[0] + b1 * n1[0] + b2 * n2[0], b0 * n0[1] + b1 * n1[1] + b2 * n2[1],
                        b0 * n0[2] + b1 * n1[2] + b2 * n2[2]};
@@ -508,38 +570,19 @@ static void triangle_interaction(const ts_shape *s, uint32_t prim, const ts_ray 
         }
     }
 
-    /* uv and ∂p/∂u, ∂p/∂v as pbrt-v3 (default uvs (0,0), (1,0), (1,1)). */
-    double uv[3][2] = {{0, 0}, {1, 0}, {1, 1}};
+    /* uv as pbrt-v3 (default uvs (0,0), (1,0), (1,1)). */
     if (mesh->uv) {
-        uint32_t ids[3] = {tr.i0, tr.i1, tr.i2};
-        for (int k = 0; k < 3; k++) {
-            uv[k][0] = mesh->uv[2 * ids[k]];
-            uv[k][1] = mesh->uv[2 * ids[k] + 1];
-        }
-    }
-    si->uv = (ts_vec2){(float)(b0 * uv[0][0] + b1 * uv[1][0] + b2 * uv[2][0]),
-                       (float)(b0 * uv[0][1] + b1 * uv[1][1] + b2 * uv[2][1])};
-    double du02 = uv[0][0] - uv[2][0], dv02 = uv[0][1] - uv[2][1];
-    double du12 = uv[1][0] - uv[2][0], dv12 = uv[1][1] - uv[2][1];
-    ts_dvec3 dp02 = ts_dvec3_sub(tr.p0, tr.p2), dp12 = ts_dvec3_sub(tr.p1, tr.p2);
-    double uv_det = du02 * dv12 - dv02 * du12;
-    bool degenerate = fabs(uv_det) < 1e-8;
-    ts_dvec3 dpdu = {0, 0, 0}, dpdv = {0, 0, 0};
-    if (!degenerate) {
-        double inv = 1 / uv_det;
-        dpdu = ts_dvec3_scale(ts_dvec3_sub(ts_dvec3_scale(dp02, dv12), ts_dvec3_scale(dp12, dv02)), inv);
-        dpdv = ts_dvec3_scale(ts_dvec3_sub(ts_dvec3_scale(dp12, du02), ts_dvec3_scale(dp02, du12)), inv);
-    }
-    if (degenerate || ts_dvec3_length(ts_dvec3_cross(dpdu, dpdv)) == 0) {
-        ts_vec3 a, b;
-        ts_coordinate_system(si->n, &a, &b);
-        si->dpdu = a;
-        si->dpdv = b;
+        const float *uv0 = mesh->uv + 2 * tr.i0, *uv1 = mesh->uv + 2 * tr.i1, *uv2 = mesh->uv + 2 * tr.i2;
+        si->uv = (ts_vec2){(float)(b0 * (double)uv0[0] + b1 * (double)uv1[0] + b2 * (double)uv2[0]),
+                           (float)(b0 * (double)uv0[1] + b1 * (double)uv1[1] + b2 * (double)uv2[1])};
     } else {
-        si->dpdu = ts_dvec3_to_vec3(dpdu);
-        si->dpdv = ts_dvec3_to_vec3(dpdv);
+        si->uv = (ts_vec2){(float)(b0 * 0.0 + b1 * 1.0 + b2 * 1.0), (float)(b0 * 0.0 + b1 * 0.0 + b2 * 1.0)};
     }
-    si->wo = to_unit_f(ts_dvec3_scale(d, -1));
+    si->dpdu = c->dpdu;
+    si->dpdv = c->dpdv;
+    /* to_unit_f(−d), whose length is d_len bit for bit ((−x)² = x²). */
+    ts_dvec3 wo = ts_dvec3_scale(d, -1);
+    si->wo = ts_dvec3_to_vec3(d_len > 0 ? ts_dvec3_scale(wo, 1.0 / d_len) : wo);
     si->t = (float)t;
     si->prim = prim;
 }
@@ -549,7 +592,9 @@ void ts_shape_interaction(const ts_shape *s, uint32_t shape_index, uint32_t prim
 {
     si->shape = shape_index;
     if (s->type == TS_SHAPE_MESH) {
-        triangle_interaction(s, prim, ray, t, si);
+        ts_tri_cache c;
+        ts_shape_triangle_cache_init(s, prim, &c);
+        triangle_interaction(s, &c, prim, ray, t, si);
         return;
     }
     /* Re-solve: the same computation with tmax just above t finds the same root. */
@@ -573,6 +618,13 @@ void ts_shape_interaction(const ts_shape *s, uint32_t shape_index, uint32_t prim
         h.err = ts_dvec3_length(ts_dvec3_sub(p, ts_dvec3_add(R.o, ts_dvec3_scale(R.d, t))));
     }
     analytic_interaction(s, ray, &h, si);
+}
+
+void ts_shape_triangle_interaction_cached(const ts_shape *s, const ts_tri_cache *c, uint32_t shape_index,
+                                          uint32_t prim, const ts_ray *ray, float t, ts_interaction *si)
+{
+    si->shape = shape_index;
+    triangle_interaction(s, c, prim, ray, t, si);
 }
 
 /* ---- bounds and area ---- */

@@ -73,6 +73,28 @@ bool ts_shape_intersect(const ts_shape *s, const ts_ray *ray, float tmax, float 
 void ts_shape_interaction(const ts_shape *s, uint32_t shape_index, uint32_t prim, const ts_ray *ray, float t,
                           ts_interaction *si);
 
+/* Ray-independent data of one mesh triangle that ts_shape_interaction and
+ * ts_shape_triangle_ahead otherwise recompute at every hit (three square roots, the
+ * normal's division, the ∂p/∂u solve). The accelerator keeps one per triangle; the
+ * functions taking it return bit for bit what the ones without it return. */
+typedef struct ts_tri_cache {
+    double n_len, e1_len, e2_len; /* |(p1 − p0) × (p2 − p0)|, |p1 − p0|, |p2 − p0| (double) */
+    double inv_sin;               /* e1_len·e2_len / n_len, ∞ for a degenerate triangle */
+    ts_vec3 n;                    /* the interaction's n */
+    ts_vec3 dpdu, dpdv;           /* the interaction's dpdu, dpdv */
+} ts_tri_cache;
+
+/* Fills c for triangle prim of mesh s. */
+void ts_shape_triangle_cache_init(const ts_shape *s, uint32_t prim, ts_tri_cache *c);
+
+/* ts_shape_interaction of a triangle hit with its cache (c from ts_shape_triangle_cache_init
+ * of the same s and prim): the same interaction, bit for bit. */
+void ts_shape_triangle_interaction_cached(const ts_shape *s, const ts_tri_cache *c, uint32_t shape_index,
+                                          uint32_t prim, const ts_ray *ray, float t, ts_interaction *si);
+
+/* ts_shape_triangle_ahead with the triangle's cache: the same answer. */
+bool ts_shape_triangle_ahead_cached(const ts_shape *s, const ts_tri_cache *c, uint32_t prim, const ts_ray *ray);
+
 /* Surface area in world space (meshes: of one triangle prim; other shapes ignore prim). */
 double ts_shape_area(const ts_shape *s, uint32_t prim);
 

@@ -111,9 +111,12 @@ ts_status ts_shape_sample_info_init(const ts_shape *s, uint32_t prim, ts_triangl
         if (prim >= s->mesh.n_triangles)
             return ts_error_set(err, TS_ERR_INVALID, "triangle %u out of range (mesh has %u)", prim,
                                 s->mesh.n_triangles);
-        ts_dvec3 v[3];
+        ts_dvec3 *v = info->tri_p;
         tri_vertices(s, prim, v);
-        info->area = 0.5 * ts_dvec3_length(ts_dvec3_cross(ts_dvec3_sub(v[1], v[0]), ts_dvec3_sub(v[2], v[0])));
+        ts_dvec3 N = ts_dvec3_cross(ts_dvec3_sub(v[1], v[0]), ts_dvec3_sub(v[2], v[0]));
+        info->area = 0.5 * ts_dvec3_length(N);
+        info->tri_n = ts_dvec3_normalize(N);
+        info->tri_pdf_area = (float)(1.0 / info->area);
         info->similarity = true;
         info->det_abs = 1;
         return TS_OK;
@@ -172,21 +175,21 @@ ts_status ts_shape_sample_info_init(const ts_shape *s, uint32_t prim, ts_triangl
 bool ts_shape_sample_area(const ts_shape *s, uint32_t prim, const ts_shape_sample_info *info, ts_vec2 u,
                           ts_shape_point *out)
 {
+    (void)prim; /* a triangle's vertices and normal are in info */
     if (!(info->area > 0)) return false;
     if (s->type == TS_SHAPE_MESH) {
-        ts_dvec3 v[3];
-        tri_vertices(s, prim, v);
+        const ts_dvec3 *v = info->tri_p;
         ts_vec2 b = ts_sample_uniform_triangle(u);
         double b0 = b.x, b1 = b.y, b2 = 1.0 - b0 - b1;
         ts_dvec3 p = ts_dvec3_add(ts_dvec3_add(ts_dvec3_scale(v[0], b0), ts_dvec3_scale(v[1], b1)),
                                   ts_dvec3_scale(v[2], b2));
-        ts_dvec3 n = ts_dvec3_normalize(ts_dvec3_cross(ts_dvec3_sub(v[1], v[0]), ts_dvec3_sub(v[2], v[0])));
+        ts_dvec3 n = info->tri_n;
         ts_dvec3 e = ts_dvec3_add(ts_dvec3_add(dabs(ts_dvec3_scale(v[0], b0)), dabs(ts_dvec3_scale(v[1], b1))),
                                   dabs(ts_dvec3_scale(v[2], b2)));
         out->p = ts_dvec3_to_vec3(p);
         out->p_error = ts_vec3_scale(ts_dvec3_to_vec3(e), ts_gamma(6));
         out->n = ts_dvec3_to_vec3(n);
-        out->pdf = (float)(1.0 / info->area);
+        out->pdf = info->tri_pdf_area;
         return isfinite(out->pdf) && out->pdf > 0;
     }
     ts_dvec3 p_obj, n_obj;
@@ -230,20 +233,16 @@ float ts_shape_pdf_area(const ts_shape *s, uint32_t prim, const ts_shape_sample_
 {
     (void)prim;
     if (!(info->area > 0)) return 0;
-    if (s->type == TS_SHAPE_MESH) return (float)(1.0 / info->area);
+    if (s->type == TS_SHAPE_MESH) return info->tri_pdf_area;
     ts_dvec3 n_obj = object_normal(s, ts_xform_point_inv(&s->to_world, dv(p)));
     double pdf = 1.0 / (object_area(s) * area_jacobian(s, info, n_obj));
     return isfinite(pdf) ? (float)pdf : 0.0f;
 }
 
 /* World-space unit front normal at world point p of the shape. */
-static ts_dvec3 normal_at(const ts_shape *s, uint32_t prim, ts_dvec3 p)
+static ts_dvec3 normal_at(const ts_shape *s, const ts_shape_sample_info *info, ts_dvec3 p)
 {
-    if (s->type == TS_SHAPE_MESH) {
-        ts_dvec3 v[3];
-        tri_vertices(s, prim, v);
-        return ts_dvec3_normalize(ts_dvec3_cross(ts_dvec3_sub(v[1], v[0]), ts_dvec3_sub(v[2], v[0])));
-    }
+    if (s->type == TS_SHAPE_MESH) return info->tri_n;
     ts_dvec3 n_obj = object_normal(s, ts_xform_point_inv(&s->to_world, p));
     return ts_dvec3_normalize(ts_xform_normal(&s->to_world, n_obj));
 }
@@ -287,13 +286,11 @@ bool ts_shape_sample_intersect(const ts_shape *s, uint32_t prim, ts_vec3 o, ts_v
 /* ---- solid angle ---- */
 
 /* Plane of a disk or triangle: unit normal and a point. False for other shapes. */
-static bool shape_plane(const ts_shape *s, uint32_t prim, ts_dvec3 *n, ts_dvec3 *p0)
+static bool shape_plane(const ts_shape *s, const ts_shape_sample_info *info, ts_dvec3 *n, ts_dvec3 *p0)
 {
     if (s->type == TS_SHAPE_MESH) {
-        ts_dvec3 v[3];
-        tri_vertices(s, prim, v);
-        *n = ts_dvec3_normalize(ts_dvec3_cross(ts_dvec3_sub(v[1], v[0]), ts_dvec3_sub(v[2], v[0])));
-        *p0 = v[0];
+        *n = info->tri_n;
+        *p0 = info->tri_p[0];
         return true;
     }
     if (s->type == TS_SHAPE_DISK) {
@@ -306,10 +303,10 @@ static bool shape_plane(const ts_shape *s, uint32_t prim, ts_dvec3 *n, ts_dvec3 
 
 /* True if ref lies on the plane of a planar shape within its error bound (plus one float
  * ulp of the coordinates): it sees the shape edge-on, solid angle 0. */
-static bool edge_on(const ts_shape *s, uint32_t prim, const ts_interaction *ref)
+static bool edge_on(const ts_shape *s, const ts_shape_sample_info *info, const ts_interaction *ref)
 {
     ts_dvec3 n, p0;
-    if (!shape_plane(s, prim, &n, &p0)) return false;
+    if (!shape_plane(s, info, &n, &p0)) return false;
     ts_dvec3 p = dv(ref->p), an = dabs(n);
     double dist = ts_dvec3_dot(n, ts_dvec3_sub(p, p0));
     double tol = ts_dvec3_dot(an, dv(ref->p_error)) +
@@ -341,10 +338,9 @@ static double sphere_one_minus_cos(const ts_shape_sample_info *info, ts_dvec3 p_
 
 /* Unit vectors from p to the triangle's vertices and the solid angle; false if p is at a
  * vertex. */
-static bool spherical_setup(const ts_shape *s, uint32_t prim, ts_dvec3 p, ts_dvec3 v[3], ts_dvec3 w[3],
-                            double *omega)
+static bool spherical_setup(const ts_shape_sample_info *info, ts_dvec3 p, ts_dvec3 w[3], double *omega)
 {
-    tri_vertices(s, prim, v);
+    const ts_dvec3 *v = info->tri_p;
     for (int k = 0; k < 3; k++) {
         w[k] = ts_dvec3_sub(v[k], p);
         double len = ts_dvec3_length(w[k]);
@@ -367,18 +363,16 @@ double ts_spherical_triangle_area(ts_dvec3 a, ts_dvec3 b, ts_dvec3 c, ts_dvec3 p
 }
 
 /* AUTO's cheap test: the triangle looks small from p (see TS_SPHERICAL_AUTO_MIN_ESTIMATE). */
-static bool auto_small(const ts_shape *s, uint32_t prim, const ts_shape_sample_info *info, ts_dvec3 p)
+static bool auto_small(const ts_shape_sample_info *info, ts_dvec3 p)
 {
     if (info->triangle_mode != TS_TRIANGLE_SAMPLING_AUTO) return false;
-    ts_dvec3 v[3];
-    tri_vertices(s, prim, v);
+    const ts_dvec3 *v = info->tri_p;
     double d2 = INFINITY;
     for (int k = 0; k < 3; k++) {
         ts_dvec3 w = ts_dvec3_sub(v[k], p);
         d2 = fmin(d2, ts_dvec3_dot(w, w));
     }
-    double area = 0.5 * ts_dvec3_length(ts_dvec3_cross(ts_dvec3_sub(v[1], v[0]), ts_dvec3_sub(v[2], v[0])));
-    return area < TS_SPHERICAL_AUTO_MIN_ESTIMATE * d2;
+    return info->area < TS_SPHERICAL_AUTO_MIN_ESTIMATE * d2;
 }
 
 static bool use_spherical(const ts_shape_sample_info *info, double omega)
@@ -457,7 +451,7 @@ static bool area_to_solid_angle(ts_dvec3 p_ref, ts_shape_point *pt)
 bool ts_shape_sample_solid_angle(const ts_shape *s, uint32_t prim, const ts_shape_sample_info *info,
                                  const ts_interaction *ref, ts_vec2 u, ts_shape_point *out)
 {
-    if (!(info->area > 0) || edge_on(s, prim, ref)) return false;
+    if (!(info->area > 0) || edge_on(s, info, ref)) return false;
     ts_dvec3 p_ref = dv(ref->p);
     if (sphere_cone(s, info, ref)) {
         ts_dvec3 dc = ts_dvec3_sub(info->center, p_ref);
@@ -485,13 +479,14 @@ bool ts_shape_sample_solid_angle(const ts_shape *s, uint32_t prim, const ts_shap
         out->pdf = (float)(1 / (2 * TS_PI_D * omc));
         return isfinite(out->pdf) && ts_vec3_distance_sq(out->p, ref->p) > 0;
     }
-    if (s->type == TS_SHAPE_MESH && !auto_small(s, prim, info, p_ref)) {
-        ts_dvec3 v[3], w[3], dir;
+    if (s->type == TS_SHAPE_MESH && !auto_small(info, p_ref)) {
+        const ts_dvec3 *v = info->tri_p;
+        ts_dvec3 w[3], dir;
         double omega;
-        if (!spherical_setup(s, prim, p_ref, v, w, &omega)) return false;
+        if (!spherical_setup(info, p_ref, w, &omega)) return false;
         if (use_spherical(info, omega)) {
             if (!sample_spherical_triangle(w, u, &dir)) return false;
-            ts_dvec3 n = ts_dvec3_normalize(ts_dvec3_cross(ts_dvec3_sub(v[1], v[0]), ts_dvec3_sub(v[2], v[0])));
+            ts_dvec3 n = info->tri_n;
             double dn = ts_dvec3_dot(n, dir);
             if (dn == 0) return false;
             double t = ts_dvec3_dot(n, ts_dvec3_sub(v[0], p_ref)) / dn;
@@ -523,16 +518,16 @@ bool ts_shape_sample_solid_angle(const ts_shape *s, uint32_t prim, const ts_shap
 float ts_shape_pdf_solid_angle_at(const ts_shape *s, uint32_t prim, const ts_shape_sample_info *info,
                                   const ts_interaction *ref, ts_vec3 p_hit)
 {
-    if (!(info->area > 0) || edge_on(s, prim, ref)) return 0;
+    if (!(info->area > 0) || edge_on(s, info, ref)) return 0;
     ts_dvec3 p_ref = dv(ref->p);
     if (sphere_cone(s, info, ref)) return (float)(1 / (2 * TS_PI_D * sphere_one_minus_cos(info, p_ref)));
-    if (s->type == TS_SHAPE_MESH && !auto_small(s, prim, info, p_ref)) {
-        ts_dvec3 v[3], w[3];
+    if (s->type == TS_SHAPE_MESH && !auto_small(info, p_ref)) {
+        ts_dvec3 w[3];
         double omega;
-        if (!spherical_setup(s, prim, p_ref, v, w, &omega)) return 0;
+        if (!spherical_setup(info, p_ref, w, &omega)) return 0;
         if (use_spherical(info, omega)) return (float)(1 / omega);
     }
-    ts_shape_point pt = {p_hit, {0, 0, 0}, ts_dvec3_to_vec3(normal_at(s, prim, dv(p_hit))),
+    ts_shape_point pt = {p_hit, {0, 0, 0}, ts_dvec3_to_vec3(normal_at(s, info, dv(p_hit))),
                          ts_shape_pdf_area(s, prim, info, p_hit)};
     if (!(pt.pdf > 0) || !area_to_solid_angle(p_ref, &pt)) return 0;
     return pt.pdf;
@@ -541,7 +536,7 @@ float ts_shape_pdf_solid_angle_at(const ts_shape *s, uint32_t prim, const ts_sha
 float ts_shape_pdf_solid_angle(const ts_shape *s, uint32_t prim, const ts_shape_sample_info *info,
                                const ts_interaction *ref, ts_vec3 wi)
 {
-    if (!(info->area > 0) || edge_on(s, prim, ref)) return 0;
+    if (!(info->area > 0) || edge_on(s, info, ref)) return 0;
     ts_dvec3 p_ref = dv(ref->p), d = ts_dvec3_normalize(dv(wi));
     if (!(ts_dvec3_length(d) > 0)) return 0;
     if (sphere_cone(s, info, ref)) {

@@ -48,6 +48,9 @@ typedef struct ts_shape_sample_info {
     double radius;            /* sphere: world radius when similarity */
     double det_abs;           /* |det| of to_world's linear part */
     ts_triangle_sampling triangle_mode;
+    ts_dvec3 tri_p[3];        /* mesh: triangle prim's vertices (the float positions, in double) */
+    ts_dvec3 tri_n;           /* mesh: its unit normal, normalize((p1 − p0) × (p2 − p0)) in double */
+    float tri_pdf_area;       /* mesh: (float)(1 / area) */
 } ts_shape_sample_info;
 
 /* A point on a shape: world position with its error bound, unit normal on the shape's
@@ -60,7 +63,9 @@ typedef struct ts_shape_point {
 
 /* Precomputes area and sampling data of shape s (triangle prim for meshes). For spheres
  * under a non-uniform scale the area is integrated numerically (relative error < 1e-5).
- * TS_ERR_INVALID for a prim out of range. Not hot-path. */
+ * TS_ERR_INVALID for a prim out of range. Not hot-path. The sampling and pdf functions
+ * below take the info of the same shape and prim (a triangle's vertices and normal are
+ * read from it). */
 ts_status ts_shape_sample_info_init(const ts_shape *s, uint32_t prim, ts_triangle_sampling triangle_mode,
                                     ts_shape_sample_info *info, ts_error *err);
 

@@ -1,12 +1,15 @@
 /* bsdf.c — see bsdf.h (pbrt-v3 §9.1 BSDF, §14.1.6 sampling of the mixture). */
 #include "materials/bsdf.h"
 
+#include <string.h>
+
 #include "sampling/sampling.h"
 
 void ts_bsdf_init(ts_bsdf *b, ts_vec3 ng, ts_vec3 ns, ts_vec3 dpdu, float eta)
 {
     b->ng = ts_vec3_normalize(ng);
-    b->ns = ts_vec3_normalize(ns);
+    /* Without shading normals ns is ng, bit for bit: its normalisation is b->ng's. */
+    b->ns = memcmp(&ns, &ng, sizeof ns) == 0 ? b->ng : ts_vec3_normalize(ns);
     if (!(ts_vec3_length_sq(b->ns) > 0.5f) || !ts_vec3_is_finite(b->ns)) b->ns = b->ng;
     /* Gram–Schmidt dpdu against ns; fall back to an arbitrary tangent. */
     ts_vec3 s = ts_vec3_sub(dpdu, ts_vec3_scale(b->ns, ts_vec3_dot(b->ns, dpdu)));
@@ -93,7 +96,13 @@ bool ts_bsdf_sample_f(const ts_bsdf *b, ts_vec3 wo_world, float u_lobe, ts_vec2 
             if (i != comp) pdf += ts_bxdf_pdf(&b->bxdfs[i], wo, s.wi);
         out->pdf = pdf / (float)n;
         bool reflect = ts_vec3_dot(wi_world, b->ng) * ts_vec3_dot(wo_world, b->ng) > 0;
-        out->f = sum_f(b, wo, s.wi, reflect);
+        /* sum_f of a single lobe is its ts_bxdf_f(wo, wi), which s.f is already (bxdf.h's
+         * sampling contract; exactly so for every lobe but the tabulated Fourier one,
+         * whose sampled f comes from its own inversion). */
+        if (n == 1 && x->type != TS_BXDF_FOURIER)
+            out->f = (x->flags & (reflect ? TS_BXDF_REFLECTION : TS_BXDF_TRANSMISSION)) ? s.f : (ts_rgb){0, 0, 0};
+        else
+            out->f = sum_f(b, wo, s.wi, reflect);
     }
     if (!(out->pdf > 0) || !isfinite(out->pdf) || ts_rgb_is_black(out->f) || !ts_rgb_is_finite(out->f)) return false;
     return true;

@@ -76,11 +76,13 @@ bool ts_render_tile(const ts_render_request *req, int x0, int y0, int w, int h, 
     ts_camera cam = s->camera;
     if (!(fx & TS_EFFECT_DEPTH_OF_FIELD)) cam.lens_radius = 0; /* the lens sample is still drawn */
     for (int y = y0; y < y0 + h; y++)
-        for (int x = x0; x < x0 + w; x++)
+        for (int x = x0; x < x0 + w; x++) {
+            ts_sampler_pixel pixel; /* the pixel's scramble seeds, shared by its samples */
+            ts_sampler_pixel_init(&s->sampler, (uint32_t)x, (uint32_t)y, &pixel);
             for (uint32_t i = req->sample_begin; i < req->sample_end; i++) {
                 if (req->stop && atomic_load_explicit(req->stop, memory_order_relaxed)) return false;
                 ts_sample_stream st;
-                ts_sampler_begin(&s->sampler, (uint32_t)x, (uint32_t)y, i, &st);
+                ts_sampler_begin_in_pixel(&pixel, i, &st);
                 ts_vec2 u_film = ts_sample_2d(&st);
                 /* The lens dimension is reserved either way, so later dimensions keep their
                  * values; a pinhole camera just does not compute it. */
@@ -99,6 +101,7 @@ bool ts_render_tile(const ts_render_request *req, int x0, int y0, int w, int h, 
                 }
                 ts_film_add_sample(req->film, x, y, L, weight);
             }
+        }
     return true;
 }
 

@@ -10,6 +10,8 @@
  * keeps every aligned block of 2^m indices an aligned block of 2^m. */
 #include "sampling/sampler.h"
 
+#include <stddef.h>
+
 #include "core/hash.h"
 
 static inline uint32_t reverse_bits(uint32_t v)
@@ -57,15 +59,30 @@ static inline uint32_t sobol_dim1_reversed(uint32_t i)
 /* Top 24 bits as a float in [0, 1): exact, so no rounding up to 1 or across strata. */
 static inline float bits_to_unit(uint32_t bits) { return (float)(bits >> 8) * 0x1p-24f; }
 
-/* h = ts_hash4(seed, px, py, dim). The index is shuffled by a nested-uniform scramble,
- * x = scramble(reverse_bits(shuffled)) and y = scramble(sobol_dim1(shuffled)), each
- * written out with the double reversals cancelled. */
+/* h = ts_hash4(seed, px, py, dim); the three scramble seeds of that dimension. */
+static inline void dim_seeds(uint32_t h, uint32_t seeds[3])
+{
+    seeds[0] = ts_hash_combine(h, 0x01u);
+    seeds[1] = ts_hash_combine(h, 0x02u);
+    seeds[2] = ts_hash_combine(h, 0x03u);
+}
+
+/* The index is shuffled by a nested-uniform scramble (seeds[0]), x = scramble(
+ * reverse_bits(shuffled)) and y = scramble(sobol_dim1(shuffled)) (seeds[1], seeds[2]),
+ * each written out with the double reversals cancelled. */
+static inline ts_vec2 sobol_value_seeded(const uint32_t seeds[3], uint32_t index)
+{
+    uint32_t shuffled = reverse_bits(lk_permute(reverse_bits(index), seeds[0]));
+    uint32_t x = reverse_bits(lk_permute(shuffled, seeds[1]));
+    uint32_t y = reverse_bits(lk_permute(sobol_dim1_reversed(shuffled), seeds[2]));
+    return (ts_vec2){bits_to_unit(x), bits_to_unit(y)};
+}
+
 static inline ts_vec2 sobol_value_hashed(uint32_t h, uint32_t index)
 {
-    uint32_t shuffled = reverse_bits(lk_permute(reverse_bits(index), ts_hash_combine(h, 0x01u)));
-    uint32_t x = reverse_bits(lk_permute(shuffled, ts_hash_combine(h, 0x02u)));
-    uint32_t y = reverse_bits(lk_permute(sobol_dim1_reversed(shuffled), ts_hash_combine(h, 0x03u)));
-    return (ts_vec2){bits_to_unit(x), bits_to_unit(y)};
+    uint32_t seeds[3];
+    dim_seeds(h, seeds);
+    return sobol_value_seeded(seeds, index);
 }
 
 /* Hash of (seed, px, py): ts_hash4(seed, px, py, d) = ts_hash_combine(pixel_hash, d). */
@@ -103,7 +120,39 @@ void ts_sampler_begin(const ts_sampler *s, uint32_t px, uint32_t py, uint32_t in
     /* The stream caches what every dimension of this sample shares: for sobol the pixel's
      * hash, for independent that combined with the index (see independent_value). */
     if (s->type == TS_SAMPLER_INDEPENDENT) h = ts_hash_combine(h, index);
-    *out = (ts_sample_stream){s->type, s->seed, px, py, index, 0, h};
+    *out = (ts_sample_stream){s->type, s->seed, px, py, index, 0, h, NULL};
+}
+
+void ts_sampler_pixel_init(const ts_sampler *s, uint32_t px, uint32_t py, ts_sampler_pixel *pixel)
+{
+    pixel->type = s->type;
+    pixel->seed = s->seed;
+    pixel->px = px;
+    pixel->py = py;
+    pixel->hash = pixel_hash(s->seed, px, py);
+    pixel->filled = 0;
+}
+
+void ts_sampler_begin_in_pixel(ts_sampler_pixel *pixel, uint32_t index, ts_sample_stream *out)
+{
+    if (pixel->type == TS_SAMPLER_INDEPENDENT) { /* per-sample hashes only: nothing to share */
+        ts_sampler sampler = {pixel->type, pixel->seed};
+        ts_sampler_begin(&sampler, pixel->px, pixel->py, index, out);
+        return;
+    }
+    *out = (ts_sample_stream){pixel->type, pixel->seed, pixel->px, pixel->py, index, 0, pixel->hash, pixel};
+}
+
+/* The seeds of dimension dim (< TS_SAMPLER_PIXEL_DIMS) of a stream's pixel, from its
+ * cache (computed there first if no sample of the pixel has drawn that dimension yet). */
+static inline const uint32_t *cached_seeds(ts_sampler_pixel *p, uint32_t dim)
+{
+    uint64_t bit = (uint64_t)1 << dim;
+    if (!(p->filled & bit)) {
+        dim_seeds(ts_hash_combine(p->hash, dim), p->seeds[dim]);
+        p->filled |= bit;
+    }
+    return p->seeds[dim];
 }
 
 /* One dimension of a stream: value_2d(...) of its sample, from the cached hash. */
@@ -113,6 +162,7 @@ static inline ts_vec2 stream_value(const ts_sample_stream *st, uint32_t dim)
         uint32_t h = ts_hash_combine(st->hash, dim);
         return (ts_vec2){bits_to_unit(h), bits_to_unit(ts_hash_u32(h ^ 0x68e31da4u))};
     }
+    if (st->pixel && dim < TS_SAMPLER_PIXEL_DIMS) return sobol_value_seeded(cached_seeds(st->pixel, dim), st->index);
     return sobol_value_hashed(ts_hash_combine(st->hash, dim), st->index);
 }
 

@@ -36,15 +36,37 @@ typedef struct ts_sampler {
     uint32_t seed;
 } ts_sampler;
 
+/* What all samples of one pixel share (sobol): the scramble seeds of its first
+ * TS_SAMPLER_PIXEL_DIMS dimensions, three hashes each that depend on (seed, px, py, dim)
+ * but not on the sample index. Filled lazily, a dimension when a stream begun from it
+ * first draws it, so a pixel's later samples skip those hashes; the values drawn are bit
+ * for bit those of ts_sampler_begin's streams. Caller storage; one thread's, one pixel at
+ * a time (its streams write to it). */
+#define TS_SAMPLER_PIXEL_DIMS 48 /* ≤ 64: one bit of `filled` each */
+typedef struct ts_sampler_pixel {
+    ts_sampler_type type;
+    uint32_t seed, px, py;
+    uint32_t hash;   /* the pixel's hash (ts_sampler_begin's for sobol) */
+    uint64_t filled; /* bit d: seeds[d] is computed */
+    uint32_t seeds[TS_SAMPLER_PIXEL_DIMS][3];
+} ts_sampler_pixel;
+
 /* One pixel sample's sequence of dimensions; caller storage (e.g. on the stack). */
 typedef struct ts_sample_stream {
     ts_sampler_type type;
     uint32_t seed, px, py, index, dim; /* dim = next dimension to be drawn */
     uint32_t hash; /* set by ts_sampler_begin: hash of what all dimensions share */
+    ts_sampler_pixel *pixel; /* NULL, or the pixel's seed cache (ts_sampler_begin_in_pixel) */
 } ts_sample_stream;
 
 /* Starts sample `index` of pixel (px, py) at dimension 0. */
 void ts_sampler_begin(const ts_sampler *s, uint32_t px, uint32_t py, uint32_t index, ts_sample_stream *out);
+
+/* Starts the seed cache of pixel (px, py), empty. */
+void ts_sampler_pixel_init(const ts_sampler *s, uint32_t px, uint32_t py, ts_sampler_pixel *pixel);
+
+/* ts_sampler_begin for the cache's pixel, drawing through (and filling) the cache. */
+void ts_sampler_begin_in_pixel(ts_sampler_pixel *pixel, uint32_t index, ts_sample_stream *out);
 
 /* In [0, 1); consumes one dimension (the value is the x of that dimension's 2-D value). */
 float ts_sample_1d(ts_sample_stream *st);
