@@ -115,6 +115,7 @@ double ts_rs_student_two_sided(double t, double dof)
 static double block_p(double d, double se, double dof, double scale, double floor, double *t)
 {
     *t = se > 0 ? d / se : 0;
+    if (fabs(d) <= 1e-5 * scale + 1e-12) *t = 0;
     if (fabs(d) <= 1e-5 * scale + 1e-12 || fabs(d) <= floor) return 1;
     if (!(se > 0)) return 0;
     return ts_rs_student_two_sided(*t, dof);

@@ -419,6 +419,10 @@ static void test_selection(void **state)
     assert_false(ts_light_sample_li(&lights[3], shapes, &r, (ts_vec2){0.3f, 0.3f}, &s));
     assert_true(ts_light_pdf_li(&lights[3], shapes, &r, (ts_vec3){0, 0, -1}) == 0);
     assert_rel(ts_light_power(&lights[1], shapes).g, 5 * TS_PI_D * 4 * TS_PI_D * 0.25, 1e-6, "area power LπA");
+    /* A two-sided emitter emits from both faces: twice the power. */
+    ts_light two = lights[1];
+    two.two_sided = true;
+    assert_rel(ts_light_power(&two, shapes).g, 2 * 5 * TS_PI_D * 4 * TS_PI_D * 0.25, 1e-6, "two-sided area power 2LπA");
     ts_arena arena;
     ts_arena_init(&arena, 0);
     for (int mode = 0; mode < 2; mode++) {
