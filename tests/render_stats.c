@@ -12,7 +12,8 @@
 #include <math.h>
 #include <string.h>
 
-void ts_rs_render(ts_scene *s, ts_sampler_type type, uint32_t seed0, int k, int spp, int block, ts_rs_blocks *out)
+void ts_rs_render(ts_scene *s, ts_sampler_type type, uint32_t seed0, int k, int spp, int block,
+                  ts_rs_blocks *out)
 {
     memset(out, 0, sizeof *out);
     int w = s->width, h = s->height;
@@ -143,12 +144,13 @@ ts_rs_result ts_rs_compare(const ts_rs_blocks *a, const ts_rs_blocks *b, double 
     double va = a->image_se * a->image_se, vb = b->image_se * b->image_se, v = va + vb;
     double dof = v > 0 ? v * v / (va * va / (a->k - 1) + vb * vb / (b->k - 1)) : 1;
     r.image_diff = a->image_mean - b->image_mean;
-    r.image_p = block_p(r.image_diff, sqrt(v), dof, fmax(fabs(a->image_mean), fabs(b->image_mean)), floor, &r.image_t);
+    r.image_p = block_p(r.image_diff, sqrt(v), dof, fmax(fabs(a->image_mean), fabs(b->image_mean)), floor,
+                        &r.image_t);
     return r;
 }
 
-ts_rs_result ts_rs_compare_reference(const ts_rs_blocks *a, const double *ref, const double *ref_se, double ref_dof,
-                                     double floor)
+ts_rs_result ts_rs_compare_reference(const ts_rs_blocks *a, const double *ref, const double *ref_se,
+                                     double ref_dof, double floor)
 {
     ts_rs_result r = {1, -1, 0, 0, 0, 0, 0, 1};
     double rsum = 0, rvar = 0;

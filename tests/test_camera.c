@@ -1,11 +1,12 @@
-/* test_camera.c — primary rays against the geometry DESIGN.md §4 gives the camera: `fov`
- * the full angle along the shorter image axis, raster (0,0) the top-left corner with y
- * down, right = forward × up; the orthographic window `height` scene units tall; the thin
+/* test_camera.c — primary rays against the geometry docs/design.md §4 gives the camera:
+ * `fov` the full angle along the shorter image axis, raster (0,0) the top-left corner with
+ * y down, right = forward × up; the orthographic window `height` scene units tall; the thin
  * lens focused on the plane at focus_distance along forward. Exact up to float rounding
  * (relative 1e-5 on angles and positions). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
+/* cmocka needs the three above first */
 #include <cmocka.h>
 
 #include <math.h>
@@ -27,7 +28,10 @@ static ts_camera make(ts_camera_type type, float fov, float ortho_h, float lens,
 }
 
 /* Angle between a ray direction and the view axis (−z). */
-static double off_axis_deg(ts_vec3 d) { return acos(-d.z / sqrt(d.x * d.x + d.y * d.y + d.z * d.z)) * 180 / M_PI; }
+static double off_axis_deg(ts_vec3 d)
+{
+    return acos(-d.z / sqrt(d.x * d.x + d.y * d.y + d.z * d.z)) * 180 / M_PI;
+}
 
 static void test_perspective_fov(void **state)
 {
@@ -35,7 +39,8 @@ static void test_perspective_fov(void **state)
     const ts_vec2 lens = {0.5f, 0.5f};
     /* Landscape 200 × 100: the fov spans the height; the width sees atan(2 tan(fov/2)). */
     ts_camera c = make(TS_CAMERA_PERSPECTIVE, 40, 0, 0, 1, 200, 100);
-    ts_ray top = ts_camera_ray(&c, (ts_vec2){100, 0}, lens), right = ts_camera_ray(&c, (ts_vec2){200, 50}, lens);
+    ts_ray top = ts_camera_ray(&c, (ts_vec2){100, 0}, lens),
+           right = ts_camera_ray(&c, (ts_vec2){200, 50}, lens);
     assert_near(off_axis_deg(top.d), 20, 1e-4, "half the fov at the top edge");
     assert_true(top.d.y > 0 && fabsf(top.d.x) < 1e-6f); /* raster y = 0 is the top */
     assert_near(off_axis_deg(right.d), atan(2 * tan(20 * M_PI / 180)) * 180 / M_PI, 1e-4, "the wider axis");
@@ -44,7 +49,8 @@ static void test_perspective_fov(void **state)
     assert_near(off_axis_deg(centre.d), 0, 1e-3, "centre on the axis");
     /* Portrait 100 × 300: now the fov spans the width. */
     c = make(TS_CAMERA_PERSPECTIVE, 60, 0, 0, 1, 100, 300);
-    ts_ray left = ts_camera_ray(&c, (ts_vec2){0, 150}, lens), bottom = ts_camera_ray(&c, (ts_vec2){50, 300}, lens);
+    ts_ray left = ts_camera_ray(&c, (ts_vec2){0, 150}, lens),
+           bottom = ts_camera_ray(&c, (ts_vec2){50, 300}, lens);
     assert_near(off_axis_deg(left.d), 30, 1e-4, "half the fov at the left edge");
     assert_true(left.d.x < 0);
     assert_near(off_axis_deg(bottom.d), atan(3 * tan(30 * M_PI / 180)) * 180 / M_PI, 1e-4, "the taller axis");

@@ -131,7 +131,7 @@ static void test_alias(void **state)
     ts_arena_fini(&arena);
 }
 
-/* Light selection with many lights (issue 17): 10^6 weights spread log-uniformly over
+/* Light selection with many lights: 10^6 weights spread log-uniformly over
  * three decades (powers 1 to 1000), sampled N = 2^24 times with the values the renderer
  * feeds the table — one 2-D dimension of the independent sampler per draw, multiples of
  * 2^-24 — and the counts compared with the returned pmfs by Pearson's χ² over bins of

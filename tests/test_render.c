@@ -142,9 +142,9 @@ static void test_translated_and_scaled_scenes_render_alike(void **state)
     ts_film_destroy(ref);
 }
 
-/* Pixel (x, y) is the raster square [x, x+1) × [y, y+1), raster y downwards (DESIGN.md
- * §4): an orthographic camera whose 8 × 8 film spans 8 × 8 scene units looks at an
- * emitting rectangle covering raster [0, 2.75) × [0, 5.5). With the box filter of radius
+/* Pixel (x, y) is the raster square [x, x+1) × [y, y+1), raster y downwards
+ * (docs/design.md §4): an orthographic camera whose 8 × 8 film spans 8 × 8 scene units
+ * looks at an emitting rectangle covering raster [0, 2.75) × [0, 5.5). With the box filter of radius
  * 0.5 each pixel is the covered fraction of its square, and 64 Sobol samples — a
  * (0,6,2)-net — hit a strip of a quarter or a half of the square exactly that often: 1,
  * 0.75, 0 across and 1, 0.5, 0 down, to 1/64 (a sample exactly on an edge). A sample put
