@@ -2,7 +2,8 @@
 #   make run    install what is missing, build, serve with the built-in Cornell box queued
 #   make test   install what is missing, build, run the whole suite through ctest
 # Also: make build, make deps, make test-asan, make test-tsan, make fuzz, make bench (+ bench-deps),
-#       make bench-compare, make image (+ image-deps), make clean.
+#       make bench-compare, make image (+ image-deps), make mutants (the mutation campaign,
+#       tests/mutation/README.md), make clean.
 
 BUILD      ?= build
 BUILD_TYPE ?= Release
@@ -30,7 +31,7 @@ IMAGE_PACKAGES := podman runc catatonit debootstrap
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: all run test build deps test-asan test-tsan fuzz fuzz-build bench bench-compare bench-deps image image-deps clean
+.PHONY: all run test build deps test-asan test-tsan fuzz fuzz-build bench bench-compare bench-deps image image-deps mutants clean
 
 all: build
 
@@ -130,6 +131,14 @@ image: image-deps
 # ÷ 1 thread, and tessera ÷ Cycles at equal RMSE where Blender is installed.
 bench-compare: build
 	bench/compare.sh $(BUILD)
+
+# The mutation campaign (tests/mutation/README.md): each mutant of tests/mutation/mutants.txt
+# applied to a scratch copy of the tree, rebuilt, and the renderer-level tests run against
+# it; prints which test killed it and the kill rate. By hand only, never part of `make test`.
+# MUTANTS_ARGS passes options, e.g. MUTANTS_ARGS="--only M19 --keep".
+MUTANTS_ARGS ?=
+mutants: deps
+	tests/mutation/run $(MUTANTS_ARGS)
 
 clean:
 	rm -rf build build-asan build-tsan build-fuzz cornell.exr cornell.png

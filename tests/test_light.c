@@ -387,8 +387,8 @@ static void test_sample_vs_pdf(void **state)
 }
 
 /* Light selection: pmfs exact and summing to 1, emitting lights > 0, the returned pmf is
- * the distribution's, frequencies over a fine u grid match the pmfs (alias table: within
- * n/2^20 of each pmf, from the float grid), a zero-area triangle is never chosen. */
+ * the distribution's, frequencies over a fine grid of u (bin × coin) match the pmfs
+ * (within the grid's resolution of the coin), a zero-area triangle is never chosen. */
 static void test_selection(void **state)
 {
     (void)state;
@@ -419,6 +419,10 @@ static void test_selection(void **state)
     assert_false(ts_light_sample_li(&lights[3], shapes, &r, (ts_vec2){0.3f, 0.3f}, &s));
     assert_true(ts_light_pdf_li(&lights[3], shapes, &r, (ts_vec3){0, 0, -1}) == 0);
     assert_rel(ts_light_power(&lights[1], shapes).g, 5 * TS_PI_D * 4 * TS_PI_D * 0.25, 1e-6, "area power LπA");
+    /* A two-sided emitter emits from both faces: twice the power. */
+    ts_light two = lights[1];
+    two.two_sided = true;
+    assert_rel(ts_light_power(&two, shapes).g, 2 * 5 * TS_PI_D * 4 * TS_PI_D * 0.25, 1e-6, "two-sided area power 2LπA");
     ts_arena arena;
     ts_arena_init(&arena, 0);
     for (int mode = 0; mode < 2; mode++) {
@@ -439,17 +443,21 @@ static void test_selection(void **state)
             else assert_true(p == 0);
         }
         assert_rel(sum, 1, 1e-6, "pmfs sum to 1");
+        /* u.x at 256 points per alias bin, u.y (the coin) at 1024: an outcome gathers at
+         * most 5 bins' shares, each resolved to 1/1024 of 1/5. */
         int count[5] = {0};
-        const int n = 1 << 20;
-        for (int k = 0; k < n; k++) {
-            float pmf;
-            uint32_t i = ts_light_distribution_sample(&d, (k + 0.5f) / n, &pmf);
-            assert_true(i < 5);
-            assert_true(pmf == ts_light_distribution_pmf(&d, i));
-            count[i]++;
-        }
+        const int nx = 5 * 256, ny = 1024;
+        for (int a = 0; a < nx; a++)
+            for (int b = 0; b < ny; b++) {
+                float pmf;
+                uint32_t i = ts_light_distribution_sample(&d, (ts_vec2){(a + 0.5f) / nx, (b + 0.5f) / ny}, &pmf);
+                assert_true(i < 5);
+                assert_true(pmf == ts_light_distribution_pmf(&d, i));
+                count[i]++;
+            }
+        const double n = (double)nx * ny;
         for (int i = 0; i < 5; i++)
-            if (fabs((double)count[i] / n - w[i] / wsum) > 8.0 / n)
+            if (fabs(count[i] / n - w[i] / wsum) > 1.0 / ny)
                 fail_msg("mode %d light %d: frequency %g, pmf %g", mode, i, (double)count[i] / n, w[i] / wsum);
         assert_int_equal(count[3], 0);
     }
@@ -457,7 +465,7 @@ static void test_selection(void **state)
     ts_error err = {0};
     assert_int_equal(ts_light_distribution_init(&empty, lights, 0, shapes, TS_LIGHT_SAMPLING_POWER, &arena, &err), TS_OK);
     float pmf = 1;
-    assert_true(ts_light_distribution_sample(&empty, 0.5f, &pmf) == TS_NONE && pmf == 0);
+    assert_true(ts_light_distribution_sample(&empty, (ts_vec2){0.5f, 0.5f}, &pmf) == TS_NONE && pmf == 0);
     ts_arena_fini(&arena);
 }
 

@@ -1,5 +1,6 @@
 /* test_render.c — the tile renderer: the film is bit-identical whatever the thread count
- * and however the sample range is split into passes (docs/design.md §6). */
+ * and however the sample range is split into passes (docs/design.md §6), and each sample
+ * lands in the pixel whose square it was drawn in. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -141,11 +142,47 @@ static void test_translated_and_scaled_scenes_render_alike(void **state)
     ts_film_destroy(ref);
 }
 
+/* Pixel (x, y) is the raster square [x, x+1) × [y, y+1), raster y downwards
+ * (docs/design.md §4): an orthographic camera whose 8 × 8 film spans 8 × 8 scene units
+ * looks at an emitting rectangle covering raster [0, 2.75) × [0, 5.5). With the box filter of radius
+ * 0.5 each pixel is the covered fraction of its square, and 64 Sobol samples — a
+ * (0,6,2)-net — hit a strip of a quarter or a half of the square exactly that often: 1,
+ * 0.75, 0 across and 1, 0.5, 0 down, to 1/64 (a sample exactly on an edge). A sample put
+ * in the wrong pixel, or a filter offset by a pixel, moves the edges by whole pixels. */
+static void test_pixels_are_registered(void **state)
+{
+    (void)state;
+    const char *doc =
+        "{\"tessera\":1,\"camera\":{\"type\":\"orthographic\",\"from\":[0,0,5],\"to\":[0,0,0],\"up\":[0,1,0],"
+        "\"height\":8},\"film\":{\"width\":8,\"height\":8,\"filter\":{\"type\":\"box\",\"radius\":0.5}},"
+        "\"integrator\":{\"type\":\"path\",\"max_depth\":0},\"materials\":{\"k\":{\"type\":\"diffuse\",\"reflectance\":0}},"
+        "\"shapes\":[{\"type\":\"mesh\",\"material\":\"k\",\"emission\":1,"
+        "\"positions\":[-4,-1.5,0, -1.25,-1.5,0, -1.25,4,0, -4,4,0],\"indices\":[0,1,2, 0,2,3]}]}";
+    ts_scene *s = NULL;
+    ts_error err = {0};
+    if (ts_scene_load_text(doc, strlen(doc), NULL, "registration", NULL, &s, &err)) fail_msg("%s", err.message);
+    ts_film *f = ts_film_create(8, 8, 0, 0, 8, 8, &err);
+    assert_non_null(f);
+    ts_render_stats stats = {0};
+    ts_render_request req = {s, s->integrator.type, f, 0, 64, 2, NULL, NULL, NULL};
+    assert_int_equal(ts_render(&req, &stats, &err), TS_OK);
+    const double cx[8] = {1, 1, 0.75, 0, 0, 0, 0, 0}, cy[8] = {1, 1, 1, 1, 1, 0.5, 0, 0};
+    for (int y = 0; y < 8; y++)
+        for (int x = 0; x < 8; x++) {
+            double v = ts_film_pixel_rgb(f, x, y).g, want = cx[x] * cy[y];
+            if (!(fabs(v - want) <= 1.0 / 64 + 1e-6))
+                fail_msg("pixel (%d, %d) is %.4f, expected %.4f (the covered fraction of its square)", x, y, v, want);
+        }
+    ts_film_destroy(f);
+    ts_scene_destroy(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_thread_count_and_passes_do_not_change_pixels),
         cmocka_unit_test(test_translated_and_scaled_scenes_render_alike),
+        cmocka_unit_test(test_pixels_are_registered),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -149,7 +149,7 @@ static bool nee_samples_bsdf(uint32_t fx) { return (fx & (TS_EFFECT_AREA_LIGHTS 
 static ts_rgb sample_one_light(const ts_scene *s, uint32_t fx, const ts_interaction *si, const ts_bsdf *bsdf,
                                ts_sample_stream *st, ts_counters *c)
 {
-    float u_select = ts_sample_1d(st);
+    ts_vec2 u_select = ts_sample_2d(st); /* x: the alias bin, y: its coin (integrator.h) */
     ts_vec2 u_light = ts_sample_2d(st);
     float u_lobe = 0;
     ts_vec2 u_bsdf = {0, 0};
@@ -199,7 +199,7 @@ static ts_rgb sample_all_lights(const ts_scene *s, uint32_t fx, const ts_interac
  * distribution, one light sample. Its MIS partner is the path's own next BSDF sample,
  * whose hit adds the emission it finds weighted by the power heuristic (li_path), so no
  * extra BSDF ray is traced here. Both pdfs include the light's selection pmf. */
-static ts_rgb path_nee(const ts_scene *s, const ts_interaction *si, const ts_bsdf *bsdf, float u_select,
+static ts_rgb path_nee(const ts_scene *s, const ts_interaction *si, const ts_bsdf *bsdf, ts_vec2 u_select,
                        ts_vec2 u_light, ts_counters *c)
 {
     float pmf;
@@ -295,7 +295,7 @@ static ts_rgb li_path(const ts_scene *s, uint32_t fx, ts_ray ray, ts_sample_stre
         ts_material_bsdf(&s->materials[s->shapes[si.shape].material], &si, &bsdf);
         uint32_t flags = ts_bsdf_flags(&bsdf);
         if (flags & ~TS_BXDF_SPECULAR & (TS_BXDF_DIFFUSE | TS_BXDF_GLOSSY)) {
-            float u_select = ts_sample_1d(st);
+            ts_vec2 u_select = ts_sample_2d(st); /* x: the alias bin, y: its coin */
             ts_vec2 u_light = ts_sample_2d(st);
             L = ts_rgb_add(L, ts_rgb_mul(beta, path_nee(s, &si, &bsdf, u_select, u_light, c)));
         } else {

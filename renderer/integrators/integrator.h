@@ -4,7 +4,26 @@
  * pointers on the hot path). Random numbers come only from the sample stream, whose
  * dimensions 0 and 1 the camera has used, so a sample's value depends only on (seed,
  * pixel, index, dimension). Nothing here allocates or locks; counters are per worker.
- * `ao` and `normals` are debugging views that need no lights. */
+ * `ao` and `normals` are debugging views that need no lights.
+ *
+ * Sample dimensions (sampler.h: every dimension is 2-D; a 1-D draw uses its x and leaves
+ * its y unused). A dimension is consumed whether or not its value is computed (effects.h
+ * skips what nothing reads), so each has a fixed place:
+ *   camera (render.c)          0 film position, 1 lens
+ *   path, vertex k ≥ 0 from 2 + 5k:
+ *     +0 light selection       x: the alias-table bin, y: the bin's coin (distribution.h)
+ *     +1 light sample          the point or direction on the chosen light
+ *     +2 lobe choice           x (y free)
+ *     +3 BSDF sample           the continuation direction (MIS's BSDF half)
+ *     +4 Russian roulette      x (y free)
+ *   direct, strategy one, at each vertex: +0 selection (x bin, y coin), +1 light sample,
+ *     +2 lobe choice (x), +3 BSDF sample; then, for a specular bounce, +4 lobe choice and
+ *     +5 BSDF sample of the specular continuation, and the next vertex after those.
+ *   direct, strategy all: per light +0 light sample, +1 lobe choice (x), +2 BSDF sample,
+ *     drawn at samples_per_light consecutive sequence indices (an array); then the
+ *     specular continuation's +0 lobe choice, +1 BSDF sample.
+ * The selection's coin lives in the y of the selection's own dimension, so it is
+ * independent of the bin and stratified with it, at no extra dimension. */
 #ifndef TS_INTEGRATOR_H
 #define TS_INTEGRATOR_H
 

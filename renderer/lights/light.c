@@ -252,7 +252,7 @@ ts_status ts_light_distribution_init(ts_light_distribution *d, const ts_light *l
     return TS_OK;
 }
 
-uint32_t ts_light_distribution_sample(const ts_light_distribution *d, float u, float *pmf)
+uint32_t ts_light_distribution_sample(const ts_light_distribution *d, ts_vec2 u, float *pmf)
 {
     if (d->n == 0) {
         if (pmf) *pmf = 0;

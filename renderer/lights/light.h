@@ -123,8 +123,9 @@ typedef struct ts_light_distribution {
 ts_status ts_light_distribution_init(ts_light_distribution *d, const ts_light *lights, uint32_t n,
                                      const ts_shape *shapes, ts_light_sampling mode, ts_arena *arena,
                                      ts_error *err);
-/* Index of a light with probability *pmf; TS_NONE (pmf 0) when there are no lights. */
-uint32_t ts_light_distribution_sample(const ts_light_distribution *d, float u, float *pmf);
+/* Index of a light with probability *pmf; TS_NONE (pmf 0) when there are no lights. u is
+ * one 2-D sample (ts_alias_table_sample: u.x the bin, u.y the coin). */
+uint32_t ts_light_distribution_sample(const ts_light_distribution *d, ts_vec2 u, float *pmf);
 /* Probability of selecting light i (0 if out of range). */
 float ts_light_distribution_pmf(const ts_light_distribution *d, uint32_t i);
 

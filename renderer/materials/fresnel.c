@@ -53,6 +53,8 @@ ts_rgb ts_fresnel_eval(const ts_fresnel *f, float cos_theta_i)
     switch (f->type) {
     case TS_FRESNEL_ONE: return ts_rgb_gray(1);
     case TS_FRESNEL_DIELECTRIC: return ts_rgb_gray(ts_fresnel_dielectric(cos_theta_i, f->eta_i, f->eta_t));
+    case TS_FRESNEL_DIELECTRIC_TWO_SIDED:
+        return ts_rgb_gray(ts_fresnel_dielectric(fabsf(cos_theta_i), f->eta_i, f->eta_t));
     case TS_FRESNEL_CONDUCTOR: return ts_fresnel_conductor(cos_theta_i, f->eta_i, f->eta, f->k);
     case TS_FRESNEL_SCHLICK: {
         float m = 1 - ts_clampf(fabsf(cos_theta_i), 0, 1), m5 = (m * m) * (m * m) * m;

@@ -12,6 +12,7 @@
 typedef enum ts_fresnel_type {
     TS_FRESNEL_ONE,        /* F = 1 (perfect mirror) */
     TS_FRESNEL_DIELECTRIC, /* eta_i: index on the normal's side, eta_t: the other side */
+    TS_FRESNEL_DIELECTRIC_TWO_SIDED, /* a coat seen from outside on either side: eta_i → eta_t at |cosθ| */
     TS_FRESNEL_CONDUCTOR,  /* complex index eta + i·k of the conductor, per channel, from eta_i */
     TS_FRESNEL_SCHLICK,    /* Schlick's approximation with normal-incidence reflectance r0 */
 } ts_fresnel_type;
@@ -39,6 +40,14 @@ static inline ts_fresnel ts_fresnel_one(void) { return (ts_fresnel){.type = TS_F
 static inline ts_fresnel ts_fresnel_make_dielectric(float eta_i, float eta_t)
 {
     return (ts_fresnel){.type = TS_FRESNEL_DIELECTRIC, .eta_i = eta_i, .eta_t = eta_t};
+}
+/* The Fresnel term of a dielectric coat that has its outside (eta_i) on both faces, as
+ * plastic's: light arriving on either side goes from eta_i into eta_t, so there is no
+ * total internal reflection whatever the sign of the cosine (pbrt-v3's FresnelDielectric
+ * would swap the indices for a cosine below the normal's side). */
+static inline ts_fresnel ts_fresnel_make_dielectric_two_sided(float eta_i, float eta_t)
+{
+    return (ts_fresnel){.type = TS_FRESNEL_DIELECTRIC_TWO_SIDED, .eta_i = eta_i, .eta_t = eta_t};
 }
 static inline ts_fresnel ts_fresnel_make_conductor(float eta_i, ts_rgb eta, ts_rgb k)
 {

@@ -21,7 +21,16 @@
  * down by the coat is not re-added, so kd = ks = 1 smooth plastic reflects 0.91 at normal
  * incidence rising to ~1 at grazing, and rough plastic (whose microfacet lobe also loses
  * its shadowed energy) at most 0.89 (α = 1) to 0.99 (α → 0) (test_material prints them).
- * Substrate (FresnelBlend) is already coupled in its own formula and is pbrt-v3's. */
+ * Substrate (FresnelBlend) is already coupled in its own formula and is pbrt-v3's.
+ *
+ * The coat is two-sided: seen from behind (wo below the shading normal: a one-sided
+ * surface's back, a leaf, an open box seen from inside) light still arrives at the coat
+ * from the air, so its Fresnel term is F from 1 into 1.5 at |cosθ| on both sides
+ * (ts_fresnel_make_dielectric_two_sided) — the coupled diffuse lobe's own |cos| rule.
+ * A one-sided dielectric Fresnel swapped the indices below the normal and totally
+ * reflected beyond 41.8° while the diffuse lobe still took (1 − F(|cos|)), so kd = ks = 1
+ * reflected 1.86 at cosθo = −0.7 (smooth) and 1.66 (α = 0.1); now every albedo is the
+ * front side's (test_material's furnace sweeps both sides of every material). */
 #include "materials/material.h"
 
 #include "materials/bsdf.h"
@@ -70,7 +79,7 @@ void ts_material_bsdf(const ts_material *m, const ts_interaction *si, ts_bsdf *o
         break;
     }
     case TS_MATERIAL_PLASTIC: {
-        ts_fresnel fr = ts_fresnel_make_dielectric(1, 1.5f);
+        ts_fresnel fr = ts_fresnel_make_dielectric_two_sided(1, 1.5f);
         if (nonblack(m->diffuse)) ts_bsdf_add(out, ts_bxdf_lambertian_coupled(m->diffuse, m->specular, fr));
         if (!nonblack(m->specular)) break;
         if (smooth) ts_bsdf_add(out, ts_bxdf_specular_reflection(m->specular, fr));

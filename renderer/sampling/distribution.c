@@ -156,11 +156,14 @@ ts_status ts_alias_table_init(ts_alias_table *t, const double *w, uint32_t n, ts
 {
     memset(t, 0, sizeof *t);
     if (n == 0) return ts_error_set(err, TS_ERR_INVALID, "alias table: no weights");
+    if (n > (1u << 24)) return ts_error_set(err, TS_ERR_INVALID, "alias table: %u weights, at most 2^24", n);
+    uint32_t nb = 1;
+    while (nb < n) nb <<= 1;
     float *pmf = ts_arena_calloc(arena, n, sizeof *pmf);
-    float *q = ts_arena_calloc(arena, n, sizeof *q);
-    uint32_t *alias = ts_arena_calloc(arena, n, sizeof *alias);
-    double *scaled = malloc((size_t)n * sizeof *scaled);
-    uint32_t *work = malloc((size_t)n * sizeof *work);
+    float *q = ts_arena_calloc(arena, nb, sizeof *q);
+    uint32_t *alias = ts_arena_calloc(arena, nb, sizeof *alias);
+    double *scaled = malloc((size_t)nb * sizeof *scaled);
+    uint32_t *work = malloc((size_t)nb * sizeof *work);
     ts_status st = TS_OK;
     if (!pmf || !q || !alias || !scaled || !work) {
         st = ts_error_set(err, TS_ERR_NOMEM, "alias table: out of memory for %u weights", n);
@@ -174,21 +177,21 @@ ts_status ts_alias_table_init(ts_alias_table *t, const double *w, uint32_t n, ts
         }
         sum += w[i];
     }
-    for (uint32_t i = 0; i < n; i++) {
-        double p = sum > 0 ? w[i] / sum : 1.0 / n;
-        pmf[i] = (float)p;
-        scaled[i] = p * n;
-        alias[i] = i;
+    for (uint32_t i = 0; i < nb; i++) {
+        double p = i >= n ? 0 : (sum > 0 ? w[i] / sum : 1.0 / n);
+        if (i < n) pmf[i] = (float)p;
+        scaled[i] = p * nb;
+        alias[i] = i < n ? i : 0;
     }
     /* work holds small indices from the front and large ones from the back. */
     uint32_t n_small = 0, n_large = 0;
-    for (uint32_t i = 0; i < n; i++) {
+    for (uint32_t i = 0; i < nb; i++) {
         if (scaled[i] < 1.0) work[n_small++] = i;
-        else work[n - 1 - n_large++] = i;
+        else work[nb - 1 - n_large++] = i;
     }
     while (n_small > 0 && n_large > 0) {
         uint32_t s = work[--n_small];
-        uint32_t l = work[n - n_large]; /* most recently pushed large */
+        uint32_t l = work[nb - n_large]; /* most recently pushed large */
         q[s] = (float)scaled[s];
         alias[s] = l;
         scaled[l] = (scaled[l] + scaled[s]) - 1.0;
@@ -197,20 +200,20 @@ ts_status ts_alias_table_init(ts_alias_table *t, const double *w, uint32_t n, ts
             work[n_small++] = l;
         }
     }
-    /* Leftovers are 1 up to rounding. */
-    for (uint32_t k = 0; k < n_small; k++) q[work[k]] = 1.0f;
-    for (uint32_t k = 0; k < n_large; k++) q[work[n - 1 - k]] = 1.0f;
+    /* Leftovers are 1 up to rounding (an extra bin, of mass exactly 0, is never one). */
+    for (uint32_t k = 0; k < n_small; k++) q[work[k]] = work[k] < n ? 1.0f : 0.0f;
+    for (uint32_t k = 0; k < n_large; k++) q[work[nb - 1 - k]] = 1.0f;
     /* An outcome of probability 0 must never be returned, even through rounding: send its
-     * bin wholly to its alias (or to any positive outcome). */
+     * bin wholly to its alias (or to any positive outcome); the extra bins likewise. */
     uint32_t any_positive = 0;
     while (any_positive < n && pmf[any_positive] == 0) any_positive++;
-    if (any_positive < n) {
-        for (uint32_t i = 0; i < n; i++) {
-            if (pmf[i] == 0) q[i] = 0.0f;
-            if (q[i] < 1.0f && pmf[alias[i]] == 0) alias[i] = any_positive;
-        }
+    if (any_positive == n) any_positive = 0;
+    for (uint32_t i = 0; i < nb; i++) {
+        if (i >= n || pmf[i] == 0) q[i] = 0.0f;
+        if (q[i] < 1.0f && (alias[i] >= n || pmf[alias[i]] == 0)) alias[i] = any_positive;
     }
     t->n = n;
+    t->n_bins = nb;
     t->pmf = pmf;
     t->q = q;
     t->alias = alias;
@@ -221,12 +224,12 @@ fail_free:
     return st;
 }
 
-uint32_t ts_alias_table_sample(const ts_alias_table *t, float u, float *pmf)
+uint32_t ts_alias_table_sample(const ts_alias_table *t, ts_vec2 u, float *pmf)
 {
-    double x = (double)u * t->n; /* double: bins stay resolved for large n */
-    uint32_t i = x < (double)t->n ? (uint32_t)x : t->n - 1;
-    float up = ts_minf((float)(x - i), TS_ONE_MINUS_EPSILON);
-    uint32_t k = up < t->q[i] ? i : t->alias[i];
+    /* n_bins is a power of two ≤ 2^24, so this product is exact for sampler values. */
+    float x = u.x * (float)t->n_bins;
+    uint32_t i = x < (float)t->n_bins ? (uint32_t)x : t->n_bins - 1;
+    uint32_t k = u.y < t->q[i] ? i : t->alias[i];
     if (pmf) *pmf = t->pmf[k];
     return k;
 }

@@ -64,20 +64,33 @@ ts_vec2 ts_distribution2d_invert(const ts_distribution2d *d, ts_vec2 p);
 /* Integral of f over [0,1)² (mean of f). */
 static inline float ts_distribution2d_integral(const ts_distribution2d *d) { return d->marginal.func_int; }
 
-/* Walker/Vose alias table over n ≥ 1 non-negative weights. pmf[i] = w[i] / Σ w, computed
- * in double; if every weight is 0 the table is uniform (total_weight = 0 tells you). */
+/* Walker/Vose alias table over 1 ≤ n ≤ 2^24 non-negative weights. pmf[i] = w[i] / Σ w,
+ * computed in double; if every weight is 0 the table is uniform (total_weight = 0 tells
+ * you). The table has n_bins = the power of two ≥ n bins (the n_bins − n extra ones hold
+ * no outcome of their own: keep probability 0, always their alias), so a sampler value —
+ * a multiple of 2^-24 — picks a bin from its top log2(n_bins) bits with exactly equal
+ * probability for every bin; with n bins, 10^6 lights got 16 or 17 of the 2^24 values
+ * each, their probabilities off by −4.6% to +1.3%. */
 typedef struct ts_alias_table {
-    uint32_t n;
+    uint32_t n;             /* outcomes */
+    uint32_t n_bins;        /* power of two ≥ n */
     const float *pmf;       /* n exact probabilities */
-    const float *q;         /* n: probability of keeping bin i */
-    const uint32_t *alias;  /* n: the other outcome of bin i */
+    const float *q;         /* n_bins: probability of keeping bin i */
+    const uint32_t *alias;  /* n_bins: the other outcome of bin i */
     double total_weight;    /* Σ w */
 } ts_alias_table;
 
+/* TS_ERR_INVALID for n = 0, n > 2^24 or a negative or non-finite weight; TS_ERR_NOMEM. */
 ts_status ts_alias_table_init(ts_alias_table *t, const double *w, uint32_t n, ts_arena *arena, ts_error *err);
 /* Index with probability pmf[index]; *pmf if not NULL. Never returns an index whose pmf
- * is 0 (unless all are 0 and the table is uniform). */
-uint32_t ts_alias_table_sample(const ts_alias_table *t, float u, float *pmf);
+ * is 0 (unless all are 0 and the table is uniform). u.x picks the bin, u.y is the coin
+ * that keeps it or takes its alias: two independent values — in the integrators the two
+ * components of one 2-D sampler dimension, which the (0,2)-sequence stratifies jointly
+ * (integrator.h). The coin must not be frac(u.x·n_bins) of the same value: sampler values
+ * are multiples of 2^-24, so a bin holds only 2^24/n_bins of them and the coin would take
+ * that few values; with 10^6 lights of uneven power the real probabilities were off the
+ * pmf by up to 8.6× and 18% of the lights were never chosen (test_distribution's χ²). */
+uint32_t ts_alias_table_sample(const ts_alias_table *t, ts_vec2 u, float *pmf);
 static inline float ts_alias_table_pmf(const ts_alias_table *t, uint32_t i) { return i < t->n ? t->pmf[i] : 0.0f; }
 
 #endif
