@@ -84,7 +84,13 @@ function renderJobs() {
   const list = [...jobs.values()].sort((a, b) => b.created_at - a.created_at);
   $('jobs-empty').hidden = list.length > 0;
   const rows = list.map((j) => {
-    const frac = j.spp_target > 0 ? Math.min(1, j.spp_done / j.spp_target) : 0;
+    // progress: the server's (0–1 of the first halting bound, moving within a pass); a job
+    // halted by its time limit or target error reads as such, not as a partial bar.
+    const frac = j.progress != null ? j.progress : j.spp_target > 0 ? Math.min(1, j.spp_done / j.spp_target) : 0;
+    const why = { time_limit: 'time limit reached', target_error: 'target error reached', cancelled: 'cancelled',
+      spp: 'all samples', restored: 'restored' }[j.halt_reason];
+    const progressText = finished(j.state) ? (why || j.state)
+      : Math.round(100 * frac) + '%' + (j.eta_s != null ? ' · ETA ' + fmtTime(j.eta_s) : '');
     const row = el('tr', { 'data-id': j.id, class: j.id === selectedId ? 'selected' : '' },
       el('td', { 'data-label': 'Job' }, el('button', { class: 'link', type: 'button', 'aria-label': 'show job ' + jobLabel(j) + ' in the preview',
         'aria-pressed': j.id === selectedId ? 'true' : 'false', onclick: () => select(j.id) }, jobLabel(j)),
@@ -92,10 +98,11 @@ function renderJobs() {
       el('td', { 'data-label': 'State' }, el('span', { class: 'state state-' + j.state, title: j.error || j.halt_reason || '' }, j.state),
         j.error ? el('div', { class: 'err small' }, j.error) : ''),
       el('td', { 'data-label': 'Progress' }, el('progress', { max: '1', value: String(frac), 'aria-label': 'progress of ' + j.id }),
-        el('span', { class: 'small' }, ' ' + Math.round(100 * frac) + '%')),
+        el('span', { class: 'small progress-text' }, ' ' + progressText)),
       el('td', { 'data-label': 'spp', class: 'num' }, j.spp_done + ' / ' + j.spp_target),
       el('td', { 'data-label': 'Samples/s', class: 'num' }, fmtRate(j.samples_per_s)),
-      el('td', { 'data-label': 'Error', class: 'num' }, fmtNum(j.error_estimate)),
+      el('td', { 'data-label': 'Error', class: 'num', title: j.error_estimate == null ? 'not known yet (fewer than 2 samples per pixel)' : '' },
+        j.error_estimate == null ? 'n/a' : fmtNum(j.error_estimate)),
       el('td', { 'data-label': 'Elapsed', class: 'num' }, fmtTime(j.elapsed_s)),
       el('td', { 'data-label': 'Effects', class: 'effects small' }, (j.effects || []).join(', ')),
       el('td', { 'data-label': 'Actions', class: 'actions' },
@@ -594,6 +601,7 @@ function select(id) {
   hover = null;
   placeHover();
   $('preview-job').textContent = '— ' + jobLabel(j);
+  loadHistory(id);
   $('preview-status').textContent = j.state;
   openStream(id);
   renderJobs();
@@ -607,12 +615,22 @@ $('exposure').addEventListener('input', () => {
 $('outline').addEventListener('change', drawOutlines);
 
 // ------------------------------------------------------------------ plots
+// The job's whole convergence series from the server (GET …/history, kept across restarts
+// with --data), so a new tab or a reload shows the whole curve, finished jobs included.
+async function loadHistory(id) {
+  const r = await api('/api/v1/jobs/' + encodeURIComponent(id) + '/history');
+  if (!r.ok || !r.body || !Array.isArray(r.body.points)) return;
+  for (const p of r.body.points) addPoint(id, p.elapsed_s, p.error_estimate, p.spp);
+  updatePlots(true);
+}
+
 function setCompare(id) {
   if (compareId && compareId !== selectedId) closeStream(compareId);
   compareId = id;
   if (id) {
     const j = jobs.get(id);
     if (j && !finished(j.state)) openStream(id);
+    loadHistory(id);
   }
   updatePlots(true);
 }
@@ -623,12 +641,23 @@ const PLOT_H = 190;
 function plotWidth() {
   return Math.max(240, Math.min(640, $('plot-error').clientWidth));
 }
+const LOG_INCRS = [1, 2, 5].flatMap((m) => [-6, -5, -4, -3, -2, -1, 0, 1, 2, 3, 4, 5, 6].map((e) => m * 10 ** e)).sort((a, b) => a - b);
+function logTicks(u, splits) {
+  return splits.map((v) => {
+    if (v == null) return '';
+    const lead = v / 10 ** Math.floor(Math.log10(v) + 1e-9);
+    if (![1, 2, 5].some((m) => Math.abs(lead - m) < 1e-6)) return '';
+    return v >= 1e4 || v < 1e-3 ? v.toExponential(0) : String(Number(v.toPrecision(3)));
+  });
+}
 function makePlot(target, title, ylabel, names) {
   const colors = ['#2f7ed8', '#e4572e'];
   return new uPlot({
     title, width: plotWidth(), height: PLOT_H, padding: [8, 18, 0, 0],
     scales: { x: { time: false, distr: 3 }, y: { distr: 3 } },
-    axes: [{ label: 'elapsed (s)' }, { label: ylabel, size: 60 }],
+    // Log axes with a label at every 1, 2, 5 × 10^k, so a curve can be read off.
+    axes: [{ label: 'elapsed (s)', space: 36, incrs: LOG_INCRS, values: logTicks },
+      { label: ylabel, size: 64, space: 22, incrs: LOG_INCRS, values: logTicks }],
     series: [{ label: 'elapsed (s)' }, ...names.map((n, i) => ({ label: n, stroke: colors[i], width: 2, spanGaps: true,
       points: { show: true, size: 5 } }))],
     legend: { show: true, live: false },
