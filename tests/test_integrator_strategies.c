@@ -228,7 +228,12 @@ static const char *plates_fmt =
  * by a 4×4 grid of quads in the ceiling (32 triangle lights), a sphere light and a sky
  * (a constant environment, seen through the open side: MIS weighs escaping rays too);
  * max_depth 4 with roulette after 2 bounces; uniform light selection (power would give
- * the sky, whose power grows with the scene's radius², most of the samples). */
+ * the sky, whose power grows with the scene's radius², most of the samples). Light
+ * sampling alone must find the plastic's and the gold's highlights of the small lights,
+ * too rarely for 16 renders: its block means are skewed (in 52 calibration runs 30 of its
+ * 104 block comparisons had a smallest p below 1e-3, 8× what normal means give, and 4
+ * would have failed), while its image mean is not (none below 1e-2), so here it is held
+ * to the image mean; MIS and BSDF sampling are held block by block. */
 static void box_doc(char *buf, size_t n)
 {
     char pos[2048] = "", idx[1024] = "", v[64];
@@ -349,6 +354,9 @@ typedef struct glossy_case {
     int spp, block;
     const double *ref, *ref_se;
     int ref_n;
+    /* Light sampling alone is compared on the whole image only: block by block it is
+     * skewed where it must find a glossy highlight (see the box). */
+    bool light_image_only;
 } glossy_case;
 
 static void print_reference(const glossy_case *g, const char *tag)
@@ -395,14 +403,20 @@ static void check_strategies(const glossy_case *g)
             fail_msg("%s: %d blocks, the reference has %d (TS_PRINT_REFERENCE=1)", g->name, r[i].n, g->ref_n);
         ts_rs_result c = ts_rs_compare_reference(&r[i], g->ref, g->ref_se, 31, floor);
         char what[96];
-        snprintf(what, sizeof what, "%s sampling − reference", strategies[i]);
-        ok &= report(what, &c, r[i].n, comparisons);
+        snprintf(what, sizeof what, "%s sampling − reference%s", strategies[i],
+                 i == 1 && g->light_image_only ? " (image)" : "");
+        bool image_only = i == 1 && g->light_image_only;
+        if (image_only) c.p = 1, c.block = -1;
+        ok &= report(what, &c, image_only ? 0 : r[i].n, comparisons);
     }
     for (int i = 1; i < 3; i++) {
         ts_rs_result c = ts_rs_compare(&r[i], &r[0], floor);
         char what[96];
-        snprintf(what, sizeof what, "%s sampling − MIS", strategies[i]);
-        ok &= report(what, &c, r[i].n, comparisons);
+        snprintf(what, sizeof what, "%s sampling − MIS%s", strategies[i],
+                 i == 1 && g->light_image_only ? " (image)" : "");
+        bool image_only = i == 1 && g->light_image_only;
+        if (image_only) c.p = 1, c.block = -1;
+        ok &= report(what, &c, image_only ? 0 : r[i].n, comparisons);
     }
     print_message("  image: MIS %.4f ± %.4f, light %.4f ± %.4f, BSDF %.4f ± %.4f\n", r[0].image_mean,
                   r[0].image_se, r[1].image_mean, r[1].image_se, r[2].image_mean, r[2].image_se);
@@ -416,7 +430,8 @@ static const glossy_case plates = {"glossy plates under four lights",
                                    4,
                                    plates_ref,
                                    plates_ref_se,
-                                   sizeof plates_ref / sizeof *plates_ref};
+                                   sizeof plates_ref / sizeof *plates_ref,
+                                   false};
 static const glossy_case box = {
     "box with glossy and plastic spheres, 34 lights, 4 bounces",
     NULL,
@@ -426,7 +441,8 @@ static const glossy_case box = {
     4,
     box_ref,
     box_ref_se,
-    sizeof box_ref / sizeof *box_ref};
+    sizeof box_ref / sizeof *box_ref,
+    true};
 
 static void test_glossy_plates_four_lights(void **state)
 {
