@@ -14,7 +14,8 @@
  * 1e-3 per test if block means are normal (each averages 256 or more samples). Skewed
  * estimators break that: light sampling alone on a sharp glossy lobe finds its highlight
  * too rarely, and the scenes keep every strategy's variance moderate for that reason.
- * TS_CALIBRATE=N re-runs the tests N times with fresh seeds and counts how often the
+ * TS_CALIBRATE=N re-runs the tests N times with fresh seeds (TS_CALIBRATE_FROM=k starts
+ * at the k-th set) and counts how often the
  * smallest p falls below 1e-2, 1e-3, 1e-4 against what normal block means would give;
  * the measured rate is in tests/mutation/README.md.
  *
@@ -482,9 +483,10 @@ int main(void)
     };
     int status = cmocka_run_group_tests(tests, NULL, NULL);
     int reps = getenv("TS_CALIBRATE") ? atoi(getenv("TS_CALIBRATE")) : 0;
+    int first = getenv("TS_CALIBRATE_FROM") ? atoi(getenv("TS_CALIBRATE_FROM")) : 1; /* to resume a series */
     if (reps > 0) {
         memset(&calib, 0, sizeof calib);
-        for (int k = 1; k <= reps; k++) {
+        for (int k = first; k < first + reps; k++) {
             seed_shift = 100000u * (uint32_t)k;
             cmocka_run_group_tests(tests, NULL, NULL);
         }
