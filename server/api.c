@@ -507,6 +507,20 @@ static int metrics(srv_request *r)
                    "# HELP tessera_event_streams_dropped_total Event streams ended for falling too far behind.\n"
                    "# TYPE tessera_event_streams_dropped_total counter\ntessera_event_streams_dropped_total %llu\n",
                    atomic_load(&srv->sse_limits->total), (unsigned long long)atomic_load(&srv->sse_limits->dropped));
+    if (srv->persist && srv->data_dir)
+        srv_buf_printf(&buf, &len, &cap,
+                       "# HELP tessera_checkpoint_temporaries_removed_total Temporary files of interrupted checkpoint writes removed (--data).\n"
+                       "# TYPE tessera_checkpoint_temporaries_removed_total counter\ntessera_checkpoint_temporaries_removed_total %llu\n"
+                       "# HELP tessera_checkpoint_stray_entries Entries under --data's jobs/ that are not job folders (ignored).\n"
+                       "# TYPE tessera_checkpoint_stray_entries gauge\ntessera_checkpoint_stray_entries %llu\n"
+                       "# HELP tessera_checkpoint_damaged_total Checkpoints refused at restore (their jobs render again).\n"
+                       "# TYPE tessera_checkpoint_damaged_total counter\ntessera_checkpoint_damaged_total %llu\n"
+                       "# HELP tessera_checkpoint_failures_total Checkpoint attempts that failed (retried with backoff).\n"
+                       "# TYPE tessera_checkpoint_failures_total counter\ntessera_checkpoint_failures_total %llu\n",
+                       (unsigned long long)atomic_load(&srv->persist->temporaries_removed),
+                       (unsigned long long)atomic_load(&srv->persist->stray_entries),
+                       (unsigned long long)atomic_load(&srv->persist->damaged),
+                       (unsigned long long)atomic_load(&srv->persist->failures));
     srv_metrics_format(srv->metrics, &buf, &len, &cap);
     if (!buf) return srv_http_error(r, 500, "out of memory");
     int ret = srv_http_reply(r, 200, "text/plain; version=0.0.4; charset=utf-8", buf, len);

@@ -12,6 +12,7 @@
 struct srv_store;
 struct srv_metrics;
 struct srv_events_limits;
+struct srv_persist_stats;
 struct ts_scheduler;
 
 /* What the routes read: the server's parts and the settings that concern them. Owned by
@@ -26,6 +27,7 @@ typedef struct srv_api {
     struct ts_scheduler *sched;
     struct srv_metrics *metrics;
     struct srv_events_limits *sse_limits; /* event-stream subscriber caps */
+    struct srv_persist_stats *persist;    /* checkpoint counters (--data), or NULL */
 } srv_api;
 
 /* The handler table of API v1 over api (srv_http_start takes it). */

@@ -50,6 +50,7 @@ typedef struct srv_job {
     atomic_uint_fast64_t version;
     atomic_bool started_logged;  /* the job.started line is written once */
     uint64_t saved_version;      /* maintenance thread only */
+    double ckpt_backoff_s, ckpt_retry_at; /* failing checkpoints' retry (persist.c); maintenance thread only */
     /* The convergence series (GET …/history): a point at every pass end, once a second
      * while the job renders (srv_job_tick) and at the end; guarded by hist_mu. */
     pthread_mutex_t hist_mu;

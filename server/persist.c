@@ -3,6 +3,9 @@
 
 #include <dirent.h>
 #include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <nettle/sha2.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -11,12 +14,66 @@
 
 #include "tessera.h"
 
-#define FILM_MAGIC "TSFILM01"
+/* film.bin: the header, the tiles' spp (uint32 each), the pixels (ts_film_pixel each). The
+ * header's sha256 is the SHA-256 of every other byte of the file (the header up to it and
+ * all that follows), so a file damaged anywhere is refused. "TSFILM01" files (no digest)
+ * are refused as damaged: their jobs render again from their scenes. */
+#define FILM_MAGIC "TSFILM02"
 
 typedef struct film_header {
     char magic[8];
     int32_t full_w, full_h, x0, y0, w, h, nx, ny;
+    uint8_t sha256[SHA256_DIGEST_SIZE];
 } film_header;
+
+#define FILM_DIGEST_AT offsetof(film_header, sha256)
+
+/* The digest of a film file of len bytes (the header's own digest field skipped). */
+static void film_digest(const unsigned char *buf, size_t len, uint8_t out[SHA256_DIGEST_SIZE])
+{
+    struct sha256_ctx ctx;
+    sha256_init(&ctx);
+    sha256_update(&ctx, FILM_DIGEST_AT, buf);
+    sha256_update(&ctx, len - sizeof(film_header), buf + sizeof(film_header));
+    sha256_digest(&ctx, SHA256_DIGEST_SIZE, out);
+}
+
+/* Rewrites err's sentence with every "DIR/" taken out, so paths read relative to --data
+ * ("jobs/ID/film.bin"): answers and job statuses never name a path of the server's. */
+static void relative_to(ts_error *err, const char *dir)
+{
+    char prefix[4200], out[sizeof err->message];
+    int n = snprintf(prefix, sizeof prefix, "%s/", dir);
+    if (n <= 1 || (size_t)n >= sizeof prefix) return;
+    size_t o = 0;
+    for (const char *m = err->message; *m && o + 1 < sizeof out;) {
+        if (!strncmp(m, prefix, (size_t)n)) m += n;
+        else out[o++] = *m++;
+    }
+    out[o] = '\0';
+    memcpy(err->message, out, o + 1);
+}
+
+/* True for a name the atomic writer gives its temporary files ("<name>.tmp.<pid>.<n>"). */
+static bool is_temporary(const char *name) { return strstr(name, ".tmp.") != NULL; }
+
+/* Removes the temporary files in folder (debris of a crash, or of a write whose clean-up
+ * failed); returns how many. The caller holds the job's disk lock or runs before any
+ * writer starts, so none of them is being written. */
+static int sweep_temporaries(const char *folder)
+{
+    DIR *d = opendir(folder);
+    if (!d) return 0;
+    int n = 0;
+    char path[4400];
+    for (struct dirent *e = readdir(d); e; e = readdir(d)) {
+        if (!is_temporary(e->d_name)) continue;
+        snprintf(path, sizeof path, "%s/%s", folder, e->d_name);
+        if (unlink(path) == 0) n++;
+    }
+    closedir(d);
+    return n;
+}
 
 static ts_status make_dir(const char *path, ts_error *err)
 {
@@ -91,11 +148,13 @@ static ts_status save_files(const char *dir, srv_job *j, bool with_film, ts_erro
         cJSON_Delete(o);
         return ts_error_set(err, TS_ERR_NOMEM, "out of memory for a checkpoint of %zu bytes", bytes);
     }
-    film_header h = {FILM_MAGIC, f->full_width, f->full_height, f->x0, f->y0, f->width, f->height, j->nx, j->ny};
+    film_header h = {{0}, f->full_width, f->full_height, f->x0, f->y0, f->width, f->height, j->nx, j->ny, {0}};
     memcpy(h.magic, FILM_MAGIC, 8);
-    memcpy(buf, &h, sizeof h);
     memcpy(buf + sizeof h, tile_spp, n_tiles * sizeof(uint32_t));
     memcpy(buf + sizeof h + n_tiles * sizeof(uint32_t), f->pixels, n_px * sizeof(ts_film_pixel));
+    memcpy(buf, &h, sizeof h);
+    film_digest(buf, bytes, h.sha256);
+    memcpy(buf + FILM_DIGEST_AT, h.sha256, sizeof h.sha256);
     ts_film_destroy(f);
     free(tile_spp);
     snprintf(path, sizeof path, "%s/film.bin", folder);
@@ -115,19 +174,29 @@ state:
 }
 
 /* save_files under the job's disk lock; a deleted job is not written again. */
-static ts_status save_locked(const char *dir, srv_job *j, bool with_film, ts_error *err)
+static ts_status save_locked(const char *dir, srv_job *j, bool with_film, srv_persist_stats *stats, ts_error *err)
 {
+    bool finished = with_film && ts_job_state_finished(srv_job_state(j));
     pthread_mutex_lock(&j->disk_mu);
     ts_status st = j->removed ? TS_OK : save_files(dir, j, with_film, err);
+    if (!st && finished && !j->removed) {
+        /* The job's last checkpoint: no write of its folder follows, so whatever temporary
+         * file is left there (a crashed process's, or one whose removal failed) goes. */
+        char folder[4096];
+        snprintf(folder, sizeof folder, "%s/jobs/%s", dir, j->id);
+        int n = sweep_temporaries(folder);
+        if (n && stats) atomic_fetch_add(&stats->temporaries_removed, (uint64_t)n);
+    }
     pthread_mutex_unlock(&j->disk_mu);
+    if (st) relative_to(err, dir);
     return st;
 }
 
-ts_status srv_persist_save(const char *dir, srv_job *j, ts_error *err) { return save_locked(dir, j, true, err); }
+ts_status srv_persist_save(const char *dir, srv_job *j, ts_error *err) { return save_locked(dir, j, true, NULL, err); }
 
 ts_status srv_persist_save_submitted(const char *dir, srv_job *j, ts_error *err)
 {
-    return save_locked(dir, j, false, err);
+    return save_locked(dir, j, false, NULL, err);
 }
 
 void srv_persist_remove(const char *dir, srv_job *j)
@@ -147,24 +216,38 @@ void srv_persist_remove(const char *dir, srv_job *j)
     pthread_mutex_unlock(&j->disk_mu);
 }
 
-int srv_persist_save_changed(const char *dir, srv_store *st)
+int srv_persist_save_changed(const char *dir, srv_store *st, const srv_persist_retry *retry, srv_persist_stats *stats)
 {
     int n = 0, count = 0;
+    double now = ts_now_seconds();
     srv_job **jobs = srv_store_list(st, &n);
     for (int i = 0; jobs && i < n; i++) {
         srv_job *j = jobs[i];
         uint64_t v = atomic_load(&j->version);
-        if (v != j->saved_version) {
+        if (v != j->saved_version && (!retry || j->ckpt_backoff_s <= 0 || now >= j->ckpt_retry_at)) {
             ts_error err = {0};
-            if (srv_persist_save(dir, j, &err)) {
+            bool was_failing = j->ckpt_backoff_s > 0;
+            if (save_locked(dir, j, true, stats, &err)) {
                 /* Rendering goes on; the previous checkpoint files stay as they were (each
-                 * is replaced only by an atomic rename). Logged when the reason changes. */
-                if (srv_job_set_checkpoint_error(j, err.message))
-                    fprintf(stderr, "tessera: checkpoint of job %s failed, the previous one is kept: %s\n", j->id,
-                            err.message);
+                 * is replaced only by an atomic rename). Retried after a delay that doubles
+                 * from retry->first_s up to retry->max_s; one log line when the job's
+                 * checkpoints start failing and one when they land again. */
+                if (stats) atomic_fetch_add(&stats->failures, 1);
+                if (retry) {
+                    double d = was_failing ? 2 * j->ckpt_backoff_s : retry->first_s;
+                    j->ckpt_backoff_s = d < retry->max_s ? d : retry->max_s;
+                    j->ckpt_retry_at = now + j->ckpt_backoff_s;
+                } else {
+                    j->ckpt_backoff_s = 1; /* failing, for the log */
+                }
+                srv_job_set_checkpoint_error(j, err.message);
+                if (!was_failing)
+                    fprintf(stderr, "tessera: checkpoint of job %s failed, the previous one is kept (retrying with backoff): %s\n",
+                            j->id, err.message);
             } else {
-                if (srv_job_set_checkpoint_error(j, NULL))
-                    fprintf(stderr, "tessera: checkpoint of job %s written again\n", j->id);
+                srv_job_set_checkpoint_error(j, NULL);
+                if (was_failing) fprintf(stderr, "tessera: checkpoint of job %s written again\n", j->id);
+                j->ckpt_backoff_s = 0;
                 j->saved_version = v;
                 count++;
             }
@@ -177,59 +260,113 @@ int srv_persist_save_changed(const char *dir, srv_store *st)
 
 /* ---------------------------------------------------------------- restore */
 
-static char *read_all(const char *path, size_t *len)
+/* Reads a whole regular file; NULL with *why set (a sentence fragment) otherwise. Opened
+ * with O_NOFOLLOW | O_NONBLOCK and checked with fstat before reading, so a symbolic link
+ * cannot redirect a restore and a FIFO or device cannot block it. */
+static char *read_all(const char *path, size_t *len, const char **why)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f) return NULL;
-    char *buf = NULL;
-    size_t cap = 0, n = 0;
-    for (;;) {
-        if (n + 65536 > cap) {
-            cap = cap ? cap * 2 : 262144;
-            char *b = realloc(buf, cap + 1);
-            if (!b) {
-                free(buf);
-                fclose(f);
-                return NULL;
-            }
-            buf = b;
-        }
-        size_t r = fread(buf + n, 1, cap - n, f);
-        n += r;
-        if (r == 0) break;
+    *why = "cannot be read";
+    int fd = open(path, O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) {
+        *why = errno == ENOENT ? "is missing" : errno == ELOOP ? "is a symbolic link" : "cannot be opened";
+        return NULL;
     }
-    fclose(f);
+    struct stat sb;
+    if (fstat(fd, &sb) != 0 || !S_ISREG(sb.st_mode)) {
+        *why = "is not a regular file";
+        close(fd);
+        return NULL;
+    }
+    size_t cap = (size_t)sb.st_size, n = 0;
+    char *buf = malloc(cap + 1);
+    if (!buf) {
+        *why = "does not fit in memory";
+        close(fd);
+        return NULL;
+    }
+    while (n < cap) {
+        ssize_t r = read(fd, buf + n, cap - n);
+        if (r < 0 && errno == EINTR) continue;
+        if (r <= 0) break;
+        n += (size_t)r;
+    }
+    close(fd);
+    if (n != cap) { /* changed under us */
+        free(buf);
+        return NULL;
+    }
     buf[n] = '\0';
     *len = n;
     return buf;
 }
 
-static ts_film *read_film(const char *path, int nx, int ny, uint32_t **tile_spp, ts_error *err)
+/* Whether a restored film holds only finite sums (a matching digest makes this redundant
+ * for damage; it keeps the film's own invariant, no NaN or Inf, whatever wrote the file). */
+static bool film_finite(const ts_film *f)
+{
+    for (size_t i = 0; i < (size_t)f->width * (size_t)f->height; i++) {
+        const ts_film_pixel *p = &f->pixels[i];
+        for (int c = 0; c < 3; c++)
+            if (!isfinite(p->sum[c]) || !isfinite(p->sum_sq[c]) || p->sum_sq[c] < 0) return false;
+        if (!isfinite(p->weight) || !isfinite(p->weight_sq) || p->weight_sq < 0) return false;
+    }
+    return true;
+}
+
+/* Reads film.bin for a scene of that crop window and tile grid. NULL when there is none
+ * (*missing) or it is damaged (err says how, naming the file relative to --data). */
+static ts_film *read_film(const char *path, const char *rel, const ts_scene *s, int nx, int ny, uint32_t **tile_spp,
+                          bool *missing, ts_error *err)
 {
     size_t len = 0;
-    unsigned char *buf = (unsigned char *)read_all(path, &len);
+    const char *why;
+    unsigned char *buf = (unsigned char *)read_all(path, &len, &why);
     film_header h;
+    *missing = false;
     if (!buf) {
-        ts_error_set(err, TS_ERR_IO, "%s: cannot read the checkpoint", path);
+        *missing = !strcmp(why, "is missing");
+        ts_error_set(err, TS_ERR_IO, "%s %s", rel, why);
         return NULL;
     }
     ts_film *f = NULL;
+    const char *bad = "is truncated or does not match the scene";
+    size_t n_tiles = (size_t)nx * (size_t)ny, n_px = 0;
+    uint8_t digest[SHA256_DIGEST_SIZE];
     if (len < sizeof h) goto bad;
     memcpy(&h, buf, sizeof h);
-    if (memcmp(h.magic, FILM_MAGIC, 8) != 0 || h.nx != nx || h.ny != ny) goto bad;
-    size_t n_tiles = (size_t)nx * (size_t)ny;
+    if (memcmp(h.magic, FILM_MAGIC, 8) != 0) {
+        bad = memcmp(h.magic, "TSFILM01", 8) ? "is not a film checkpoint" : "has no checksum (an older format)";
+        goto bad;
+    }
+    if (h.nx != nx || h.ny != ny || h.full_w != s->width || h.full_h != s->height || h.x0 != s->crop_x0 ||
+        h.y0 != s->crop_y0 || h.w != s->crop_x1 - s->crop_x0 || h.h != s->crop_y1 - s->crop_y0)
+        goto bad;
+    n_px = (size_t)h.w * (size_t)h.h;
+    if (len != sizeof h + n_tiles * 4 + n_px * sizeof(ts_film_pixel)) goto bad;
+    film_digest(buf, len, digest);
+    if (memcmp(digest, h.sha256, sizeof digest) != 0) {
+        bad = "fails its checksum (damaged)";
+        goto bad;
+    }
     f = ts_film_create(h.full_w, h.full_h, h.x0, h.y0, h.w, h.h, err);
     if (!f) goto fail;
-    size_t n_px = (size_t)h.w * (size_t)h.h;
-    if (len != sizeof h + n_tiles * 4 + n_px * sizeof(ts_film_pixel)) goto bad;
     *tile_spp = malloc(n_tiles * 4);
-    if (!*tile_spp) goto bad;
+    if (!*tile_spp) {
+        ts_error_set(err, TS_ERR_NOMEM, "%s does not fit in memory", rel);
+        goto fail;
+    }
     memcpy(*tile_spp, buf + sizeof h, n_tiles * 4);
     memcpy(f->pixels, buf + sizeof h + n_tiles * 4, n_px * sizeof(ts_film_pixel));
+    if (!film_finite(f)) {
+        free(*tile_spp);
+        *tile_spp = NULL;
+        bad = "holds sums that are not finite";
+        goto bad;
+    }
     free(buf);
     return f;
 bad:
-    ts_error_set(err, TS_ERR_INVALID, "%s: the checkpoint is truncated or does not match the scene", path);
+    ts_error_set(err, TS_ERR_INVALID, "%s %s", rel, bad);
 fail:
     ts_film_destroy(f);
     free(buf);
@@ -251,16 +388,22 @@ static double num(const cJSON *o, const char *k, double def)
     return cJSON_IsNumber(v) ? v->valuedouble : def;
 }
 
+/* Restores one job folder. What the server finished stays finished; a checkpoint that
+ * cannot be used (job.json unreadable, film.bin missing for a finished job, damaged or
+ * of another scene) does not fail the job: it renders again from its scene, the log says
+ * why and its status carries the reason in checkpoint_error until the next checkpoint
+ * lands. A job fails here only when its scene no longer loads (or it had failed). */
 static void restore_one(const char *dir, const char *id, srv_store *st, const ts_scene_limits *limits,
-                        const char *assets_dir)
+                        const char *assets_dir, srv_persist_stats *stats)
 {
-    char folder[4096], path[4200];
+    char folder[4096], path[4200], rel[200];
     snprintf(folder, sizeof folder, "%s/jobs/%s", dir, id);
     size_t jlen = 0, slen = 0;
+    const char *jwhy, *swhy;
     snprintf(path, sizeof path, "%s/job.json", folder);
-    char *jtext = read_all(path, &jlen);
+    char *jtext = read_all(path, &jlen, &jwhy);
     snprintf(path, sizeof path, "%s/scene.json", folder);
-    char *stext = read_all(path, &slen);
+    char *stext = read_all(path, &slen, &swhy);
     cJSON *meta = jtext ? cJSON_ParseWithLength(jtext, jlen) : NULL;
     ts_error err = {0};
     srv_restore r = {0};
@@ -270,11 +413,12 @@ static void restore_one(const char *dir, const char *id, srv_store *st, const ts
     ts_scene *scene = NULL;
     ts_film *film = NULL;
     uint32_t *tile_spp = NULL;
-    char failure[600] = "";
-    if (!meta || !stext) {
-        snprintf(failure, sizeof failure, "checkpoint of job %s is unreadable (job.json or scene.json)", id);
+    char failure[600] = "", damaged[600] = "";
+    if (!stext) {
+        snprintf(failure, sizeof failure, "the checkpoint of job %s is unusable: jobs/%s/scene.json %s", id, id, swhy);
         goto add;
     }
+    if (!meta) snprintf(damaged, sizeof damaged, "jobs/%s/job.json %s", id, jtext ? "does not parse" : jwhy);
     const cJSON *name = cJSON_GetObjectItemCaseSensitive(meta, "name");
     const cJSON *state = cJSON_GetObjectItemCaseSensitive(meta, "state");
     const cJSON *fail = cJSON_GetObjectItemCaseSensitive(meta, "error");
@@ -302,18 +446,26 @@ static void restore_one(const char *dir, const char *id, srv_store *st, const ts
         goto add;
     }
     r.settings.integrator = scene->integrator.type;
+    if (!meta) ts_job_settings_from_scene(scene, &r.settings);
+    if (r.state == TS_JOB_FAILED) goto add;
     int nx, ny;
     ts_tile_grid_size(scene->crop_x1 - scene->crop_x0, scene->crop_y1 - scene->crop_y0, &nx, &ny);
     snprintf(path, sizeof path, "%s/film.bin", folder);
-    struct stat sb;
-    if (stat(path, &sb) == 0) {
-        film = read_film(path, nx, ny, &tile_spp, &err);
-        if (!film) {
-            snprintf(failure, sizeof failure, "%s", err.message);
-            goto add;
-        }
+    snprintf(rel, sizeof rel, "jobs/%s/film.bin", id);
+    bool missing = false;
+    if (!damaged[0]) {
+        film = read_film(path, rel, scene, nx, ny, &tile_spp, &missing, &err);
+        if (!film && (!missing || ts_job_state_finished(r.state))) snprintf(damaged, sizeof damaged, "%s", err.message);
     }
-    if (ts_job_state_finished(r.state) && !film && !failure[0]) snprintf(failure, sizeof failure, "the film checkpoint is missing");
+    if (damaged[0]) {
+        /* From the scene, as if just submitted: no samples, counters or series kept. */
+        ts_film_destroy(film);
+        free(tile_spp);
+        film = NULL, tile_spp = NULL;
+        r.state = TS_JOB_QUEUED;
+        r.elapsed_s = 0, r.nonfinite = 0, r.history = NULL;
+        if (stats) atomic_fetch_add(&stats->damaged, 1);
+    }
 add:
     if (failure[0]) r.failure = failure;
     r.scene = scene;
@@ -322,8 +474,16 @@ add:
     srv_job *j = srv_store_restore(st, &r, &err);
     if (j && j->sj) scene = NULL, film = NULL; /* the job owns them now */
     if (j) {
-        j->saved_version = atomic_load(&j->version);
-        fprintf(stderr, "tessera: restored job %s (%s)\n", id, r.failure ? r.failure : ts_job_state_name(r.state));
+        if (damaged[0]) {
+            char why[700];
+            snprintf(why, sizeof why, "the checkpoint was damaged (%s): the job renders again from its scene", damaged);
+            srv_job_set_checkpoint_error(j, why);
+            j->saved_version = 0; /* write a good checkpoint at the next chance */
+            fprintf(stderr, "tessera: restored job %s (queued): %s\n", id, why);
+        } else {
+            j->saved_version = atomic_load(&j->version);
+            fprintf(stderr, "tessera: restored job %s (%s)\n", id, r.failure ? r.failure : ts_job_state_name(r.state));
+        }
     }
     srv_job_release(j);
     ts_scene_destroy(scene);
@@ -334,17 +494,51 @@ add:
     free(stext);
 }
 
-int srv_persist_restore_all(const char *dir, srv_store *st, const ts_scene_limits *limits, const char *assets_dir)
+/* A job folder's name: what job ids are made of, [0-9A-Za-z_-], at most 23 characters. */
+static bool job_id_name(const char *name)
+{
+    size_t n = strlen(name);
+    if (n == 0 || n >= sizeof(((entry *)0)->id)) return false;
+    for (size_t i = 0; i < n; i++) {
+        char c = name[i];
+        if (!((c >= '0' && c <= '9') || (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_' || c == '-'))
+            return false;
+    }
+    return true;
+}
+
+int srv_persist_restore_all(const char *dir, srv_store *st, const ts_scene_limits *limits, const char *assets_dir,
+                            srv_persist_stats *stats)
 {
     char path[4096];
     snprintf(path, sizeof path, "%s/jobs", dir);
     DIR *d = opendir(path);
     if (!d) return 0;
     entry *e = NULL;
-    int n = 0, cap = 0;
+    int n = 0, cap = 0, stray = 0, swept = 0;
     struct dirent *de;
     while ((de = readdir(d))) {
-        if (de->d_name[0] == '.' || strlen(de->d_name) >= sizeof e->id) continue;
+        if (!strcmp(de->d_name, ".") || !strcmp(de->d_name, "..")) continue;
+        char folder[4200], jp[4300];
+        snprintf(folder, sizeof folder, "%s/%s", path, de->d_name);
+        struct stat sb;
+        /* Only folders named like a job are jobs (lstat: a symbolic link is not one); a
+         * stray file or link is left alone and counted, and holds no --max-jobs place. */
+        if (!job_id_name(de->d_name) || lstat(folder, &sb) != 0 || !S_ISDIR(sb.st_mode)) {
+            stray++;
+            continue;
+        }
+        swept += sweep_temporaries(folder); /* before any writer starts */
+        snprintf(jp, sizeof jp, "%s/scene.json", folder);
+        if (lstat(jp, &sb) != 0 && errno == ENOENT) {
+            snprintf(jp, sizeof jp, "%s/job.json", folder);
+            if (lstat(jp, &sb) != 0 && errno == ENOENT) {
+                /* Neither file ever landed (a submission on a full disk, a crash before
+                 * the first rename): nothing was accepted from here. */
+                if (rmdir(folder) != 0) stray++;
+                continue;
+            }
+        }
         if (n == cap) {
             cap = cap ? cap * 2 : 16;
             entry *ne = realloc(e, sizeof *e * (size_t)cap);
@@ -352,10 +546,10 @@ int srv_persist_restore_all(const char *dir, srv_store *st, const ts_scene_limit
             e = ne;
         }
         snprintf(e[n].id, sizeof e[n].id, "%s", de->d_name);
-        char jp[4200];
-        snprintf(jp, sizeof jp, "%s/%s/job.json", path, de->d_name);
+        snprintf(jp, sizeof jp, "%s/job.json", folder);
         size_t len = 0;
-        char *t = read_all(jp, &len);
+        const char *why;
+        char *t = read_all(jp, &len, &why);
         cJSON *o = t ? cJSON_ParseWithLength(t, len) : NULL;
         e[n].created = o ? num(o, "created_at", 0) : 0;
         cJSON_Delete(o);
@@ -363,8 +557,15 @@ int srv_persist_restore_all(const char *dir, srv_store *st, const ts_scene_limit
         n++;
     }
     closedir(d);
+    if (stats) {
+        atomic_store(&stats->stray_entries, (uint64_t)stray);
+        atomic_fetch_add(&stats->temporaries_removed, (uint64_t)swept);
+    }
+    if (swept || stray)
+        fprintf(stderr, "tessera serve: --data: removed %d temporary file(s) left by an earlier run; %d entr%s under jobs/ %s not a job (left alone)\n",
+                swept, stray, stray == 1 ? "y" : "ies", stray == 1 ? "is" : "are");
     if (n) qsort(e, (size_t)n, sizeof *e, cmp_entry); /* e may be NULL when the folder is empty */
-    for (int i = 0; i < n; i++) restore_one(dir, e[i].id, st, limits, assets_dir);
+    for (int i = 0; i < n; i++) restore_one(dir, e[i].id, st, limits, assets_dir, stats);
     free(e);
     return n;
 }

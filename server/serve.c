@@ -174,7 +174,11 @@ static void *maintenance(void *arg)
         pthread_mutex_unlock(&srv->mu);
         now = ts_now_seconds();
         if (srv->cfg.data_dir && (kicked || now >= next_ckpt)) {
-            srv_persist_save_changed(srv->cfg.data_dir, srv->store);
+            /* A failing job is retried after 1 s (or the interval, when shorter), doubling
+             * up to 10 s (or the interval, when longer). */
+            double ci = srv->cfg.checkpoint_interval_s;
+            srv_persist_retry retry = {ci < 1 ? ci : 1, ci > 10 ? ci : 10};
+            srv_persist_save_changed(srv->cfg.data_dir, srv->store, &retry, &srv->persist);
             if (now >= next_ckpt) next_ckpt = now + srv->cfg.checkpoint_interval_s;
         }
         if (now >= next_ka) {
@@ -215,7 +219,7 @@ bool srv_server_start(srv_server *srv, int *port_out, char *err, size_t err_len)
             snprintf(err, err_len, "--data: %s", e.message);
             goto fail;
         }
-        int n = srv_persist_restore_all(cfg->data_dir, srv->store, &cfg->limits, cfg->assets_dir);
+        int n = srv_persist_restore_all(cfg->data_dir, srv->store, &cfg->limits, cfg->assets_dir, &srv->persist);
         if (n) fprintf(stderr, "tessera serve: %d job(s) restored from %s\n", n, cfg->data_dir);
     }
     if (cfg->assets_dir)
@@ -240,7 +244,7 @@ bool srv_server_start(srv_server *srv, int *port_out, char *err, size_t err_len)
     atomic_init(&srv->sse_limits.total, 0);
     atomic_init(&srv->sse_limits.dropped, 0);
     srv->api = (srv_api){cfg->token, cfg->data_dir, cfg->cors_origin, cfg->bind, cfg->allowed_hosts, srv->store, srv->sched, srv->metrics,
-                         &srv->sse_limits};
+                         &srv->sse_limits, &srv->persist};
     srv_http_config hc = {cfg->bind,       cfg->port,        cfg->http_threads, cfg->client_timeout_s,
                           cfg->max_client_conns, cfg->max_body, cfg->cors_origin, srv->metrics,
                           srv->offload, &srv->log};
@@ -267,7 +271,7 @@ void srv_server_stop(srv_server *srv, bool checkpoint)
     }
     if (srv->sched) ts_scheduler_stop(srv->sched);
     if (cfg->data_dir && srv->store && checkpoint) {
-        int n = srv_persist_save_changed(cfg->data_dir, srv->store);
+        int n = srv_persist_save_changed(cfg->data_dir, srv->store, NULL, &srv->persist);
         fprintf(stderr, "tessera serve: checkpointed %d job(s) to %s\n", n, cfg->data_dir);
     }
     if (srv->store) shutdown_streams(srv->store);

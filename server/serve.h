@@ -20,6 +20,7 @@
 #include "log.h"
 #include "metrics.h"
 #include "offload.h"
+#include "persist.h"
 #include "tessera.h"
 
 typedef struct srv_config {
@@ -60,6 +61,7 @@ typedef struct srv_server {
     srv_log log;                    /* job events and (at debug) requests, to stderr */
     char builtin_job[24];           /* the id of the queued built-in scene (--queue-builtin), or "" */
     srv_events_limits sse_limits;   /* caps from cfg; its count is atomic */
+    srv_persist_stats persist;      /* checkpoint and restore counters (atomics) */
     /* maintenance thread */
     pthread_t maint;
     bool maint_started;

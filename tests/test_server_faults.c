@@ -27,6 +27,7 @@
 #include <curl/curl.h>
 #include <dirent.h>
 #include <errno.h>
+#include <math.h>
 #include <fcntl.h>
 #include <netinet/in.h>
 #include <poll.h>
@@ -104,6 +105,8 @@ static ts_image get_exr(const test_server *s, const char *id)
     ts_http_free(&r);
     return img;
 }
+
+static double metric(const test_server *s, const char *name);
 
 /* ================================================================ checkpoint faults */
 
@@ -232,25 +235,54 @@ static void checkpoint_fault(fault_kind kind)
     char *before = read_file(film, &before_len);
     assert_non_null(before);
 
+    /* No path of the server's in what clients see. */
+    if (strstr(why, dir)) fail_msg("checkpoint_error '%s' names the server's folder", why);
+    double fault_t0 = now_s(), failures0 = metric(&s, "tessera_checkpoint_failures_total");
+
     /* Rendering goes on to the end. */
     cJSON *o = ts_wait_done(&s, id, 60);
     assert_string_equal(ts_json_str(o, "state"), "done");
     assert_int_equal((int)ts_json_num(o, "spp_done"), 1024);
     assert_non_null(cJSON_GetObjectItemCaseSensitive(o, "checkpoint_error"));
     cJSON_Delete(o);
+    /* Jobs that finish while the fault lasts (on a full disk not even their submission
+     * lands): a restart must not make them failed. */
+    char small_ids[3][32];
+    char *small = ts_ao_scene("faults-small", 16, 16, 4);
+    for (int i = 0; i < 3; i++) {
+        ts_submit(&s, small, small_ids[i], sizeof small_ids[i]);
+        cJSON_Delete(ts_wait_done(&s, small_ids[i], 20));
+    }
+    free(small);
     ts_sleep_ms(300); /* a few more failed attempts */
+    /* One log line per job when its checkpoints start failing (they once logged one line
+     * per attempt, each naming a new temporary file: 550 lines in 10 s), and retries that
+     * back off: from 0.1 s doubling to 10 s, at most ⌈log2(T/0.1)⌉ + T/10 + 1 attempts a
+     * job in T seconds, where a retry every interval (0.1 s) would make T/0.1. */
+    double fault_s = now_s() - fault_t0, failures = metric(&s, "tessera_checkpoint_failures_total") - failures0;
+    size_t log_len = 0;
+    char *log_text = read_file(s.log, &log_len);
+    int lines = 0;
+    for (size_t k = 0; k + 20 < log_len; k++) lines += !strncmp(log_text + k, "checkpoint of job", 17);
+    free(log_text);
+    double bound = 4 * (ceil(log2(fault_s / 0.1)) + fault_s / 10 + 2);
+    printf("%s: %.1f s of faults: %d log lines about checkpoints, %.0f failed attempts for 4 jobs (bound %.0f; "
+           "every interval would be %.0f)\n",
+           kind == FAULT_FULL ? "full disk" : "read-only", fault_s, lines, failures, bound, 4 * fault_s / 0.1);
+    assert_true(lines <= 4);
+    assert_true(failures <= bound);
     char *after = read_file(film, &after_len);
     assert_non_null(after);
     assert_int_equal(after_len, before_len);
     assert_memory_equal(after, before, before_len);
-    assert_true(before_len > 8 && !memcmp(before, "TSFILM01", 8));
+    assert_true(before_len > 8 && !memcmp(before, "TSFILM02", 8));
     assert_no_temporaries(folder, in_flight);
 
     /* The fault goes away: the next checkpoint lands and the error clears. */
     if (kind == FAULT_FULL) assert_int_equal(unlink(filler), 0);
     else if (geteuid() == 0) assert_int_equal(umount2(folder, 0), 0);
     else assert_int_equal(chmod(folder, 0755), 0);
-    wait_checkpoint_error(&s, id, false, 10);
+    wait_checkpoint_error(&s, id, false, 15); /* the next retry: at most 10 s later */
     snprintf(line, sizeof line, "checkpoint of job %s written again", id);
     assert_true(log_has(&s, line));
     free(after);
@@ -261,12 +293,19 @@ static void checkpoint_fault(fault_kind kind)
     free(after);
     assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
 
-    /* And it restores as the finished job. */
+    /* And it restores as the finished job; so do the small ones (their checkpoints landed
+     * once the fault went away), and no temporary file is left. */
     ts_server_start(&s, args);
     o = job_status(&s, id);
     assert_string_equal(ts_json_str(o, "state"), "done");
     assert_int_equal((int)ts_json_num(o, "spp_done"), 1024);
     cJSON_Delete(o);
+    for (int i = 0; i < 3; i++) {
+        o = job_status(&s, small_ids[i]);
+        assert_string_equal(ts_json_str(o, "state"), "done");
+        cJSON_Delete(o);
+    }
+    assert_no_temporaries(folder, "");
     assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
     free(doc);
 }
@@ -408,7 +447,7 @@ static void test_kill_at_random_moments(void **state)
     ts_pcg32 rng;
     ts_pcg32_seed(&rng, 11, 4);
     char id[32] = "", job_file[160];
-    int jobs_done = 0, last_spp = 0, kills_mid_render = 0;
+    int jobs_done = 0, last_spp = 0, kills_mid_render = 0, swept = 0;
     double t0 = now_s();
     test_server s;
     for (int k = 0; k <= KILLS; k++) {
@@ -429,6 +468,12 @@ static void test_kill_at_random_moments(void **state)
             if (durable < last_spp)
                 fail_msg("job %s: the checkpoint went back from %d to %d spp after kill %d", id, last_spp, durable, k);
             last_spp = durable;
+            /* A kill in the middle of a write leaves its temporary file; start-up removed
+             * it (once 6 files, 511 MB, after 8 kills). */
+            char folder[160];
+            snprintf(folder, sizeof folder, "%s/jobs/%s", kill_dir, id);
+            if (temporaries(folder)[0]) fail_msg("after kill %d, temporary files are left: %s", k, temporaries(folder));
+            swept += (int)metric(&s, "tessera_checkpoint_temporaries_removed_total");
             int spp = check_consistent(&s, id, SPP, W, H);
             if (spp < durable)
                 fail_msg("job %s restarted at %d spp below its checkpoint's %d after kill %d", id, spp, durable, k);
@@ -467,7 +512,7 @@ static void test_kill_at_random_moments(void **state)
     }
     assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
     printf("%d kills (%d of them while the job was running), %d jobs finished equal to the uninterrupted render, "
-           "%.1f s\n", KILLS, kills_mid_render, jobs_done, now_s() - t0);
+           "%d temporary files removed at start-up, %.1f s\n", KILLS, kills_mid_render, jobs_done, swept, now_s() - t0);
     assert_true(kills_mid_render >= KILLS / 4);
     ts_image_fini(&ref);
     free(doc);
@@ -845,10 +890,190 @@ static int run_clients(void)
     return cmocka_run_group_tests_name("clients", tests, NULL, NULL);
 }
 
+/* ================================================================ restore of a damaged --data */
+
+static char restore_dir[64];
+
+/* Everything the status documents of all jobs say, as one string (caller frees). */
+static char *all_statuses(const test_server *s)
+{
+    http_resp r;
+    ts_http(s, "GET", "/api/v1/jobs?limit=1000", NULL, 0, NULL, &r);
+    assert_int_equal(r.status, 200);
+    char *t = strndup(r.body, r.len);
+    ts_http_free(&r);
+    return t;
+}
+
+static void write_bytes(const char *path, const void *bytes, size_t len)
+{
+    unlink(path);
+    int fd = open(path, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    assert_true(fd >= 0);
+    assert_int_equal(write(fd, bytes, len), (ssize_t)len);
+    close(fd);
+}
+
+/* Every pixel of the job's image is finite and holds spp samples. */
+static void assert_clean_image(const test_server *s, const char *id, int spp)
+{
+    ts_image img = get_exr(s, id);
+    int cc = ts_image_channel(&img, "count");
+    for (int i = 0; i < img.width * img.height * img.n_channels; i++)
+        if (!isfinite(img.data[i])) fail_msg("job %s: value %d of its image is %g", id, i, img.data[i]);
+    for (int i = 0; i < img.width * img.height; i++)
+        if (img.data[i * img.n_channels + cc] != (float)spp)
+            fail_msg("job %s: pixel %d holds %g samples, not %d", id, i, img.data[i * img.n_channels + cc], spp);
+    ts_image_fini(&img);
+}
+
+/* Damage of every kind a crash, a full disk or a stranger can leave under --data, in
+ * finished jobs' folders: a FIFO as film.bin (once blocked start-up forever), a symbolic
+ * link as film.bin, random bytes of the right size with and without the film header (once
+ * restored as "done" with non-finite pixels), a missing film.bin and a missing job.json
+ * (once "failed"), temporary files of interrupted writes (once never removed), and stray
+ * entries under jobs/ (once each held a --max-jobs place). The server starts at once, no
+ * finished job becomes failed, each damaged one renders again to a clean image, the
+ * temporaries are gone, strays hold no place, the metrics count them, and no status names
+ * a path of the server's. */
+static void test_restore_damaged(void **state)
+{
+    (void)state;
+    enum { JOBS = 7, W = 40, H = 24, SPP = 8 };
+    const char *args[] = {"--threads", "2", "--data", restore_dir, "--checkpoint-interval", "0.1", "--max-jobs", "8", NULL};
+    test_server s;
+    ts_server_start(&s, args);
+    char ids[JOBS][32], dir[JOBS][160], p[300];
+    char *doc = ts_ao_scene("restore", W, H, SPP);
+    for (int i = 0; i < JOBS; i++) {
+        ts_submit(&s, doc, ids[i], sizeof ids[i]);
+        cJSON_Delete(ts_wait_done(&s, ids[i], 30));
+        snprintf(dir[i], sizeof dir[i], "%s/jobs/%s", restore_dir, ids[i]);
+    }
+    assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
+    snprintf(p, sizeof p, "%s/film.bin", dir[0]);
+    size_t film_len = 0;
+    char *film = read_file(p, &film_len);
+    assert_true(film && film_len > 200);
+
+    /* 0 stays as it is. 1: a FIFO. 2: a symbolic link to 0's film. 3: random bytes. */
+    snprintf(p, sizeof p, "%s/film.bin", dir[1]);
+    assert_int_equal(unlink(p), 0);
+    assert_int_equal(mkfifo(p, 0644), 0);
+    snprintf(p, sizeof p, "%s/film.bin", dir[2]);
+    assert_int_equal(unlink(p), 0);
+    char target[300];
+    snprintf(target, sizeof target, "%s/film.bin", dir[0]);
+    assert_int_equal(symlink(target, p), 0);
+    ts_pcg32 rng;
+    ts_pcg32_seed(&rng, 19, 5);
+    char *noise = malloc(film_len);
+    for (size_t k = 0; k < film_len; k++) noise[k] = (char)(ts_pcg32_next(&rng) & 0xff);
+    snprintf(p, sizeof p, "%s/film.bin", dir[3]);
+    write_bytes(p, noise, film_len);
+    /* 4: random pixels under the film's own header (the first 72 bytes: magic, window,
+     * digest), so only the checksum can tell. */
+    memcpy(noise, film, 72);
+    snprintf(p, sizeof p, "%s/film.bin", dir[4]);
+    write_bytes(p, noise, film_len);
+    /* 5: film.bin missing. 6: job.json missing. */
+    snprintf(p, sizeof p, "%s/film.bin", dir[5]);
+    assert_int_equal(unlink(p), 0);
+    snprintf(p, sizeof p, "%s/job.json", dir[6]);
+    assert_int_equal(unlink(p), 0);
+    /* Debris of 8 interrupted writes in 0's folder, and strays: a file, a link, a folder
+     * that is no job (a bad name), a job folder where nothing ever landed. */
+    for (int k = 0; k < 8; k++) {
+        snprintf(p, sizeof p, "%s/film.bin.tmp.%d.%d", dir[0], 4000 + k, k);
+        write_bytes(p, film, film_len);
+    }
+    snprintf(p, sizeof p, "%s/jobs/notes.txt", restore_dir);
+    write_bytes(p, "x", 1);
+    snprintf(p, sizeof p, "%s/jobs/link", restore_dir);
+    assert_int_equal(symlink("/", p), 0);
+    snprintf(p, sizeof p, "%s/jobs/not a job", restore_dir);
+    assert_int_equal(mkdir(p, 0755), 0);
+    snprintf(p, sizeof p, "%s/jobs/0123456789abcdef", restore_dir);
+    assert_int_equal(mkdir(p, 0755), 0);
+    snprintf(p, sizeof p, "%s/jobs/0123456789abcdef/job.json.tmp.1.0", restore_dir);
+    write_bytes(p, "{", 1);
+
+    double t0 = now_s();
+    ts_server_start(&s, args); /* fails the test if it does not listen within 10 s */
+    printf("restarted on the damaged folder in %.0f ms\n", 1e3 * (now_s() - t0));
+    assert_true(temporaries(dir[0])[0] == '\0');
+    assert_false(exists(p));
+    assert_int_equal((int)metric(&s, "tessera_checkpoint_temporaries_removed_total"), 9);
+    assert_int_equal((int)metric(&s, "tessera_checkpoint_stray_entries"), 3);
+    assert_int_equal((int)metric(&s, "tessera_checkpoint_damaged_total"), 6);
+    assert_true(log_has(&s, "removed 9 temporary file(s)"));
+    /* Seven jobs and a free place: the strays hold none (--max-jobs 8). */
+    char extra[32];
+    ts_submit(&s, doc, extra, sizeof extra);
+    cJSON_Delete(ts_wait_done(&s, extra, 30));
+    http_resp r;
+    ts_http(&s, "POST", "/api/v1/jobs", doc, strlen(doc), NULL, &r);
+    assert_int_equal(r.status, 503);
+    ts_http_free(&r);
+
+    static const char *const why[JOBS] = {NULL, "is not a regular file", "is a symbolic link", "is not a film checkpoint",
+                                          "fails its checksum", "is missing", "job.json is missing"};
+    for (int i = 0; i < JOBS; i++) {
+        cJSON *o = job_status(&s, ids[i]);
+        const char *state = ts_json_str(o, "state");
+        if (!strcmp(state, "failed")) fail_msg("job %d (%s) restored as failed: %s", i, ids[i], ts_json_str(o, "error"));
+        if (i == 0) {
+            assert_string_equal(state, "done");
+        } else {
+            const cJSON *ce = cJSON_GetObjectItemCaseSensitive(o, "checkpoint_error");
+            if (ce && cJSON_IsString(ce) && !strstr(ce->valuestring, why[i]))
+                fail_msg("job %d: checkpoint_error '%s' does not say '%s'", i, ce->valuestring, why[i]);
+            snprintf(p, sizeof p, "restored job %s (queued): the checkpoint was damaged", ids[i]);
+            assert_true(log_has(&s, p));
+            assert_true(log_has(&s, why[i]));
+        }
+        cJSON_Delete(o);
+        o = ts_wait_done(&s, ids[i], 30);
+        assert_string_equal(ts_json_str(o, "state"), "done");
+        assert_int_equal((int)ts_json_num(o, "spp_done"), SPP);
+        assert_int_equal((int)ts_json_num(o, "nonfinite_samples"), 0);
+        cJSON_Delete(o);
+        assert_clean_image(&s, ids[i], SPP);
+    }
+    char *all = all_statuses(&s);
+    if (strstr(all, restore_dir)) fail_msg("a status names the server's folder %s: %s", restore_dir, all);
+    free(all);
+    /* They were checkpointed again, whole: a third start restores all as done. */
+    assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
+    ts_server_start(&s, args);
+    assert_int_equal((int)metric(&s, "tessera_checkpoint_damaged_total"), 0);
+    for (int i = 0; i < JOBS; i++) {
+        cJSON *o = job_status(&s, ids[i]);
+        assert_string_equal(ts_json_str(o, "state"), "done");
+        cJSON_Delete(o);
+    }
+    assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
+    free(noise);
+    free(film);
+    free(doc);
+}
+
+static int run_restore(void)
+{
+    snprintf(restore_dir, sizeof restore_dir, "/tmp/tessera-restore-XXXXXX");
+    if (!mkdtemp(restore_dir)) return 1;
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_restore_damaged)};
+    int rc = cmocka_run_group_tests_name("restore", tests, NULL, NULL);
+    char cmd[128];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", restore_dir);
+    if (system(cmd) != 0 && !rc) rc = 1;
+    return rc;
+}
+
 int main(int argc, char **argv)
 {
     if (argc != 2) {
-        fprintf(stderr, "usage: test_server_faults checkpoint|kill|clients\n");
+        fprintf(stderr, "usage: test_server_faults checkpoint|kill|clients|restore\n");
         return 2;
     }
     signal(SIGPIPE, SIG_IGN);
@@ -857,6 +1082,7 @@ int main(int argc, char **argv)
     else curl_global_init(CURL_GLOBAL_DEFAULT);
     if (!strcmp(argv[1], "kill")) rc = run_kill();
     else if (!strcmp(argv[1], "clients")) rc = run_clients();
+    else if (!strcmp(argv[1], "restore")) rc = run_restore();
     curl_global_cleanup();
     return rc;
 }

@@ -153,7 +153,9 @@ ts_status ts_image_write_file_atomic(const char *path, const void *bytes, size_t
 {
     if (!path || !path[0]) return ts_error_set(err, TS_ERR_INVALID, "no output file name given");
     /* The temporary name is unique per process and per call, so two threads writing the
-     * same file (a server's submission and its checkpointer) never share one. */
+     * same file (a server's submission and its checkpointer) never share one. Messages do
+     * not name it, so the same failure reads the same every time (callers log a failure
+     * when its sentence changes). */
     static atomic_uint serial;
     size_t n = strlen(path) + 48;
     char *tmp = malloc(n);
@@ -163,8 +165,8 @@ ts_status ts_image_write_file_atomic(const char *path, const void *bytes, size_t
     ts_status st = TS_OK;
     int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
     if (fd < 0) {
-        st = ts_error_set(err, TS_ERR_IO, "cannot write '%s': cannot create temporary file '%s': %s",
-                          path, tmp, strerror(errno));
+        st = ts_error_set(err, TS_ERR_IO, "cannot write '%s': cannot create a temporary file beside it: %s",
+                          path, strerror(errno));
         goto fail_open;
     }
     const unsigned char *p = bytes;
@@ -173,7 +175,7 @@ ts_status ts_image_write_file_atomic(const char *path, const void *bytes, size_t
         ssize_t w = write(fd, p, left);
         if (w < 0 && errno == EINTR) continue;
         if (w <= 0) {
-            st = ts_error_set(err, TS_ERR_IO, "cannot write '%s': writing '%s' failed: %s", path, tmp,
+            st = ts_error_set(err, TS_ERR_IO, "cannot write '%s': writing its temporary file failed: %s", path,
                               w < 0 ? strerror(errno) : "no progress");
             goto fail_written;
         }
@@ -181,20 +183,20 @@ ts_status ts_image_write_file_atomic(const char *path, const void *bytes, size_t
         left -= (size_t)w;
     }
     if (fsync(fd) != 0) {
-        st = ts_error_set(err, TS_ERR_IO, "cannot write '%s': fsync of '%s' failed: %s", path, tmp,
+        st = ts_error_set(err, TS_ERR_IO, "cannot write '%s': fsync of its temporary file failed: %s", path,
                           strerror(errno));
         goto fail_written;
     }
     if (close(fd) != 0) {
         fd = -1;
-        st = ts_error_set(err, TS_ERR_IO, "cannot write '%s': closing '%s' failed: %s", path, tmp,
+        st = ts_error_set(err, TS_ERR_IO, "cannot write '%s': closing its temporary file failed: %s", path,
                           strerror(errno));
         goto fail_written;
     }
     fd = -1;
     if (rename(tmp, path) != 0) {
-        st = ts_error_set(err, TS_ERR_IO, "cannot write '%s': renaming '%s' onto it failed: %s", path,
-                          tmp, strerror(errno));
+        st = ts_error_set(err, TS_ERR_IO, "cannot write '%s': renaming its temporary file onto it failed: %s",
+                          path, strerror(errno));
         goto fail_written;
     }
     sync_parent_dir(path);

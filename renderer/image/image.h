@@ -64,10 +64,11 @@ const ts_image_attr *ts_image_attr_find(const ts_image *img, const char *name);
 /* Index of the channel called name, or -1. */
 int ts_image_channel(const ts_image *img, const char *name);
 
-/* Writes len bytes to path atomically: to "<path>.tmp.<pid>", fsync, then rename(2) over
- * path. On failure (TS_ERR_IO with a sentence naming the file) the temporary file is
- * removed and an existing file at path is untouched. Shared by the EXR and PNG writers.
- * Thread-safe as long as two threads do not write the same path at once. */
+/* Writes len bytes to path atomically: to "<path>.tmp.<pid>.<serial>", fsync, then
+ * rename(2) over path. On failure (TS_ERR_IO with a sentence naming path, never the
+ * temporary name, so a repeated failure reads the same) the temporary file is removed and
+ * an existing file at path is untouched. Shared by the EXR and PNG writers and the server's
+ * checkpoints. Thread-safe: temporary names are unique per call. */
 ts_status ts_image_write_file_atomic(const char *path, const void *bytes, size_t len,
                                      ts_error *err);
 
