@@ -19,6 +19,8 @@
 #include <strings.h>
 #include <unistd.h>
 
+#include "convert.h"
+#include "diagnostics.h"
 #include "display.h"
 #include "merge.h"
 #include "outputs.h"
@@ -29,7 +31,9 @@
 static void usage(FILE *f)
 {
     fprintf(f, "usage: tessera COMMAND [OPTIONS]\n"
-               "  render [SCENE]   render a scene (.json; none: the built-in Cornell box) to EXR/PNG\n"
+               "  render [SCENE]   render a scene (.json or pbrt-v3 .pbrt; none: the built-in Cornell box)\n"
+               "                   to EXR/PNG\n"
+               "  convert SCENE    write a pbrt-v3 scene (.pbrt) as the equivalent scene document (.json)\n"
                "  merge SHARD...   add farm shards (EXR) into one image\n"
                "  serve            the render server: HTTP API and web UI\n"
                "  help [COMMAND]   this text, or a command's options with their units and defaults\n"
@@ -41,7 +45,8 @@ static void render_usage(FILE *f)
 {
     fprintf(f,
             "usage: tessera render [SCENE] [OPTIONS]\n"
-            "Renders SCENE (a scene document, .json; without one the built-in Cornell box) in progressive\n"
+            "Renders SCENE (a scene document, .json, or a pbrt-v3 scene, .pbrt; without one the built-in\n"
+            "Cornell box; pbrt-v3's warnings are printed once each) in progressive\n"
             "passes of 1, 1, 2, 4, ... samples per pixel until the first of --spp, --time-limit and\n"
             "--target-error is reached.\n"
             "  -o, --output FILE         write FILE; .exr (colour, per-pixel variance, sample count) or .png;\n"
@@ -404,10 +409,10 @@ static int prepare_render(const render_opts *o, ts_scene **scene_out, ts_job_set
     ts_scene *scene = NULL;
     ts_scene_limits limits;
     ts_scene_limits_default(&limits);
-    ts_status st = o->scene_path ? ts_scene_load_file(o->scene_path, &limits, &scene, &err)
+    ts_status st = o->scene_path ? ts_scene_load_path(o->scene_path, &limits, cli_print_warning, NULL, &scene, &err)
                                  : ts_scene_load_builtin(&limits, &scene, &err);
     if (st) {
-        fprintf(stderr, "tessera: %s%s%s\n", o->scene_path ? o->scene_path : "", o->scene_path ? ": " : "", err.message);
+        cli_print_load_error(o->scene_path, err.message);
         return 1;
     }
     if (o->have_seed) scene->sampler.seed = (uint32_t)o->seed;
@@ -659,6 +664,7 @@ int cli_main(int argc, char **argv)
             char *help_argv[] = {argv[2], "--help", NULL};
             if (!strcmp(argv[2], "render")) return cmd_render(2, help_argv);
             if (!strcmp(argv[2], "merge")) return cli_merge(2, help_argv);
+            if (!strcmp(argv[2], "convert")) return cli_convert(2, help_argv);
             if (!strcmp(argv[2], "serve")) return srv_serve_main(2, help_argv);
             return usage_error("help: no command '%s'", argv[2]);
         }
@@ -666,6 +672,7 @@ int cli_main(int argc, char **argv)
         return 0;
     }
     if (strcmp(cmd, "merge") == 0) return cli_merge(argc - 1, argv + 1);
+    if (strcmp(cmd, "convert") == 0) return cli_convert(argc - 1, argv + 1);
     if (strcmp(cmd, "serve") == 0) {
         return srv_serve_main(argc - 1, argv + 1);
     }

@@ -3,4 +3,5 @@
 #define CLI_CLI_H
 /* Runs `tessera <command> ...`; returns the exit status (0 ok, 1 bad input, 2 usage). */
 int cli_main(int argc, char **argv);
+
 #endif

@@ -3,7 +3,7 @@
  * Design note: the renderer is a library with no knowledge of HTTP (docs/design.md §1).
  * Its users — server/ and cli/ — include this header and nothing else of renderer/; the
  * `layering` test checks that. The list below is the whole public surface: loading a scene
- * (and the effects it calls for), rendering it progressively through the scheduler,
+ * (JSON or pbrt-v3, and the effects it calls for; pbrt-v3 to JSON), rendering it progressively through the scheduler,
  * shards for the farm, the film and its images, and the EXR and PNG encoders. */
 #ifndef TS_TESSERA_H
 #define TS_TESSERA_H
@@ -20,5 +20,6 @@
 #include "render/shard.h"
 #include "scene/scene.h"
 #include "scene/scene_json.h"
+#include "scene/scene_load.h"
 
 #endif

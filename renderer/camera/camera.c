@@ -1,6 +1,8 @@
 /* camera.c — primary rays; see camera.h. */
 #include "camera/camera.h"
 
+#include <math.h>
+
 #include "sampling/sampling.h"
 
 ts_status ts_camera_init(ts_camera *cam, const ts_camera_desc *d, int width, int height, ts_error *err)
@@ -13,6 +15,7 @@ ts_status ts_camera_init(ts_camera *cam, const ts_camera_desc *d, int width, int
         return ts_error_set(err, TS_ERR_INVALID, "camera.up: must not be parallel to the view direction");
     right = ts_vec3_normalize(right);
     ts_vec3 up = ts_vec3_normalize(ts_vec3_cross(right, fwd));
+    if (d->mirror) right = ts_vec3_scale(right, -1);
     if (width <= 0 || height <= 0) return ts_error_set(err, TS_ERR_INVALID, "film: width and height must be positive");
 
     *cam = (ts_camera){0};
@@ -30,6 +33,24 @@ ts_status ts_camera_init(ts_camera *cam, const ts_camera_desc *d, int width, int
 
     float aspect = (float)width / (float)height;
     float half_short;
+    if (d->has_window) {
+        const float *w = d->screen_window;
+        if (!(isfinite(w[0]) && isfinite(w[1]) && isfinite(w[2]) && isfinite(w[3]) && w[0] < w[1] && w[2] < w[3]))
+            return ts_error_set(err, TS_ERR_INVALID,
+                                "camera.screen_window: expected [x0, x1, y0, y1] with x0 < x1 and y0 < y1");
+        float unit = 1;
+        if (d->type == TS_CAMERA_PERSPECTIVE) {
+            if (!(d->fov_deg > 0 && d->fov_deg < 180))
+                return ts_error_set(err, TS_ERR_INVALID, "camera.fov: expected an angle in (0, 180), got %g",
+                                    d->fov_deg);
+            unit = tanf(ts_radians(d->fov_deg) * 0.5f);
+        }
+        cam->half_w = 0.5f * (w[1] - w[0]) * unit;
+        cam->half_h = 0.5f * (w[3] - w[2]) * unit;
+        cam->center_x = 0.5f * (w[1] + w[0]) * unit;
+        cam->center_y = 0.5f * (w[3] + w[2]) * unit;
+        return TS_OK;
+    }
     if (d->type == TS_CAMERA_PERSPECTIVE) {
         if (!(d->fov_deg > 0 && d->fov_deg < 180))
             return ts_error_set(err, TS_ERR_INVALID, "camera.fov: expected an angle in (0, 180), got %g", d->fov_deg);
@@ -52,8 +73,8 @@ ts_status ts_camera_init(ts_camera *cam, const ts_camera_desc *d, int width, int
 
 ts_ray ts_camera_ray(const ts_camera *cam, ts_vec2 p_raster, ts_vec2 u_lens)
 {
-    float sx = (2.0f * p_raster.x / (float)cam->width - 1.0f) * cam->half_w;
-    float sy = (1.0f - 2.0f * p_raster.y / (float)cam->height) * cam->half_h;
+    float sx = (2.0f * p_raster.x / (float)cam->width - 1.0f) * cam->half_w + cam->center_x;
+    float sy = (1.0f - 2.0f * p_raster.y / (float)cam->height) * cam->half_h + cam->center_y;
     ts_vec3 o, d;
     if (cam->type == TS_CAMERA_PERSPECTIVE) {
         o = cam->origin;

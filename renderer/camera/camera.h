@@ -5,7 +5,13 @@
  * top-left corner of the top-left pixel and y grows downwards. `fov` is the full angle
  * along the shorter image axis (as pbrt); an orthographic camera's `height` is the screen
  * window height in scene units. Thin lens: a lens sample on the disk of lens_radius is
- * focused at focus_distance along forward. Immutable after init; thread-safe. */
+ * focused at focus_distance along forward. Two options serve pbrt-v3 scenes (docs/pbrt-v3.md):
+ * `mirror` makes right = up × forward instead (pbrt-v3's camera space is left-handed: its
+ * image x runs along camera +x, which a right-handed from/to/up frame cannot express), and
+ * an explicit screen window [x0, x1] × [y0, y1] replaces the one centred on the view
+ * direction: for a perspective camera in units of tan(fov/2) (pbrt-v3's `screenwindow`),
+ * for an orthographic one in scene units (then `height` is not used). Immutable after
+ * init; thread-safe. */
 #ifndef TS_CAMERA_H
 #define TS_CAMERA_H
 
@@ -23,12 +29,16 @@ typedef struct ts_camera {
     float lens_radius, focus_distance;
     int width, height;
     float half_w, half_h; /* screen window half extents: at distance 1 (perspective) or in scene units */
+    float center_x, center_y; /* the window's centre in the same units (0 unless a window was given) */
 } ts_camera;
 
 typedef struct ts_camera_desc {
     ts_camera_type type;
     ts_vec3 from, to, up;
     float fov_deg, ortho_height, lens_radius, focus_distance;
+    bool mirror;       /* right = up × forward (pbrt-v3's left-handed camera space) */
+    bool has_window;   /* screen_window is given */
+    float screen_window[4]; /* x0, x1, y0, y1 (x0 < x1, y0 < y1): see the design note */
 } ts_camera_desc;
 
 /* Fails (TS_ERR_INVALID, sentence) if from == to, up is parallel to the view direction,

@@ -10,11 +10,10 @@
  * the density; E[weight] = ∫f holds whatever it is, so modest accuracy suffices. */
 #define CELL_QUADRATURE 64
 
-/* Mitchell–Netravali cubic with B = C = 1/3 on t = |x| in [0, 2); integrates to 1 over
- * [-2, 2]. */
-static double mitchell_1d(double t)
+/* Mitchell–Netravali cubic with parameters B, C on t = |x| in [0, 2); integrates to 1 over
+ * [-2, 2] (for any B, C with the cubic's normalisation). */
+static double mitchell_1d(double b, double c, double t)
 {
-    const double b = 1.0 / 3.0, c = 1.0 / 3.0;
     t = fabs(t);
     if (t < 1) return ((12 - 9 * b - 6 * c) * t * t * t + (-18 + 12 * b + 6 * c) * t * t + (6 - 2 * b)) / 6;
     if (t < 2)
@@ -32,7 +31,7 @@ static float profile(const ts_filter *f, float x)
     case TS_FILTER_GAUSSIAN:
         return f->profile_scale * fmaxf(0.0f, expf(-f->gaussian_alpha * x * x) - f->gaussian_floor);
     case TS_FILTER_MITCHELL:
-        return f->profile_scale * (float)mitchell_1d(2.0 * x / f->radius);
+        return f->profile_scale * (float)mitchell_1d(f->mitchell_b, f->mitchell_c, 2.0 * x / f->radius);
     case TS_FILTER_BOX:
         return 0.5f / f->radius;
     case TS_FILTER_TRIANGLE:
@@ -47,7 +46,7 @@ static double profile_d(const ts_filter *f, double x)
     if (fabs(x) > r) return 0;
     if (f->type == TS_FILTER_GAUSSIAN)
         return f->profile_scale * fmax(0.0, exp(-(double)f->gaussian_alpha * x * x) - f->gaussian_floor);
-    return (2.0 / r) * mitchell_1d(2.0 * x / r);
+    return (2.0 / r) * mitchell_1d(f->mitchell_b, f->mitchell_c, 2.0 * x / r);
 }
 
 static void build_table(ts_filter *f)
@@ -74,16 +73,32 @@ static void build_table(ts_filter *f)
 
 ts_status ts_filter_init(ts_filter *f, ts_filter_type type, float radius, ts_error *err)
 {
+    return ts_filter_init_params(f, type, radius, NULL, err);
+}
+
+ts_status ts_filter_init_params(ts_filter *f, ts_filter_type type, float radius, const ts_filter_params *params,
+                                ts_error *err)
+{
     if (!(radius > 0) || !isfinite(radius))
         return ts_error_set(err, TS_ERR_INVALID, "filter radius: expected a positive number, got %g",
                             (double)radius);
-    *f = (ts_filter){.type = type, .radius = radius};
+    static const ts_filter_params defaults = {0};
+    if (!params) params = &defaults;
+    if (!(params->gaussian_alpha >= 0) || !isfinite(params->gaussian_alpha))
+        return ts_error_set(err, TS_ERR_INVALID, "filter alpha: expected a positive number, got %g",
+                            (double)params->gaussian_alpha);
+    if (params->mitchell_custom && !(isfinite(params->mitchell_b) && isfinite(params->mitchell_c)))
+        return ts_error_set(err, TS_ERR_INVALID, "filter B and C: expected finite numbers");
+    *f = (ts_filter){.type = type, .radius = radius, .mitchell_b = 1.0 / 3.0, .mitchell_c = 1.0 / 3.0};
+    if (params->mitchell_custom) f->mitchell_b = params->mitchell_b, f->mitchell_c = params->mitchell_c;
     switch (type) {
     case TS_FILTER_BOX:
     case TS_FILTER_TRIANGLE:
         return TS_OK;
     case TS_FILTER_GAUSSIAN: {
-        double r = radius, sigma = r / 3, alpha = 1 / (2 * sigma * sigma), floor_v = exp(-alpha * r * r);
+        double r = radius, sigma = r / 3, alpha = 1 / (2 * sigma * sigma);
+        if (params->gaussian_alpha > 0) alpha = params->gaussian_alpha, sigma = sqrt(1 / (2 * alpha));
+        double floor_v = exp(-alpha * r * r);
         /* ∫_{-r}^{r} exp(−x²/2σ²) − floor dx, in closed form. */
         double integral = sigma * sqrt(2 * TS_PI_D) * erf(r / (sigma * sqrt(2.0))) - 2 * r * floor_v;
         f->gaussian_alpha = (float)alpha;

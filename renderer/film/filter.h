@@ -12,6 +12,8 @@
  *   triangle  f1 = (r − |x|)/r²                              sampled exactly,   weight 1
  *   gaussian  f1 ∝ exp(−x²/2σ²) − exp(−r²/2σ²), σ = r/3        tabulated
  *   mitchell  f1 = (2/r)·M(2x/r), Mitchell–Netravali B = C = 1/3 tabulated
+ * ts_filter_init_params sets the gaussian's α = 1/(2σ²) (pbrt-v3's `alpha`; its profile is
+ * exp(−α x²) − exp(−α r²)) and Mitchell's B and C instead of those defaults.
  * For gaussian and mitchell, |f1| is tabulated over [-r, r] in TS_FILTER_TABLE_CELLS
  * cells (cell value = mean of |f1| over the cell) and sampled by inverting the CDF of
  * that piecewise-constant density, so f/p stays near ±∫|f|.
@@ -46,6 +48,7 @@ typedef struct ts_filter {
     ts_filter_type type;
     float radius;                          /* r, pixels */
     float profile_scale;                   /* gaussian: 1/∫ of the unnormalised profile; mitchell: 2/r */
+    double mitchell_b, mitchell_c;         /* mitchell: B and C */
     float gaussian_alpha, gaussian_floor;  /* gaussian: 1/(2σ²) and exp(−r²/2σ²) */
     float cdf[TS_FILTER_TABLE_CELLS + 1];  /* tabulated filters: CDF, cdf[0] = 0, last = 1 */
     float cell_pdf[TS_FILTER_TABLE_CELLS]; /* density of x in each cell (per pixel) */
@@ -54,6 +57,17 @@ typedef struct ts_filter {
 /* Fills f for `type` with `radius` > 0 (pixels, finite). TS_ERR_INVALID for a bad radius
  * or type. Thread-safe (touches only f and err). */
 ts_status ts_filter_init(ts_filter *f, ts_filter_type type, float radius, ts_error *err);
+
+/* Parameters beyond the radius (pbrt-v3's). */
+typedef struct ts_filter_params {
+    float gaussian_alpha;     /* gaussian: α > 0, finite; 0: σ = radius/3 (α = 4.5/radius²) */
+    bool mitchell_custom;     /* mitchell: use b and c below (else B = C = 1/3) */
+    float mitchell_b, mitchell_c; /* finite */
+} ts_filter_params;
+
+/* ts_filter_init with params (NULL: the defaults above). TS_ERR_INVALID for a bad α, B or C. */
+ts_status ts_filter_init_params(ts_filter *f, ts_filter_type type, float radius, const ts_filter_params *params,
+                                ts_error *err);
 
 /* Offset from the pixel centre, in pixels with |dx|, |dy| <= radius, for u in [0,1)^2, and
  * in *weight (not NULL) the sample's weight f(d)/p(d) (negative in Mitchell's negative

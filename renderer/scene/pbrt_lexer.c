@@ -22,6 +22,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <nettle/sha2.h>
+
 #define CHUNK (1u << 20)
 
 struct ts_pbrt_lexer {
@@ -37,6 +39,7 @@ struct ts_pbrt_lexer {
     const char *display;
     char *scratch; /* decoded text of the last WORD / STRING */
     size_t scratch_cap;
+    struct sha256_ctx sha; /* of every byte read, in order (ts_pbrt_lexer_digest) */
 };
 
 static ts_status lex_fail(ts_pbrt_lexer *lx, ts_error *err, ts_status st, uint64_t offset, const char *fmt, ...)
@@ -61,6 +64,7 @@ static ts_pbrt_lexer *lexer_alloc(const char *display)
     lx->fd = -1;
     lx->line = 1;
     lx->display = display;
+    sha256_init(&lx->sha);
     return lx;
 }
 
@@ -123,6 +127,7 @@ ts_status ts_pbrt_lexer_from_memory(const char *text, size_t len, const char *di
     lx->buf = text;
     lx->end = len;
     lx->at_eof = 1;
+    sha256_update(&lx->sha, len, (const uint8_t *)text);
     *out = lx;
     return TS_OK;
 }
@@ -137,6 +142,8 @@ void ts_pbrt_lexer_destroy(ts_pbrt_lexer *lx)
 }
 
 uint64_t ts_pbrt_lexer_bytes(const ts_pbrt_lexer *lx) { return lx->base + lx->end; }
+
+void ts_pbrt_lexer_digest(ts_pbrt_lexer *lx, uint8_t out[32]) { sha256_digest(&lx->sha, 32, out); }
 
 /* Reads more bytes, keeping buf[keep, end) (moved to the front). Returns 1 if bytes were
  * added, 0 at the end of the input, -1 on error (err set). keep ≤ pos ≤ end. */
@@ -176,6 +183,7 @@ static int refill(ts_pbrt_lexer *lx, size_t keep, ts_error *err)
             return 0;
         }
         lx->total_read += (uint64_t)r;
+        sha256_update(&lx->sha, (size_t)r, (const uint8_t *)lx->own + lx->end);
         if (lx->max_bytes && lx->total_read > lx->max_bytes) {
             lex_fail(lx, err, TS_ERR_LIMIT, lx->base + lx->end, "file grew past the limit of %llu bytes",
                      (unsigned long long)lx->max_bytes);

@@ -75,6 +75,10 @@ void ts_pbrt_lexer_destroy(ts_pbrt_lexer *lx);
 /* Bytes of the input read so far (all of it once the lexer returned EOF). */
 uint64_t ts_pbrt_lexer_bytes(const ts_pbrt_lexer *lx);
 
+/* SHA-256 of the bytes read so far (a file lexer: as read; a memory one: its whole text);
+ * call once, when done reading. */
+void ts_pbrt_lexer_digest(ts_pbrt_lexer *lx, uint8_t out[32]);
+
 /* Writes a short description of tok for messages into buf ("end of file", "'['",
  * "number 3.5", "string \"abc\"", "WorldBegin") and returns buf. */
 const char *ts_pbrt_token_describe(const ts_pbrt_token *tok, char *buf, size_t buf_len);

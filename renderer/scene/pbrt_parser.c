@@ -23,6 +23,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <nettle/sha2.h>
+
 #include "scene/scene_path.h"
 
 /* ---- growable heap vectors ---- */
@@ -117,6 +119,7 @@ struct parser {
     vec ints;    /* int32_t */
     vec bools;   /* bool */
     vec strings; /* const char * */
+    struct sha256_ctx digest; /* the scene digest over the files read (ts_pbrt_scene.digest) */
 };
 
 static ts_status perr(parser *p, ts_pbrt_loc loc, ts_status st, const char *fmt, ...)
@@ -294,9 +297,24 @@ static void undo_to(parser *p, size_t mark)
 
 /* ---- tokens across the file stack ---- */
 
+/* Adds one file read to the scene digest: its name as written, its size and its SHA-256. */
+static void digest_file(parser *p, ts_pbrt_lexer *lx, const char *display)
+{
+    uint8_t h[32], size[8];
+    uint64_t n = ts_pbrt_lexer_bytes(lx);
+    ts_pbrt_lexer_digest(lx, h);
+    for (int i = 0; i < 8; i++) size[i] = (uint8_t)(n >> (8 * i));
+    sha256_update(&p->digest, strlen(display) + 1, (const uint8_t *)display);
+    sha256_update(&p->digest, sizeof size, size);
+    sha256_update(&p->digest, sizeof h, h);
+}
+
 static void pop_file(parser *p)
 {
     file_frame *f = &p->files[--p->nfiles];
+    /* The top-level file counts without its name: the same scene at another path (a farm
+     * node's copy) has the same digest. */
+    digest_file(p, f->lx, p->nfiles == 0 || !f->display ? "" : f->display);
     p->s->bytes_parsed += ts_pbrt_lexer_bytes(f->lx);
     ts_pbrt_lexer_destroy(f->lx);
     free(f->real_path);
@@ -405,6 +423,7 @@ static ts_status read_spd(parser *p, const ts_pbrt_params *ps, const char *decl,
     if (p->floats.n < 2 || p->floats.n % 2)
         st = param_fail(p, loc, ps, decl, TS_ERR_INVALID,
                         "spectrum file '%s' holds %zu numbers; it needs (wavelength, value) pairs", file, p->floats.n);
+    if (!st) digest_file(p, lx, display);
 fail_lexer:
     ts_pbrt_lexer_destroy(lx);
 fail_text:
@@ -1422,6 +1441,9 @@ static ts_status parse(const char *path, const char *text, size_t len, const cha
     }
     p->s = s;
     p->err = err;
+    sha256_init(&p->digest);
+    static const char domain[] = "tessera pbrt-v3 scene digest 1";
+    sha256_update(&p->digest, sizeof domain, (const uint8_t *)domain);
     if (lim)
         p->lim = *lim;
     else
@@ -1478,6 +1500,7 @@ static ts_status parse(const char *path, const char *text, size_t len, const cha
     st = run(p);
 fail:
     while (p->nfiles > 0) pop_file(p);
+    if (!st) sha256_digest(&p->digest, sizeof s->digest, s->digest);
     vec *vecs[] = {&p->undo,      &p->blocks, &p->coordsys, &p->textures,  &p->materials, &p->area_lights,
                    &p->lights,    &p->shapes, &p->objects,  &p->instances, &p->media,     &p->warnings,
                    &p->items,     &p->floats, &p->ints,     &p->bools,     &p->strings};

@@ -183,6 +183,11 @@ typedef struct ts_pbrt_scene {
     size_t warning_count;
     size_t warnings_dropped; /* beyond max_warnings */
     uint64_t bytes_parsed;   /* of every file read, for reports */
+    /* The scene digest (docs/design.md §4c): SHA-256 over a domain string and then, for
+     * every scene file read — the top-level text, each Include, each .spd — in the order
+     * they were finished, its name as written (NUL-terminated), its size (8 bytes, little
+     * endian) and its own SHA-256. */
+    uint8_t digest[32];
 } ts_pbrt_scene;
 
 /* Parses the pbrt-v3 file at path (named by the user: not confined itself, and it may be

@@ -198,7 +198,7 @@ ts_status ts_scene_builder_set_film(ts_scene_builder *b, const ts_film_desc *f, 
     if (x1 <= x0 || y1 <= y0)
         return ts_error_set(err, TS_ERR_INVALID, "film.crop: the window holds no pixel");
     ts_filter filter; /* its own checks: a radius > 0, a known type */
-    TRY(ts_filter_init(&filter, f->filter, f->filter_radius, err));
+    TRY(ts_filter_init_params(&filter, f->filter, f->filter_radius, &f->filter_params, err));
     ts_scene *s = b->s;
     s->width = width;
     s->height = height;

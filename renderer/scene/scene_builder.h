@@ -94,6 +94,7 @@ typedef struct ts_film_desc {
                                the pixels [ceil(width·x0), ceil(width·x1)) × … (pbrt's rule) */
     ts_filter_type filter;
     float filter_radius; /* pixels, in (0, 16] */
+    ts_filter_params filter_params; /* gaussian α, Mitchell B and C (filter.h); all zero: the defaults */
 } ts_film_desc;
 ts_status ts_scene_builder_set_film(ts_scene_builder *b, const ts_film_desc *film, ts_error *err);
 

@@ -149,14 +149,29 @@ static ts_status parse_film(loader *ld, const cJSON *doc)
         const cJSON *filter;
         TRY(ts_json_object(film, "film", "filter", false, &filter, ld->err));
         if (filter) {
-            static const char *const fkeys[] = {"type", "radius", NULL};
             static const char *const types[] = {"box", "triangle", "gaussian", "mitchell", NULL};
-            TRY(ts_json_check_object(filter, "film.filter", fkeys, ld->err));
             int t = 2;
             TRY(ts_json_enum(filter, "film.filter", "type", true, types, &t, ld->err));
+            static const char *const fkeys[] = {"type", "radius", NULL};
+            static const char *const gkeys[] = {"type", "radius", "alpha", NULL};
+            static const char *const mkeys[] = {"type", "radius", "b", "c", NULL};
+            TRY(ts_json_check_object(filter, "film.filter", t == 2 ? gkeys : (t == 3 ? mkeys : fkeys), ld->err));
             ftype = (ts_filter_type)t;
             fradius = t == 0 ? 0.5 : (t == 1 ? 1.0 : (t == 2 ? 1.5 : 2.0));
             TRY(ts_json_number(filter, "film.filter", "radius", false, TS_J_POSITIVE, &fradius, ld->err));
+            if (t == 2) {
+                double alpha = 0;
+                TRY(ts_json_number(filter, "film.filter", "alpha", false, TS_J_POSITIVE, &alpha, ld->err));
+                f.filter_params.gaussian_alpha = (float)alpha;
+            } else if (t == 3 && (cJSON_GetObjectItemCaseSensitive(filter, "b") ||
+                                  cJSON_GetObjectItemCaseSensitive(filter, "c"))) {
+                double bv = 1.0 / 3.0, cv = 1.0 / 3.0;
+                TRY(ts_json_number(filter, "film.filter", "b", false, TS_J_ANY, &bv, ld->err));
+                TRY(ts_json_number(filter, "film.filter", "c", false, TS_J_ANY, &cv, ld->err));
+                f.filter_params.mitchell_custom = true;
+                f.filter_params.mitchell_b = (float)bv;
+                f.filter_params.mitchell_c = (float)cv;
+            }
             if (fradius > 16)
                 return ts_error_set(ld->err, TS_ERR_INVALID, "film.filter.radius: expected at most 16 pixels, got %g",
                                     fradius);
@@ -190,8 +205,10 @@ static ts_status parse_camera(loader *ld, const cJSON *doc)
     static const char *const types[] = {"perspective", "orthographic", NULL};
     int type = 0;
     TRY(ts_json_enum(cam, "camera", "type", false, types, &type, ld->err));
-    static const char *const pkeys[] = {"type", "from", "to", "up", "fov", "lens_radius", "focus_distance", NULL};
-    static const char *const okeys[] = {"type", "from", "to", "up", "height", NULL};
+    static const char *const pkeys[] = {"type", "from", "to", "up", "fov", "lens_radius", "focus_distance",
+                                        "mirror", "screen_window", NULL};
+    static const char *const okeys[] = {"type", "from",         "to",     "up", "height", "lens_radius",
+                                        "focus_distance", "mirror", "screen_window", NULL};
     TRY(ts_json_check_object(cam, "camera", type == 0 ? pkeys : okeys, ld->err));
     ts_camera_desc d = {0};
     d.type = (ts_camera_type)type;
@@ -200,14 +217,29 @@ static ts_status parse_camera(loader *ld, const cJSON *doc)
     TRY(ts_json_vec3(cam, "camera", "to", true, false, &d.to, ld->err));
     TRY(ts_json_vec3(cam, "camera", "up", false, true, &d.up, ld->err));
     double fov = 45, lens = 0, focus = 1, height = 1;
+    TRY(ts_json_bool(cam, "camera", "mirror", false, &d.mirror, ld->err));
+    const cJSON *win;
+    TRY(ts_json_array(cam, "camera", "screen_window", false, &win, ld->err));
+    if (win) {
+        int n = 0;
+        for (const cJSON *v = win->child; v; v = v->next) {
+            if (n >= 4 || !cJSON_IsNumber(v) || !isfinite(v->valuedouble)) n = 5;
+            else d.screen_window[n++] = (float)v->valuedouble;
+            if (n == 5) break;
+        }
+        if (n != 4 || !(d.screen_window[0] < d.screen_window[1]) || !(d.screen_window[2] < d.screen_window[3]))
+            return ts_error_set(ld->err, TS_ERR_INVALID,
+                                "camera.screen_window: expected [x0, x1, y0, y1] with x0 < x1 and y0 < y1");
+        d.has_window = true;
+    }
+    TRY(ts_json_number(cam, "camera", "lens_radius", false, TS_J_NONNEG, &lens, ld->err));
+    TRY(ts_json_number(cam, "camera", "focus_distance", false, TS_J_POSITIVE, &focus, ld->err));
     if (type == 0) {
         TRY(ts_json_number(cam, "camera", "fov", false, TS_J_POSITIVE, &fov, ld->err));
         if (!(fov < 180))
             return ts_error_set(ld->err, TS_ERR_INVALID, "camera.fov: expected an angle in (0, 180) degrees, got %g", fov);
-        TRY(ts_json_number(cam, "camera", "lens_radius", false, TS_J_NONNEG, &lens, ld->err));
-        TRY(ts_json_number(cam, "camera", "focus_distance", false, TS_J_POSITIVE, &focus, ld->err));
     } else {
-        TRY(ts_json_number(cam, "camera", "height", true, TS_J_POSITIVE, &height, ld->err));
+        TRY(ts_json_number(cam, "camera", "height", !win, TS_J_POSITIVE, &height, ld->err));
     }
     d.fov_deg = (float)fov;
     d.lens_radius = (float)lens;

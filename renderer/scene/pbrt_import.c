@@ -1,0 +1,1435 @@
+/* pbrt_import.c — a parsed pbrt-v3 scene onto the scene builder; see pbrt_import.h.
+ *
+ * The order is the JSON front end's: film, camera, sampler, integrator, then the shapes
+ * (each shape's material mapped and added the first time a shape uses it), then the
+ * lights. Every element is handed to the builder through the same transform and placement
+ * calls scene_json.c makes for the JSON document written beside it, so the two agree bit
+ * for bit. Positions in messages are the parser's (file:line:column of the directive or
+ * of the parameter). */
+#include "scene/pbrt_import.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cjson/cJSON.h>
+
+#include "scene/mesh_read.h"
+#include "scene/spectrum.h"
+
+#define TRY(expr)                                                                                            \
+    do {                                                                                                     \
+        ts_status st_ = (expr);                                                                              \
+        if (st_ != TS_OK) return st_;                                                                        \
+    } while (0)
+
+enum { MAT_UNMAPPED, MAT_MAPPED, MAT_NO_SURFACE };
+
+typedef struct imp {
+    ts_pbrt_scene *s;
+    ts_scene_builder *b;
+    cJSON *doc, *jmaterials, *jshapes, *jlights; /* NULL unless converting */
+    ts_warning_fn warn;
+    void *warn_ctx;
+    ts_error *err;
+    char **seen; /* warnings given, less their position (open addressing) */
+    size_t seen_cap, seen_n, repeats;
+    uint32_t *mat_id; /* per material, the last for pbrt-v3's default matte */
+    uint8_t *mat_state;
+    bool direct_all; /* the integrator takes several samples per light (nsamples matters) */
+} imp;
+
+/* ---------------------------------------------------------------- messages */
+
+static uint32_t hash_str(const char *s)
+{
+    uint32_t h = 2166136261u;
+    for (; *s; s++)
+        h = (h ^ (uint8_t)*s) * 16777619u;
+    return h;
+}
+
+/* true if body was not given before (and remembers it). */
+static bool first_time(imp *im, const char *body)
+{
+    if (im->seen_n * 2 >= im->seen_cap) {
+        size_t cap = im->seen_cap ? im->seen_cap * 2 : 64;
+        char **t = calloc(cap, sizeof *t);
+        if (!t) return true; /* out of memory: repeat rather than lose a warning */
+        for (size_t i = 0; i < im->seen_cap; i++)
+            if (im->seen[i]) {
+                size_t j = hash_str(im->seen[i]) & (cap - 1);
+                while (t[j])
+                    j = (j + 1) & (cap - 1);
+                t[j] = im->seen[i];
+            }
+        free(im->seen);
+        im->seen = t;
+        im->seen_cap = cap;
+    }
+    size_t j = hash_str(body) & (im->seen_cap - 1);
+    for (; im->seen[j]; j = (j + 1) & (im->seen_cap - 1))
+        if (strcmp(im->seen[j], body) == 0) return false;
+    im->seen[j] = strdup(body);
+    if (im->seen[j]) im->seen_n++;
+    return true;
+}
+
+static void emit(imp *im, ts_pbrt_loc loc, const char *body)
+{
+    if (!im->warn) return;
+    if (!first_time(im, body)) {
+        im->repeats++;
+        return;
+    }
+    char line[TS_ERROR_MAX + 64];
+    if (loc.file)
+        snprintf(line, sizeof line, "%s:%u:%u: %s", loc.file, loc.line, loc.column, body);
+    else
+        snprintf(line, sizeof line, "%s", body);
+    ts_pbrt_sanitize_utf8(line);
+    im->warn(im->warn_ctx, line);
+}
+
+static void warnf(imp *im, ts_pbrt_loc loc, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+static void warnf(imp *im, ts_pbrt_loc loc, const char *fmt, ...)
+{
+    char body[TS_ERROR_MAX];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(body, sizeof body, fmt, ap);
+    va_end(ap);
+    emit(im, loc, body);
+}
+
+/* A warning about a whole directive: "<Directive> \"<arg>\": …". */
+static void dwarn(imp *im, const ts_pbrt_params *ps, ts_pbrt_loc loc, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+static void dwarn(imp *im, const ts_pbrt_params *ps, ts_pbrt_loc loc, const char *fmt, ...)
+{
+    char msg[TS_ERROR_MAX];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    warnf(im, loc, "%s \"%s\"%s%s", ps->directive, ps->directive_arg,
+          strncmp(msg, "is ", 3) == 0 ? " " : ": ", msg);
+}
+
+/* A warning about one parameter: "<Directive> \"<arg>\": \"<type> <name>\" …". */
+static void pwarn(imp *im, const ts_pbrt_params *ps, const ts_pbrt_param *p, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+static void pwarn(imp *im, const ts_pbrt_params *ps, const ts_pbrt_param *p, const char *fmt, ...)
+{
+    char msg[TS_ERROR_MAX];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    warnf(im, p->loc, "%s \"%s\": \"%s %s\" %s", ps->directive, ps->directive_arg, p->type_name, p->name,
+          msg);
+}
+
+static void warn_unused(imp *im, const ts_pbrt_params *ps)
+{
+    size_t cur = 0;
+    for (const ts_pbrt_param *p; (p = ts_pbrt_params_next_unused(ps, &cur));)
+        pwarn(im, ps, p, "is not used");
+}
+
+/* An error about a whole directive. */
+static ts_status derr(imp *im, const ts_pbrt_params *ps, ts_pbrt_loc loc, ts_status st, const char *fmt, ...)
+    __attribute__((format(printf, 5, 6)));
+static ts_status derr(imp *im, const ts_pbrt_params *ps, ts_pbrt_loc loc, ts_status st, const char *fmt, ...)
+{
+    char msg[TS_ERROR_MAX];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    /* "Shape \"x\" is not supported", "Shape \"x\": the mesh is too large" */
+    const char *sep = strncmp(msg, "is ", 3) == 0 ? " " : ": ";
+    if (loc.file)
+        ts_error_set(im->err, st, "%s:%u:%u: %s \"%s\"%s%s", loc.file, loc.line, loc.column, ps->directive,
+                     ps->directive_arg, sep, msg);
+    else
+        ts_error_set(im->err, st, "%s \"%s\"%s%s", ps->directive, ps->directive_arg, sep, msg);
+    ts_pbrt_sanitize_utf8(im->err->message);
+    return st;
+}
+
+/* A builder's sentence about what a directive made gets the directive in front. */
+static ts_status at(imp *im, ts_status st, const ts_pbrt_params *ps, ts_pbrt_loc loc)
+{
+    if (!st) return st;
+    char inner[TS_ERROR_MAX];
+    memcpy(inner, im->err->message, sizeof inner);
+    return derr(im, ps, loc, st, "%s", inner);
+}
+
+static ts_status nomem(imp *im)
+{
+    return ts_error_set(im->err, TS_ERR_NOMEM, "out of memory while importing the pbrt-v3 scene");
+}
+
+/* ---------------------------------------------------------------- parameter values */
+
+/* The value of a "constant" texture named by texture parameter p; other classes are
+ * refused until materials take textures. */
+static ts_status constant_texture(imp *im, ts_pbrt_params *ps, ts_pbrt_param *p, bool want_float, float *f,
+                                  ts_rgb *c);
+
+static ts_status get_rgb(imp *im, ts_pbrt_params *ps, const char *name, ts_rgb def, ts_rgb *out)
+{
+    ts_pbrt_param *p = ts_pbrt_params_get(ps, name);
+    *out = def;
+    if (!p) return TS_OK;
+    size_t values = ts_pbrt_param_values(p);
+    switch (p->type) {
+    case TS_PBRT_PARAM_RGB:
+    case TS_PBRT_PARAM_XYZ:
+        return ts_pbrt_find_rgb(ps, name, def, out, im->err);
+    case TS_PBRT_PARAM_SPECTRUM:
+        *out = ts_spectrum_to_rgb(p->floats, p->n / 2);
+        return TS_OK;
+    case TS_PBRT_PARAM_BLACKBODY:
+        if (p->n == 1)
+            *out = ts_spectrum_blackbody_rgb(p->floats[0], 1);
+        else if (p->n == 2)
+            *out = ts_spectrum_blackbody_rgb(p->floats[0], p->floats[1]);
+        else
+            return ts_pbrt_param_error(ps, p, im->err, TS_ERR_INVALID,
+                                       "expects a temperature and a scale (2 values), got %zu values", p->n);
+        return TS_OK;
+    case TS_PBRT_PARAM_TEXTURE:
+        return constant_texture(im, ps, p, false, NULL, out);
+    default:
+        (void)values;
+        return ts_pbrt_param_error(ps, p, im->err, TS_ERR_INVALID,
+                                   "expects a colour (rgb, xyz, spectrum, blackbody or a texture)");
+    }
+}
+
+static ts_status get_float(imp *im, ts_pbrt_params *ps, const char *name, float def, float *out)
+{
+    ts_pbrt_param *p = ts_pbrt_params_get(ps, name);
+    *out = def;
+    if (!p) return TS_OK;
+    if (p->type == TS_PBRT_PARAM_TEXTURE) return constant_texture(im, ps, p, true, out, NULL);
+    return ts_pbrt_find_float(ps, name, def, out, im->err);
+}
+
+static ts_status constant_texture(imp *im, ts_pbrt_params *ps, ts_pbrt_param *p, bool want_float, float *f,
+                                  ts_rgb *c)
+{
+    int32_t ti = want_float ? p->texture_float : p->texture_spectrum;
+    if (ti < 0)
+        return ts_pbrt_param_error(ps, p, im->err, TS_ERR_INVALID, "names no %s texture \"%s\" in scope",
+                                   want_float ? "float" : "spectrum", p->strings[0]);
+    ts_pbrt_texture *t = &im->s->textures[ti];
+    if (strcmp(t->class_name, "constant") != 0)
+        return ts_pbrt_param_error(ps, p, im->err, TS_ERR_UNSUPPORTED,
+                                   "names the \"%s\" texture \"%s\": textured material parameters are not "
+                                   "supported yet (only \"constant\" textures)",
+                                   t->class_name, t->name);
+    ts_status st = want_float ? ts_pbrt_find_float(&t->params, "value", 1, f, im->err)
+                              : get_rgb(im, &t->params, "value", ts_rgb_gray(1), c);
+    if (!st) warn_unused(im, &t->params);
+    return st;
+}
+
+float ts_pbrt_roughness_to_alpha(float roughness)
+{
+    float x = logf(fmaxf(roughness, 1e-3f));
+    return 1.62142f + 0.819955f * x + 0.1734f * x * x + 0.0171201f * x * x * x + 0.000640711f * x * x * x * x;
+}
+
+/* ---------------------------------------------------------------- JSON helpers */
+
+static cJSON *jnum_array(const double *v, size_t n)
+{
+    cJSON *a = cJSON_CreateArray();
+    for (size_t i = 0; a && i < n; i++) {
+        cJSON *x = cJSON_CreateNumber(v[i]);
+        if (!x || !cJSON_AddItemToArray(a, x)) {
+            cJSON_Delete(x);
+            cJSON_Delete(a);
+            return NULL;
+        }
+    }
+    return a;
+}
+
+static bool jadd(cJSON *obj, const char *key, cJSON *item)
+{
+    if (!item) return false;
+    if (!cJSON_AddItemToObject(obj, key, item)) {
+        cJSON_Delete(item);
+        return false;
+    }
+    return true;
+}
+
+static bool jrgb(cJSON *obj, const char *key, ts_rgb c)
+{
+    double v[3] = {c.r, c.g, c.b};
+    return jadd(obj, key, jnum_array(v, 3));
+}
+
+static bool jvec3(cJSON *obj, const char *key, ts_vec3 c)
+{
+    double v[3] = {c.x, c.y, c.z};
+    return jadd(obj, key, jnum_array(v, 3));
+}
+
+static bool jnumber(cJSON *obj, const char *key, double v) { return jadd(obj, key, cJSON_CreateNumber(v)); }
+static bool jstring(cJSON *obj, const char *key, const char *v)
+{
+    return jadd(obj, key, cJSON_CreateString(v));
+}
+static bool jbool(cJSON *obj, const char *key, bool v) { return jadd(obj, key, cJSON_CreateBool(v)); }
+
+/* [{"matrix": the 16 numbers of m, row-major}] */
+static cJSON *jtransform(const ts_mat4 *m)
+{
+    double v[16];
+    for (int k = 0; k < 16; k++)
+        v[k] = m->m[k / 4][k % 4];
+    cJSON *list = cJSON_CreateArray(), *step = cJSON_CreateObject();
+    if (!list || !step || !jadd(step, "matrix", jnum_array(v, 16)) || !cJSON_AddItemToArray(list, step)) {
+        cJSON_Delete(step);
+        cJSON_Delete(list);
+        return NULL;
+    }
+    return list;
+}
+
+/* The transform the JSON front end makes of a one-matrix "transform" list (its order of
+ * composition, so both front ends hold the same bits). false: the matrix is singular. */
+static bool user_xform(const ts_mat4 *m, ts_xform *out)
+{
+    ts_xform step, id = ts_xform_identity();
+    if (!ts_xform_from_matrix(m, &step)) return false;
+    *out = ts_xform_compose(&step, &id);
+    return true;
+}
+
+/* ---------------------------------------------------------------- film, camera, sampler, integrator */
+
+static ts_status map_film(imp *im, uint32_t *width, uint32_t *height)
+{
+    ts_pbrt_option *o = &im->s->film;
+    ts_pbrt_params *ps = &o->params;
+    if (strcmp(o->type, "image") != 0)
+        return derr(im, ps, o->loc, TS_ERR_UNSUPPORTED, "is not supported (the film is \"image\")");
+    int32_t xres, yres;
+    TRY(ts_pbrt_find_int(ps, "xresolution", 1280, &xres, im->err));
+    TRY(ts_pbrt_find_int(ps, "yresolution", 720, &yres, im->err));
+    if (xres < 1 || yres < 1)
+        return derr(im, ps, o->loc, TS_ERR_INVALID, "the resolution %d × %d has no pixel", xres, yres);
+    ts_film_desc f = {.width = (uint32_t)xres, .height = (uint32_t)yres, .crop = {0, 1, 0, 1}};
+    const float *cw;
+    size_t ncw;
+    TRY(ts_pbrt_find_floats(ps, "cropwindow", &cw, &ncw, im->err));
+    if (cw) {
+        if (ncw != 4)
+            return ts_pbrt_param_error(ps, ts_pbrt_params_get(ps, "cropwindow"), im->err, TS_ERR_INVALID,
+                                       "expects 4 values (x0 x1 y0 y1), got %zu", ncw);
+        /* pbrt-v3: each pair ordered, then clamped to [0, 1]. */
+        for (int k = 0; k < 2; k++) {
+            float a = cw[2 * k], b = cw[2 * k + 1];
+            f.crop[2 * k] = ts_clampf(fminf(a, b), 0, 1);
+            f.crop[2 * k + 1] = ts_clampf(fmaxf(a, b), 0, 1);
+        }
+    }
+    const char *filename;
+    TRY(ts_pbrt_find_string(ps, "filename", NULL, &filename, im->err));
+    if (filename)
+        pwarn(im, ps, ts_pbrt_params_get(ps, "filename"),
+              "is not used: tessera writes the files its -o options name");
+    warn_unused(im, ps);
+
+    ts_pbrt_option *fo = &im->s->filter;
+    ts_pbrt_params *fps = &fo->params;
+    static const char *const names[] = {"box", "triangle", "gaussian", "mitchell", "sinc"};
+    static const float widths[] = {0.5f, 2, 2, 2, 4};
+    int t = -1;
+    for (int k = 0; k < 5; k++)
+        if (strcmp(fo->type, names[k]) == 0) t = k;
+    if (t < 0)
+        return derr(im, fps, fo->loc, TS_ERR_UNSUPPORTED,
+                    "is not a pbrt-v3 filter (box, triangle, gaussian, mitchell, sinc)");
+    float xw, yw;
+    TRY(ts_pbrt_find_float(fps, "xwidth", widths[t], &xw, im->err));
+    TRY(ts_pbrt_find_float(fps, "ywidth", widths[t], &yw, im->err));
+    if (!(xw > 0) || !(yw > 0))
+        return derr(im, fps, fo->loc, TS_ERR_INVALID, "xwidth and ywidth must be positive, got %g and %g", xw,
+                    yw);
+    if (xw != yw)
+        dwarn(im, fps, fo->loc, "tessera's filters are square: xwidth %g is taken for ywidth %g too", xw, yw);
+    f.filter_radius = xw;
+    switch (t) {
+    case 0:
+        f.filter = TS_FILTER_BOX;
+        break;
+    case 1:
+        f.filter = TS_FILTER_TRIANGLE;
+        break;
+    case 2: {
+        f.filter = TS_FILTER_GAUSSIAN;
+        float alpha;
+        TRY(ts_pbrt_find_float(fps, "alpha", 2, &alpha, im->err));
+        if (!(alpha > 0) || !isfinite(alpha))
+            return ts_pbrt_param_error(fps, ts_pbrt_params_get(fps, "alpha"), im->err, TS_ERR_INVALID,
+                                       "must be a positive number, got %g", alpha);
+        f.filter_params.gaussian_alpha = alpha;
+        break;
+    }
+    case 3: {
+        f.filter = TS_FILTER_MITCHELL;
+        float bv, cv;
+        TRY(ts_pbrt_find_float(fps, "B", 1.0f / 3, &bv, im->err));
+        TRY(ts_pbrt_find_float(fps, "C", 1.0f / 3, &cv, im->err));
+        f.filter_params.mitchell_custom = true;
+        f.filter_params.mitchell_b = bv;
+        f.filter_params.mitchell_c = cv;
+        break;
+    }
+    default: {
+        float tau;
+        TRY(ts_pbrt_find_float(fps, "tau", 3, &tau, im->err));
+        f.filter = TS_FILTER_MITCHELL;
+        dwarn(
+            im, fps, fo->loc,
+            "the windowed sinc filter is not supported: a Mitchell filter (B = C = 1/3) of the same width is "
+            "used");
+        break;
+    }
+    }
+    warn_unused(im, fps);
+    TRY(at(im, ts_scene_builder_set_film(im->b, &f, im->err), fps, fo->loc));
+    *width = f.width;
+    *height = f.height;
+    if (im->doc) {
+        cJSON *film = cJSON_CreateObject(), *filter = cJSON_CreateObject();
+        bool ok = film && filter && jnumber(film, "width", f.width) && jnumber(film, "height", f.height) &&
+                  jstring(filter, "type", ts_filter_type_name(f.filter)) &&
+                  jnumber(filter, "radius", f.filter_radius);
+        if (ok && f.filter == TS_FILTER_GAUSSIAN)
+            ok = jnumber(filter, "alpha", f.filter_params.gaussian_alpha);
+        if (ok && f.filter == TS_FILTER_MITCHELL)
+            ok = jnumber(filter, "b", f.filter_params.mitchell_b) &&
+                 jnumber(filter, "c", f.filter_params.mitchell_c);
+        ok = ok && jadd(film, "filter", filter);
+        if (!ok) cJSON_Delete(filter);
+        filter = NULL;
+        if (ok && (f.crop[0] != 0 || f.crop[1] != 1 || f.crop[2] != 0 || f.crop[3] != 1)) {
+            double c[4] = {f.crop[0], f.crop[1], f.crop[2], f.crop[3]};
+            ok = jadd(film, "crop", jnum_array(c, 4));
+        }
+        if (!ok || !jadd(im->doc, "film", film)) {
+            if (!ok) cJSON_Delete(film);
+            return nomem(im);
+        }
+    }
+    return TS_OK;
+}
+
+static double col_len(const ts_mat4 *m, int j)
+{
+    return sqrt(m->m[0][j] * m->m[0][j] + m->m[1][j] * m->m[1][j] + m->m[2][j] * m->m[2][j]);
+}
+
+static ts_status map_camera(imp *im, uint32_t width, uint32_t height)
+{
+    ts_pbrt_option *o = &im->s->camera;
+    ts_pbrt_params *ps = &o->params;
+    bool persp = strcmp(o->type, "perspective") == 0;
+    if (!persp && strcmp(o->type, "orthographic") != 0)
+        return derr(im, ps, o->loc, TS_ERR_UNSUPPORTED,
+                    "is not supported (perspective and orthographic are)");
+    const ts_mat4 *c2w = &im->s->camera_to_world;
+    ts_camera_desc d = {0};
+    d.type = persp ? TS_CAMERA_PERSPECTIVE : TS_CAMERA_ORTHOGRAPHIC;
+    /* pbrt-v3's camera space: x to the image's right, y up, z forward (left-handed). */
+    ts_dvec3 origin = {c2w->m[0][3], c2w->m[1][3], c2w->m[2][3]};
+    ts_dvec3 x = {c2w->m[0][0], c2w->m[1][0], c2w->m[2][0]};
+    ts_dvec3 y = {c2w->m[0][1], c2w->m[1][1], c2w->m[2][1]};
+    ts_dvec3 z = {c2w->m[0][2], c2w->m[1][2], c2w->m[2][2]};
+    double lx = col_len(c2w, 0), ly = col_len(c2w, 1), lz = col_len(c2w, 2);
+    if (!(lx > 0 && ly > 0 && lz > 0) || !isfinite(lx * ly * lz))
+        return derr(im, ps, o->loc, TS_ERR_INVALID, "the camera transform is singular");
+    double det =
+        x.x * (y.y * z.z - y.z * z.y) - y.x * (x.y * z.z - x.z * z.y) + z.x * (x.y * y.z - x.z * y.y);
+    d.from = (ts_vec3){(float)origin.x, (float)origin.y, (float)origin.z};
+    d.to =
+        (ts_vec3){(float)(origin.x + z.x / lz), (float)(origin.y + z.y / lz), (float)(origin.z + z.z / lz)};
+    d.up = (ts_vec3){(float)(y.x / ly), (float)(y.y / ly), (float)(y.z / ly)};
+    /* A right-handed camera-to-world frame maps pbrt-v3's left-handed camera space to a
+     * mirrored image of tessera's from/to/up frame (camera.h). */
+    d.mirror = det > 0;
+
+    float frame = (float)width / (float)height, fov = 90, halffov = -1, lens = 0, focus = 1e6f;
+    bool has_frame = ts_pbrt_params_get(ps, "frameaspectratio") != NULL;
+    TRY(ts_pbrt_find_float(ps, "frameaspectratio", frame, &frame, im->err));
+    if (!(frame > 0) || !isfinite(frame))
+        return ts_pbrt_param_error(ps, ts_pbrt_params_get(ps, "frameaspectratio"), im->err, TS_ERR_INVALID,
+                                   "must be a positive number, got %g", frame);
+    float win[4] = {-frame, frame, -1, 1};
+    if (frame <= 1) win[0] = -1, win[1] = 1, win[2] = -1 / frame, win[3] = 1 / frame;
+    const float *sw;
+    size_t nsw;
+    TRY(ts_pbrt_find_floats(ps, "screenwindow", &sw, &nsw, im->err));
+    if (sw) {
+        if (nsw != 4)
+            return ts_pbrt_param_error(ps, ts_pbrt_params_get(ps, "screenwindow"), im->err, TS_ERR_INVALID,
+                                       "expects 4 values (x0 x1 y0 y1), got %zu", nsw);
+        memcpy(win, sw, sizeof win);
+    }
+    TRY(ts_pbrt_find_float(ps, "lensradius", 0, &lens, im->err));
+    TRY(ts_pbrt_find_float(ps, "focaldistance", 1e6f, &focus, im->err));
+    if (persp) {
+        TRY(ts_pbrt_find_float(ps, "fov", 90, &fov, im->err));
+        TRY(ts_pbrt_find_float(ps, "halffov", -1, &halffov, im->err));
+        if (halffov > 0) fov = 2 * halffov;
+        if (!(fov > 0 && fov < 180))
+            return derr(im, ps, o->loc, TS_ERR_INVALID, "\"float fov\" must be in (0, 180) degrees, got %g",
+                        fov);
+    }
+    float shutter;
+    TRY(ts_pbrt_find_float(ps, "shutteropen", 0, &shutter, im->err));
+    TRY(ts_pbrt_find_float(ps, "shutterclose", 1, &shutter, im->err));
+    warn_unused(im, ps);
+    /* Camera-space lengths to world units: the window's axes against the view axis, the
+     * lens along x and the focus along z. */
+    double kx = persp ? lx / lz : lx, ky = persp ? ly / lz : ly;
+    bool unit_axes = fabs(kx - 1) < 1e-6 && fabs(ky - 1) < 1e-6;
+    d.fov_deg = fov;
+    d.lens_radius = (float)(lens * lx);
+    d.focus_distance = (float)(focus * lz);
+    if (!persp || sw || has_frame || !unit_axes) {
+        d.has_window = true;
+        d.screen_window[0] = (float)(win[0] * kx), d.screen_window[1] = (float)(win[1] * kx);
+        d.screen_window[2] = (float)(win[2] * ky), d.screen_window[3] = (float)(win[3] * ky);
+    }
+    TRY(at(im, ts_scene_builder_set_camera(im->b, &d, im->err), ps, o->loc));
+    if (im->doc) {
+        cJSON *cam = cJSON_CreateObject();
+        bool ok = cam && jstring(cam, "type", persp ? "perspective" : "orthographic") &&
+                  jvec3(cam, "from", d.from) && jvec3(cam, "to", d.to) && jvec3(cam, "up", d.up) &&
+                  (!persp || jnumber(cam, "fov", d.fov_deg)) && jnumber(cam, "lens_radius", d.lens_radius) &&
+                  jnumber(cam, "focus_distance", d.focus_distance);
+        if (ok && d.mirror) ok = jbool(cam, "mirror", true);
+        if (ok && d.has_window) {
+            double w[4] = {d.screen_window[0], d.screen_window[1], d.screen_window[2], d.screen_window[3]};
+            ok = jadd(cam, "screen_window", jnum_array(w, 4));
+        }
+        if (!ok || !jadd(im->doc, "camera", cam)) {
+            if (!ok) cJSON_Delete(cam);
+            return nomem(im);
+        }
+    }
+    return TS_OK;
+}
+
+static ts_status map_sampler(imp *im)
+{
+    ts_pbrt_option *o = &im->s->sampler;
+    ts_pbrt_params *ps = &o->params;
+    static const char *const known[] = {"halton",         "sobol",      "random",     "02sequence",
+                                        "lowdiscrepancy", "maxmindist", "stratified", NULL};
+    bool ok = false;
+    for (int k = 0; known[k]; k++)
+        ok |= strcmp(o->type, known[k]) == 0;
+    if (!ok)
+        return derr(im, ps, o->loc, TS_ERR_UNSUPPORTED,
+                    "is not a pbrt-v3 sampler (halton, sobol, random, 02sequence, maxmindist, stratified)");
+    int32_t spp = 16;
+    if (strcmp(o->type, "stratified") == 0) {
+        int32_t xs, ys;
+        bool jitter;
+        TRY(ts_pbrt_find_int(ps, "xsamples", 4, &xs, im->err));
+        TRY(ts_pbrt_find_int(ps, "ysamples", 4, &ys, im->err));
+        TRY(ts_pbrt_find_bool(ps, "jitter", true, &jitter, im->err));
+        if (xs < 1 || ys < 1 || (int64_t)xs * ys > INT32_MAX)
+            return derr(im, ps, o->loc, TS_ERR_INVALID,
+                        "xsamples × ysamples must be a positive count, got %d × %d", xs, ys);
+        spp = xs * ys;
+    } else {
+        TRY(ts_pbrt_find_int(ps, "pixelsamples", 16, &spp, im->err));
+        if (strcmp(o->type, "sobol") != 0 && o->loc.file)
+            dwarn(im, ps, o->loc,
+                  "is mapped to tessera's Owen-scrambled Sobol sampler with its pixelsamples (%d)", spp);
+    }
+    int32_t dims;
+    TRY(ts_pbrt_find_int(ps, "dimensions", 4, &dims, im->err));
+    if (spp < 1)
+        return derr(im, ps, o->loc, TS_ERR_INVALID, "the sample count must be positive, got %d", spp);
+    warn_unused(im, ps);
+    ts_sampler smp = {TS_SAMPLER_SOBOL, 0};
+    TRY(at(im, ts_scene_builder_set_sampler(im->b, &smp, (uint32_t)spp, im->err), ps, o->loc));
+    if (im->doc) {
+        cJSON *j = cJSON_CreateObject();
+        if (!j || !jstring(j, "type", "sobol") || !jnumber(j, "spp", spp) || !jnumber(j, "seed", 0) ||
+            !jadd(im->doc, "sampler", j)) {
+            cJSON_Delete(j);
+            return nomem(im);
+        }
+    }
+    return TS_OK;
+}
+
+static ts_status map_integrator(imp *im)
+{
+    ts_pbrt_option *o = &im->s->integrator;
+    ts_pbrt_params *ps = &o->params;
+    ts_integrator_desc d = {.type = TS_INTEGRATOR_PATH,
+                            .max_depth = 5,
+                            .rr_depth = 3,
+                            .light_sampling = TS_LIGHT_SELECT_POWER,
+                            .strategy = TS_LIGHTS_ALL,
+                            .sampling = TS_SAMPLING_MIS,
+                            .samples_per_light = 1,
+                            .ao_distance = INFINITY};
+    const char *t = o->type;
+    bool path_like = strcmp(t, "path") == 0;
+    if (!path_like && (strcmp(t, "bdpt") == 0 || strcmp(t, "mlt") == 0 || strcmp(t, "sppm") == 0 ||
+                       strcmp(t, "volpath") == 0)) {
+        path_like = true;
+        dwarn(im, ps, o->loc,
+              "rendered with the path integrator: the estimator differs (the image converges to the same "
+              "surface light transport%s)",
+              strcmp(t, "volpath") == 0 ? ", without media" : "");
+        /* Their parameters are theirs; only the depth carries over. */
+        for (size_t k = 0; k < ps->count; k++)
+            if (strcmp(ps->items[k].name, "maxdepth") != 0) ps->items[k].used = true;
+    }
+    int32_t depth;
+    if (path_like) {
+        TRY(ts_pbrt_find_int(ps, "maxdepth", 5, &depth, im->err));
+        float rr;
+        TRY(ts_pbrt_find_float(ps, "rrthreshold", 1, &rr, im->err));
+        if (rr != 1)
+            pwarn(
+                im, ps, ts_pbrt_params_get(ps, "rrthreshold"),
+                "is not used: roulette starts below a throughput of 1 after 3 bounces (unbiased either way)");
+        const char *strat;
+        TRY(ts_pbrt_find_string(ps, "lightsamplestrategy", "spatial", &strat, im->err));
+        if (strcmp(strat, "uniform") == 0)
+            d.light_sampling = TS_LIGHT_SELECT_UNIFORM;
+        else if (strcmp(strat, "power") != 0 && strcmp(strat, "spatial") != 0)
+            return ts_pbrt_param_error(ps, ts_pbrt_params_get(ps, "lightsamplestrategy"), im->err,
+                                       TS_ERR_INVALID, "must be uniform, power or spatial, got \"%s\"",
+                                       strat);
+        else if (strcmp(strat, "spatial") == 0 && ts_pbrt_params_get(ps, "lightsamplestrategy"))
+            pwarn(im, ps, ts_pbrt_params_get(ps, "lightsamplestrategy"),
+                  "\"spatial\" is mapped to \"power\" (unbiased either way)");
+        if (depth < 0 || depth > 65535)
+            return derr(im, ps, o->loc, TS_ERR_INVALID, "\"integer maxdepth\" must be in [0, 65535], got %d",
+                        depth);
+        d.max_depth = depth;
+    } else if (strcmp(t, "directlighting") == 0 || strcmp(t, "whitted") == 0) {
+        d.type = TS_INTEGRATOR_DIRECT;
+        TRY(ts_pbrt_find_int(ps, "maxdepth", 5, &depth, im->err));
+        const char *strat = "all";
+        if (t[0] == 'd')
+            TRY(ts_pbrt_find_string(ps, "strategy", "all", &strat, im->err));
+        else
+            dwarn(im, ps, o->loc,
+                  "rendered by the direct-lighting integrator (each light sampled once, specular "
+                  "paths followed): Whitted's estimate");
+        if (strcmp(strat, "one") == 0)
+            d.strategy = TS_LIGHTS_ONE;
+        else if (strcmp(strat, "all") != 0)
+            return ts_pbrt_param_error(ps, ts_pbrt_params_get(ps, "strategy"), im->err, TS_ERR_INVALID,
+                                       "must be all or one, got \"%s\"", strat);
+        if (depth < 0 || depth > 1000)
+            return derr(im, ps, o->loc, TS_ERR_INVALID, "\"integer maxdepth\" must be in [0, 1000], got %d",
+                        depth);
+        d.max_depth = depth;
+        im->direct_all = d.strategy == TS_LIGHTS_ALL;
+    } else {
+        return derr(
+            im, ps, o->loc, TS_ERR_UNSUPPORTED,
+            "is not supported (path, directlighting and whitted are; bdpt, mlt, sppm and volpath render "
+            "with path)");
+    }
+    const int32_t *pb;
+    size_t npb;
+    TRY(ts_pbrt_find_ints(ps, "pixelbounds", &pb, &npb, im->err));
+    if (pb) pwarn(im, ps, ts_pbrt_params_get(ps, "pixelbounds"), "is not used: the film's cropwindow is");
+    warn_unused(im, ps);
+    TRY(at(im, ts_scene_builder_set_integrator(im->b, &d, im->err), ps, o->loc));
+    if (im->doc) {
+        cJSON *j = cJSON_CreateObject();
+        bool ok = j && jstring(j, "type", d.type == TS_INTEGRATOR_PATH ? "path" : "direct") &&
+                  jnumber(j, "max_depth", d.max_depth);
+        if (ok && d.type == TS_INTEGRATOR_PATH)
+            ok = jnumber(j, "rr_depth", d.rr_depth) &&
+                 jstring(j, "light_sampling",
+                         d.light_sampling == TS_LIGHT_SELECT_UNIFORM ? "uniform" : "power");
+        if (ok && d.type == TS_INTEGRATOR_DIRECT)
+            ok = jstring(j, "strategy", d.strategy == TS_LIGHTS_ONE ? "one" : "all");
+        if (!ok || !jadd(im->doc, "integrator", j)) {
+            if (!ok) cJSON_Delete(j);
+            return nomem(im);
+        }
+    }
+    return TS_OK;
+}
+
+/* ---------------------------------------------------------------- materials */
+
+/* Roughness parameters of a microfacet material as tessera's one α: uroughness and
+ * vroughness (when given, else roughness), remapped as pbrt-v3 does unless
+ * remaproughness is false. *specular: pbrt-v3's glass is smooth when both are 0 before
+ * the remapping. */
+static ts_status get_roughness(imp *im, ts_pbrt_params *ps, ts_pbrt_loc loc, float def, bool uv_only,
+                               float *alpha, bool *smooth)
+{
+    float r = def, u, v;
+    if (!uv_only) TRY(get_float(im, ps, "roughness", def, &r));
+    TRY(get_float(im, ps, "uroughness", r, &u));
+    TRY(get_float(im, ps, "vroughness", r, &v));
+    bool remap;
+    TRY(ts_pbrt_find_bool(ps, "remaproughness", true, &remap, im->err));
+    if (!(u >= 0) || !(v >= 0) || !isfinite(u) || !isfinite(v))
+        return derr(im, ps, loc, TS_ERR_INVALID, "roughness must be a finite number ≥ 0, got %g and %g", u,
+                    v);
+    if (u != v)
+        return derr(im, ps, loc, TS_ERR_UNSUPPORTED,
+                    "anisotropic roughness (uroughness %g ≠ vroughness %g) is not supported yet", u, v);
+    if (smooth) *smooth = u == 0;
+    *alpha = remap ? ts_pbrt_roughness_to_alpha(u) : u;
+    return TS_OK;
+}
+
+/* The tessera material for pbrt-v3 material index mi (-1: the default matte); *no_surface
+ * for type "" / "none". */
+static ts_status make_material(imp *im, int32_t mi, ts_material *m, bool *no_surface, const char **json_type)
+{
+    static ts_pbrt_params default_params = {.directive = "Material", .directive_arg = "matte"};
+    ts_pbrt_params *ps = mi >= 0 ? &im->s->materials[mi].params : &default_params;
+    ts_pbrt_loc loc = mi >= 0 ? im->s->materials[mi].loc : (ts_pbrt_loc){0};
+    const char *type = mi >= 0 ? im->s->materials[mi].type : "matte";
+    *m = (ts_material){0};
+    *no_surface = false;
+    if (type[0] == 0 || strcmp(type, "none") == 0) {
+        *no_surface = true;
+        return TS_OK;
+    }
+    ts_pbrt_param *bump = ts_pbrt_params_get(ps, "bumpmap");
+    if (bump) pwarn(im, ps, bump, "is ignored: bump mapping is not supported yet");
+    if (strcmp(type, "matte") == 0) {
+        m->type = TS_MATERIAL_DIFFUSE;
+        *json_type = "diffuse";
+        TRY(get_rgb(im, ps, "Kd", ts_rgb_gray(0.5f), &m->reflectance));
+        TRY(get_float(im, ps, "sigma", 0, &m->sigma_deg));
+    } else if (strcmp(type, "plastic") == 0) {
+        m->type = TS_MATERIAL_PLASTIC;
+        *json_type = "plastic";
+        TRY(get_rgb(im, ps, "Kd", ts_rgb_gray(0.25f), &m->diffuse));
+        TRY(get_rgb(im, ps, "Ks", ts_rgb_gray(0.25f), &m->specular));
+        TRY(get_roughness(im, ps, loc, 0.1f, false, &m->roughness, NULL));
+        /* pbrt-v3's plastic is always a microfacet lobe; tessera's takes α < 1e-4 as smooth. */
+        dwarn(im, ps, loc,
+              "pbrt-v3's plastic (Lambertian + microfacet, uncoupled) is not available yet: tessera's "
+              "Fresnel-coupled plastic (docs/design.md §4) is used, whose diffuse lobe is darker");
+    } else if (strcmp(type, "mirror") == 0) {
+        m->type = TS_MATERIAL_MIRROR;
+        *json_type = "mirror";
+        TRY(get_rgb(im, ps, "Kr", ts_rgb_gray(0.9f), &m->reflectance));
+    } else if (strcmp(type, "glass") == 0) {
+        m->type = TS_MATERIAL_DIELECTRIC;
+        *json_type = "dielectric";
+        TRY(get_rgb(im, ps, "Kr", ts_rgb_gray(1), &m->reflectance));
+        TRY(get_rgb(im, ps, "Kt", ts_rgb_gray(1), &m->transmittance));
+        float eta;
+        TRY(get_float(im, ps, "index", 1.5f, &eta));
+        TRY(get_float(im, ps, "eta", eta, &m->eta));
+        bool smooth;
+        TRY(get_roughness(im, ps, loc, 0, true, &m->roughness, &smooth));
+        if (smooth) m->roughness = 0;
+    } else if (strcmp(type, "metal") == 0) {
+        m->type = TS_MATERIAL_CONDUCTOR;
+        *json_type = "conductor";
+        ts_rgb eta, k;
+        ts_spectrum_copper(&eta, &k);
+        TRY(get_rgb(im, ps, "eta", eta, &m->conductor_eta));
+        TRY(get_rgb(im, ps, "k", k, &m->conductor_k));
+        m->distribution = TS_MICROFACET_GGX;
+        TRY(get_roughness(im, ps, loc, 0.01f, false, &m->roughness, NULL));
+    } else if (strcmp(type, "substrate") == 0) {
+        m->type = TS_MATERIAL_SUBSTRATE;
+        *json_type = "substrate";
+        TRY(get_rgb(im, ps, "Kd", ts_rgb_gray(0.5f), &m->diffuse));
+        TRY(get_rgb(im, ps, "Ks", ts_rgb_gray(0.5f), &m->specular));
+        TRY(get_roughness(im, ps, loc, 0.1f, true, &m->roughness, NULL));
+    } else if (strcmp(type, "fourier") == 0) {
+        m->type = TS_MATERIAL_FOURIER;
+        *json_type = "fourier";
+        const char *file;
+        TRY(ts_pbrt_find_string(ps, "bsdffile", NULL, &file, im->err));
+        if (!file) return derr(im, ps, loc, TS_ERR_INVALID, "\"string bsdffile\" is required");
+        TRY(at(im, ts_scene_builder_load_fourier(im->b, file, &m->fourier, im->err), ps,
+               ts_pbrt_params_get(ps, "bsdffile")->loc));
+    } else if (strcmp(type, "disney") == 0 || strcmp(type, "subsurface") == 0 ||
+               strcmp(type, "kdsubsurface") == 0 || strcmp(type, "hair") == 0) {
+        return derr(im, ps, loc, TS_ERR_UNSUPPORTED, "is not supported (%s)",
+                    type[0] == 'd'   ? "the Disney BSDF is not implemented"
+                    : type[0] == 'h' ? "hair is not implemented"
+                                     : "subsurface scattering needs media, which tessera does not render");
+    } else if (strcmp(type, "uber") == 0 || strcmp(type, "translucent") == 0 || strcmp(type, "mix") == 0) {
+        return derr(im, ps, loc, TS_ERR_UNSUPPORTED, "is not supported yet");
+    } else {
+        return derr(im, ps, loc, TS_ERR_UNSUPPORTED, "is not a pbrt-v3 material");
+    }
+    return TS_OK;
+}
+
+static ts_status json_material(imp *im, const char *name, const char *type, const ts_material *m)
+{
+    cJSON *j = cJSON_CreateObject();
+    bool ok = j && jstring(j, "type", type);
+    switch (m->type) {
+    case TS_MATERIAL_DIFFUSE:
+        ok = ok && jrgb(j, "reflectance", m->reflectance) &&
+             (m->sigma_deg == 0 || jnumber(j, "sigma", m->sigma_deg));
+        break;
+    case TS_MATERIAL_MIRROR:
+        ok = ok && jrgb(j, "reflectance", m->reflectance);
+        break;
+    case TS_MATERIAL_DIELECTRIC:
+        ok = ok && jnumber(j, "eta", m->eta) && jrgb(j, "reflectance", m->reflectance) &&
+             jrgb(j, "transmittance", m->transmittance) && jnumber(j, "roughness", m->roughness);
+        break;
+    case TS_MATERIAL_CONDUCTOR:
+        ok = ok && jrgb(j, "eta", m->conductor_eta) && jrgb(j, "k", m->conductor_k) &&
+             jnumber(j, "roughness", m->roughness) && jstring(j, "distribution", "ggx");
+        break;
+    case TS_MATERIAL_PLASTIC:
+    case TS_MATERIAL_SUBSTRATE:
+        ok = ok && jrgb(j, "diffuse", m->diffuse) && jrgb(j, "specular", m->specular) &&
+             jnumber(j, "roughness", m->roughness);
+        break;
+    case TS_MATERIAL_FOURIER:
+        break; /* the file is added by the caller */
+    }
+    if (!ok || !jadd(im->jmaterials, name, j)) {
+        if (!ok) cJSON_Delete(j);
+        return nomem(im);
+    }
+    return TS_OK;
+}
+
+/* The builder id of material mi (mapped on first use), or TS_NONE with *no_surface. */
+static ts_status material_id(imp *im, int32_t mi, uint32_t *id, bool *no_surface)
+{
+    size_t slot = mi >= 0 ? (size_t)mi : im->s->material_count;
+    *no_surface = false;
+    if (im->mat_state[slot] == MAT_NO_SURFACE) {
+        *no_surface = true;
+        *id = TS_NONE;
+        return TS_OK;
+    }
+    if (im->mat_state[slot] == MAT_MAPPED) {
+        *id = im->mat_id[slot];
+        return TS_OK;
+    }
+    ts_material m;
+    const char *jtype = NULL;
+    TRY(make_material(im, mi, &m, no_surface, &jtype));
+    if (*no_surface) {
+        im->mat_state[slot] = MAT_NO_SURFACE;
+        *id = TS_NONE;
+        return TS_OK;
+    }
+    char name[300];
+    if (mi >= 0 && im->s->materials[mi].name)
+        snprintf(name, sizeof name, "%.200s#%d", im->s->materials[mi].name, (int)mi);
+    else if (mi >= 0)
+        snprintf(name, sizeof name, "%s#%d", im->s->materials[mi].type, (int)mi);
+    else
+        snprintf(name, sizeof name, "default-matte");
+    ts_pbrt_params *ps = mi >= 0 ? &im->s->materials[mi].params : NULL;
+    ts_pbrt_loc loc = mi >= 0 ? im->s->materials[mi].loc : (ts_pbrt_loc){0};
+    if (ps) {
+        ts_status st = ts_scene_builder_add_material(im->b, name, &m, id, im->err);
+        if (st) return at(im, st, ps, loc);
+    } else {
+        TRY(ts_scene_builder_add_material(im->b, name, &m, id, im->err));
+    }
+    if (im->doc) {
+        TRY(json_material(im, name, jtype, &m));
+        if (m.type == TS_MATERIAL_FOURIER) {
+            const char *file = NULL;
+            ts_pbrt_find_string(ps, "bsdffile", NULL, &file, im->err);
+            if (!jstring(cJSON_GetObjectItemCaseSensitive(im->jmaterials, name), "file", file))
+                return nomem(im);
+        }
+    }
+    im->mat_state[slot] = MAT_MAPPED;
+    im->mat_id[slot] = *id;
+    return TS_OK;
+}
+
+/* ---------------------------------------------------------------- shapes */
+
+/* pbrt-v3's facing: with shading normals a triangle's geometric normal is turned toward
+ * them (Faceforward), else it follows the winding, flipped by ReverseOrientation. The
+ * builder keeps each triangle's object-space winding (scene_builder.h), so the winding is
+ * set here: toward the sum of the vertex normals, or reversed. */
+static void orient_mesh(ts_mesh_data *md, bool reverse)
+{
+    for (uint32_t t = 0; t < md->n_triangles; t++) {
+        uint32_t *ix = &md->index[3 * t];
+        bool flip = reverse;
+        if (md->n) {
+            const float *p0 = &md->p[3 * ix[0]], *p1 = &md->p[3 * ix[1]], *p2 = &md->p[3 * ix[2]];
+            double e1[3], e2[3], ns[3];
+            for (int k = 0; k < 3; k++) {
+                e1[k] = (double)p1[k] - p0[k];
+                e2[k] = (double)p2[k] - p0[k];
+                ns[k] = (double)md->n[3 * ix[0] + k] + md->n[3 * ix[1] + k] + md->n[3 * ix[2] + k];
+            }
+            double c[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                           e1[0] * e2[1] - e1[1] * e2[0]};
+            flip = c[0] * ns[0] + c[1] * ns[1] + c[2] * ns[2] < 0;
+        }
+        if (flip) {
+            uint32_t k = ix[1];
+            ix[1] = ix[2];
+            ix[2] = k;
+        }
+    }
+}
+
+/* A trianglemesh's arrays, checked as pbrt-v3 checks them, into malloc'd *md. */
+static ts_status read_trianglemesh(imp *im, ts_pbrt_shape *sh, ts_mesh_data *md)
+{
+    ts_pbrt_params *ps = &sh->params;
+    const float *P, *N, *uv = NULL;
+    const int32_t *idx;
+    size_t np, nn, ni, nuv = 0;
+    TRY(ts_pbrt_find_point3s(ps, "P", &P, &np, im->err));
+    TRY(ts_pbrt_find_ints(ps, "indices", &idx, &ni, im->err));
+    TRY(ts_pbrt_find_normal3s(ps, "N", &N, &nn, im->err));
+    if (!P) return derr(im, ps, sh->loc, TS_ERR_INVALID, "\"point3 P\" is required");
+    static const int32_t three[3] = {0, 1, 2};
+    if (!idx) {
+        if (np != 3) return derr(im, ps, sh->loc, TS_ERR_INVALID, "\"integer indices\" is required");
+        idx = three, ni = 3;
+    }
+    if (ni % 3 != 0)
+        return ts_pbrt_param_error(ps, ts_pbrt_params_get(ps, "indices"), im->err, TS_ERR_INVALID,
+                                   "expects a multiple of 3 values, got %zu", ni);
+    if (np > UINT32_MAX || ni / 3 > UINT32_MAX)
+        return derr(im, ps, sh->loc, TS_ERR_LIMIT, "the mesh is too large");
+    for (size_t k = 0; k < ni; k++)
+        if (idx[k] < 0 || (size_t)idx[k] >= np)
+            return ts_pbrt_param_error(ps, ts_pbrt_params_get(ps, "indices"), im->err, TS_ERR_INVALID,
+                                       "value %zu is %d, not a vertex index in [0, %zu]", k, idx[k], np - 1);
+    const char *uvname = NULL;
+    static const char *const uvnames[] = {"uv", "st"};
+    for (int k = 0; k < 2 && !uvname; k++) {
+        ts_pbrt_param *p = ts_pbrt_params_get(ps, uvnames[k]);
+        if (!p) continue;
+        uvname = uvnames[k];
+        if (p->type == TS_PBRT_PARAM_FLOAT) {
+            TRY(ts_pbrt_find_floats(ps, uvname, &uv, &nuv, im->err));
+        } else {
+            TRY(ts_pbrt_find_point2s(ps, uvname, &uv, &nuv, im->err));
+            nuv *= 2;
+        }
+        if (nuv != 2 * np) {
+            pwarn(im, ps, p, "holds %zu numbers, not 2 per vertex (%zu): the mesh has no uv", nuv, 2 * np);
+            uv = NULL;
+        }
+    }
+    if (N && nn != np) {
+        pwarn(im, ps, ts_pbrt_params_get(ps, "N"),
+              "holds %zu normals for %zu vertices: the mesh has no normals", nn, np);
+        N = NULL;
+    }
+    if (N)
+        for (size_t k = 0; k < np; k++)
+            if (!(N[3 * k] != 0 || N[3 * k + 1] != 0 || N[3 * k + 2] != 0)) {
+                pwarn(im, ps, ts_pbrt_params_get(ps, "N"), "normal %zu is zero: the mesh has no normals", k);
+                N = NULL;
+                break;
+            }
+    ts_pbrt_param *S = ts_pbrt_params_get(ps, "S");
+    if (S) pwarn(im, ps, S, "is not used: shading tangents come from the normals and uv");
+    md->n_vertices = (uint32_t)np;
+    md->n_triangles = (uint32_t)(ni / 3);
+    md->p = malloc(np * 3 * sizeof(float));
+    md->index = malloc(ni * sizeof(uint32_t));
+    if (N) md->n = malloc(np * 3 * sizeof(float));
+    if (uv) md->uv = malloc(np * 2 * sizeof(float));
+    if (!md->p || !md->index || (N && !md->n) || (uv && !md->uv)) return nomem(im);
+    memcpy(md->p, P, np * 3 * sizeof(float));
+    for (size_t k = 0; k < ni; k++)
+        md->index[k] = (uint32_t)idx[k];
+    if (N) memcpy(md->n, N, np * 3 * sizeof(float));
+    if (uv) memcpy(md->uv, uv, np * 2 * sizeof(float));
+    return TS_OK;
+}
+
+static cJSON *jfloats(const float *v, size_t n)
+{
+    cJSON *a = cJSON_CreateArray();
+    for (size_t i = 0; a && i < n; i++) {
+        cJSON *x = cJSON_CreateNumber(v[i]);
+        if (!x || !cJSON_AddItemToArray(a, x)) {
+            cJSON_Delete(x);
+            cJSON_Delete(a);
+            return NULL;
+        }
+    }
+    return a;
+}
+
+static cJSON *juints(const uint32_t *v, size_t n)
+{
+    cJSON *a = cJSON_CreateArray();
+    for (size_t i = 0; a && i < n; i++) {
+        cJSON *x = cJSON_CreateNumber(v[i]);
+        if (!x || !cJSON_AddItemToArray(a, x)) {
+            cJSON_Delete(x);
+            cJSON_Delete(a);
+            return NULL;
+        }
+    }
+    return a;
+}
+
+static ts_status map_shape(imp *im, size_t si)
+{
+    ts_pbrt_shape *sh = &im->s->shapes[si];
+    ts_pbrt_params *ps = &sh->params;
+    const char *t = sh->type;
+    bool analytic = strcmp(t, "sphere") == 0 || strcmp(t, "disk") == 0 || strcmp(t, "cylinder") == 0;
+    bool mesh = strcmp(t, "trianglemesh") == 0 || strcmp(t, "plymesh") == 0;
+    if (!analytic && !mesh)
+        return derr(im, ps, sh->loc, TS_ERR_UNSUPPORTED, "is not supported%s",
+                    strcmp(t, "loopsubdiv") == 0 ? " yet"
+                                                 : " (sphere, disk, cylinder, trianglemesh and plymesh are)");
+
+    /* The surface, the emission and the cut-out first: they may make the shape vanish. */
+    uint32_t mat;
+    bool no_surface;
+    TRY(material_id(im, sh->material, &mat, &no_surface));
+    ts_shape_desc d = {0};
+    d.type = TS_SHAPE_SPHERE;
+    d.material = mat;
+    d.emission = ts_rgb_gray(0);
+    ts_pbrt_area_light *al = sh->area_light >= 0 ? &im->s->area_lights[sh->area_light] : NULL;
+    if (al) {
+        if (strcmp(al->type, "diffuse") != 0 && strcmp(al->type, "area") != 0)
+            return derr(im, &al->params, al->loc, TS_ERR_UNSUPPORTED,
+                        "is not a pbrt-v3 area light (diffuse)");
+        ts_rgb L, scale;
+        TRY(get_rgb(im, &al->params, "L", ts_rgb_gray(1), &L));
+        TRY(get_rgb(im, &al->params, "scale", ts_rgb_gray(1), &scale));
+        TRY(ts_pbrt_find_bool(&al->params, "twosided", false, &d.two_sided, im->err));
+        int32_t ns;
+        TRY(ts_pbrt_find_int(&al->params, "nsamples", 1, &ns, im->err));
+        TRY(ts_pbrt_find_int(&al->params, "samples", ns, &ns, im->err));
+        if (ns != 1 && im->direct_all)
+            dwarn(im, &al->params, al->loc,
+                  "\"integer nsamples\" %d is not honoured: the integrator's one sample per light and pixel "
+                  "sample "
+                  "is taken (the image converges to the same values)",
+                  ns);
+        d.emission = (ts_rgb){L.r * scale.r, L.g * scale.g, L.b * scale.b};
+    }
+    bool emits = d.emission.r > 0 || d.emission.g > 0 || d.emission.b > 0;
+    if (no_surface) {
+        if (emits)
+            return derr(im, ps, sh->loc, TS_ERR_UNSUPPORTED,
+                        "an emitting shape with material \"none\" (no surface) is not supported");
+        dwarn(im, ps, sh->loc, "has material \"none\" (no surface): it is left out");
+        ps->count = 0; /* its parameters do not matter */
+        return TS_OK;
+    }
+    ts_pbrt_param *alpha = ts_pbrt_params_get(ps, "alpha");
+    ts_pbrt_param *salpha = ts_pbrt_params_get(ps, "shadowalpha");
+    if (alpha && alpha->type == TS_PBRT_PARAM_FLOAT && alpha->n == 1 && alpha->floats[0] == 0) {
+        pwarn(im, ps, alpha, "is 0: the shape is cut out entirely and left out");
+        ps->count = 0;
+        return TS_OK;
+    }
+    if (alpha && !(alpha->type == TS_PBRT_PARAM_FLOAT && alpha->n == 1 && alpha->floats[0] == 1))
+        pwarn(im, ps, alpha, "is ignored: alpha cut-outs are not supported yet (the surface is opaque)");
+    if (salpha)
+        pwarn(im, ps, salpha, "is ignored: alpha cut-outs are not supported yet (shadows are opaque)");
+
+    ts_xform user;
+    if (!user_xform(sh->object_to_world, &user))
+        return derr(im, ps, sh->loc, TS_ERR_INVALID, "the transformation matrix is singular");
+    cJSON *j = NULL;
+    if (im->doc) {
+        j = cJSON_CreateObject();
+        if (!j) return nomem(im);
+    }
+    bool jok = true;
+    ts_mesh_data md = {0};
+    ts_status st = TS_OK;
+    if (analytic) {
+        float phimax;
+        TRY(ts_pbrt_find_float(ps, "phimax", 360, &phimax, im->err));
+        if (phimax < 360) {
+            cJSON_Delete(j);
+            return derr(im, ps, sh->loc, TS_ERR_UNSUPPORTED,
+                        "partial shapes (phimax %g < 360) are not supported yet", phimax);
+        }
+        if (sh->reverse_orientation && (emits && !d.two_sided)) {
+            cJSON_Delete(j);
+            return derr(im, ps, sh->loc, TS_ERR_UNSUPPORTED,
+                        "ReverseOrientation on an emitting %s is not supported yet", t);
+        }
+        if (sh->reverse_orientation) {
+            /* Only a dielectric's inside is told by the normal; other BSDFs are two-sided. */
+            if (sh->material >= 0 && strcmp(im->s->materials[sh->material].type, "glass") == 0) {
+                cJSON_Delete(j);
+                return derr(im, ps, sh->loc, TS_ERR_UNSUPPORTED,
+                            "ReverseOrientation on a glass %s is not supported yet", t);
+            }
+        }
+        float radius;
+        TRY(ts_pbrt_find_float(ps, "radius", 1, &radius, im->err));
+        if (!(radius > 0) || !isfinite(radius)) {
+            cJSON_Delete(j);
+            return ts_pbrt_param_error(ps, ts_pbrt_params_get(ps, "radius"), im->err, TS_ERR_INVALID,
+                                       "must be a positive number, got %g", radius);
+        }
+        ts_xform place;
+        if (t[0] == 's') {
+            float zmin, zmax;
+            TRY(ts_pbrt_find_float(ps, "zmin", -radius, &zmin, im->err));
+            TRY(ts_pbrt_find_float(ps, "zmax", radius, &zmax, im->err));
+            if (fminf(zmin, zmax) > -radius || fmaxf(zmin, zmax) < radius) {
+                cJSON_Delete(j);
+                return derr(im, ps, sh->loc, TS_ERR_UNSUPPORTED,
+                            "partial spheres (zmin %g, zmax %g inside the radius %g) are not supported yet",
+                            zmin, zmax, radius);
+            }
+            d.type = TS_SHAPE_SPHERE;
+            place = ts_xform_translate((ts_dvec3){0, 0, 0});
+            d.sphere.radius = radius;
+            if (j) jok = jstring(j, "type", "sphere") && jnumber(j, "radius", radius);
+        } else if (t[0] == 'd') {
+            float height, inner;
+            TRY(ts_pbrt_find_float(ps, "height", 0, &height, im->err));
+            TRY(ts_pbrt_find_float(ps, "innerradius", 0, &inner, im->err));
+            if (!(inner >= 0 && inner < radius)) {
+                cJSON_Delete(j);
+                return ts_pbrt_param_error(ps, ts_pbrt_params_get(ps, "innerradius"), im->err, TS_ERR_INVALID,
+                                           "must be in [0, radius %g), got %g", radius, inner);
+            }
+            d.type = TS_SHAPE_DISK;
+            ts_vec3 center = {0, 0, height}, normal = {0, 0, 1};
+            place = ts_xform_frame(ts_dvec3_from(center), ts_dvec3_from(normal));
+            d.disk.radius = radius;
+            d.disk.inner_radius = inner;
+            if (j)
+                jok = jstring(j, "type", "disk") && jvec3(j, "center", center) &&
+                      jnumber(j, "radius", radius) && (inner == 0 || jnumber(j, "inner_radius", inner));
+        } else {
+            float zmin, zmax;
+            TRY(ts_pbrt_find_float(ps, "zmin", -1, &zmin, im->err));
+            TRY(ts_pbrt_find_float(ps, "zmax", 1, &zmax, im->err));
+            float lo = fminf(zmin, zmax), hi = fmaxf(zmin, zmax);
+            if (!(hi > lo)) {
+                cJSON_Delete(j);
+                return derr(im, ps, sh->loc, TS_ERR_INVALID, "zmin and zmax must differ, got %g and %g", zmin,
+                            zmax);
+            }
+            d.type = TS_SHAPE_CYLINDER;
+            ts_vec3 p0 = {0, 0, lo}, p1 = {0, 0, hi};
+            ts_dvec3 axis = ts_dvec3_sub(ts_dvec3_from(p1), ts_dvec3_from(p0));
+            place = ts_xform_frame(ts_dvec3_from(p0), axis);
+            d.cylinder.radius = radius;
+            d.cylinder.height = ts_dvec3_length(axis);
+            if (j)
+                jok = jstring(j, "type", "cylinder") && jvec3(j, "p0", p0) && jvec3(j, "p1", p1) &&
+                      jnumber(j, "radius", radius);
+        }
+        d.to_world = ts_xform_compose(&user, &place);
+    } else {
+        d.type = TS_SHAPE_MESH;
+        d.to_world = user;
+        if (t[0] == 't') {
+            st = read_trianglemesh(im, sh, &md);
+        } else {
+            const char *file;
+            st = ts_pbrt_find_string(ps, "filename", NULL, &file, im->err);
+            if (!st && !file) st = derr(im, ps, sh->loc, TS_ERR_INVALID, "\"string filename\" is required");
+            if (!st)
+                st = at(im, ts_scene_builder_load_mesh(im->b, file, &md, im->err), ps,
+                        ts_pbrt_params_get(ps, "filename")->loc);
+            ts_pbrt_param *disp = ts_pbrt_params_get(ps, "displacement");
+            if (disp) pwarn(im, ps, disp, "is ignored: displacement is not supported");
+        }
+        if (!st) {
+            orient_mesh(&md, sh->reverse_orientation);
+            d.mesh = (ts_mesh){md.n_vertices, md.n_triangles, md.p, md.n, md.uv, md.index};
+            if (j) {
+                jok = jstring(j, "type", "mesh") &&
+                      jadd(j, "positions", jfloats(md.p, 3 * (size_t)md.n_vertices)) &&
+                      jadd(j, "indices", juints(md.index, 3 * (size_t)md.n_triangles)) &&
+                      (!md.n || jadd(j, "normals", jfloats(md.n, 3 * (size_t)md.n_vertices))) &&
+                      (!md.uv || jadd(j, "uvs", jfloats(md.uv, 2 * (size_t)md.n_vertices)));
+            }
+        }
+    }
+    if (!st) {
+        warn_unused(im, ps);
+        st = at(im, ts_scene_builder_add_shape(im->b, &d, NULL, im->err), ps, sh->loc);
+    }
+    if (!st && j) {
+        const char *mname = NULL;
+        /* The material's name in the document is the one the builder holds it under. */
+        char name[300];
+        int32_t mi = sh->material;
+        if (mi >= 0 && im->s->materials[mi].name)
+            snprintf(name, sizeof name, "%.200s#%d", im->s->materials[mi].name, (int)mi);
+        else if (mi >= 0)
+            snprintf(name, sizeof name, "%s#%d", im->s->materials[mi].type, (int)mi);
+        else
+            snprintf(name, sizeof name, "default-matte");
+        mname = name;
+        jok = jok && jstring(j, "material", mname) && jadd(j, "transform", jtransform(sh->object_to_world));
+        if (jok && emits)
+            jok = jrgb(j, "emission", d.emission) && (!d.two_sided || jbool(j, "two_sided", true));
+        if (!jok || !cJSON_AddItemToArray(im->jshapes, j))
+            st = nomem(im);
+        else
+            j = NULL;
+    }
+    cJSON_Delete(j);
+    ts_mesh_data_free(&md);
+    return st;
+}
+
+/* ---------------------------------------------------------------- lights */
+
+static ts_dvec3 mat_point(const ts_mat4 *m, ts_vec3 p)
+{
+    double v[3] = {p.x, p.y, p.z}, o[3];
+    for (int i = 0; i < 3; i++)
+        o[i] = m->m[i][0] * v[0] + m->m[i][1] * v[1] + m->m[i][2] * v[2] + m->m[i][3];
+    double w = m->m[3][0] * v[0] + m->m[3][1] * v[1] + m->m[3][2] * v[2] + m->m[3][3];
+    if (w != 1 && w != 0) o[0] /= w, o[1] /= w, o[2] /= w;
+    return (ts_dvec3){o[0], o[1], o[2]};
+}
+
+static ts_vec3 to_vec3(ts_dvec3 v) { return (ts_vec3){(float)v.x, (float)v.y, (float)v.z}; }
+
+static ts_status map_light(imp *im, size_t li)
+{
+    ts_pbrt_light *l = &im->s->lights[li];
+    ts_pbrt_params *ps = &l->params;
+    ts_light_desc d = {0};
+    d.to_world = ts_xform_identity();
+    ts_rgb scale;
+    TRY(get_rgb(im, ps, "scale", ts_rgb_gray(1), &scale));
+    cJSON *j = NULL;
+    if (im->doc && !(j = cJSON_CreateObject())) return nomem(im);
+    bool jok = true;
+    ts_status st = TS_OK;
+    const char *t = l->type;
+    if (strcmp(t, "point") == 0 || strcmp(t, "spot") == 0) {
+        bool spot = t[1] == 'p' && t[2] == 'o';
+        ts_rgb I;
+        ts_vec3 from, to;
+        TRY(get_rgb(im, ps, "I", ts_rgb_gray(1), &I));
+        TRY(ts_pbrt_find_point3(ps, "from", (ts_vec3){0, 0, 0}, &from, im->err));
+        TRY(ts_pbrt_find_point3(ps, "to", (ts_vec3){0, 0, 1}, &to, im->err));
+        d.type = spot ? TS_LIGHT_SPOT : TS_LIGHT_POINT;
+        d.color = (ts_rgb){I.r * scale.r, I.g * scale.g, I.b * scale.b};
+        d.from = to_vec3(mat_point(l->light_to_world, from));
+        if (spot) {
+            float angle, delta;
+            TRY(ts_pbrt_find_float(ps, "coneangle", 30, &angle, im->err));
+            TRY(ts_pbrt_find_float(ps, "conedelta", 5, &delta, im->err));
+            if (!(angle > 0 && angle <= 180) || !(delta >= 0 && delta <= angle)) {
+                cJSON_Delete(j);
+                return derr(im, ps, l->loc, TS_ERR_INVALID,
+                            "coneangle must be in (0, 180] and conedelta in [0, coneangle], got %g and %g",
+                            angle, delta);
+            }
+            d.to = to_vec3(mat_point(l->light_to_world, to));
+            if (d.to.x == d.from.x && d.to.y == d.from.y && d.to.z == d.from.z) {
+                cJSON_Delete(j);
+                return derr(im, ps, l->loc, TS_ERR_INVALID, "\"point from\" and \"point to\" must differ");
+            }
+            d.cone_angle_deg = angle;
+            d.cone_delta_deg = delta;
+            if (j)
+                jok = jstring(j, "type", "spot") && jvec3(j, "from", d.from) && jvec3(j, "to", d.to) &&
+                      jrgb(j, "intensity", d.color) && jnumber(j, "cone_angle", angle) &&
+                      jnumber(j, "cone_delta", delta);
+        } else if (j) {
+            jok =
+                jstring(j, "type", "point") && jvec3(j, "position", d.from) && jrgb(j, "intensity", d.color);
+        }
+    } else if (strcmp(t, "distant") == 0) {
+        ts_rgb L;
+        ts_vec3 from, to;
+        TRY(get_rgb(im, ps, "L", ts_rgb_gray(1), &L));
+        TRY(ts_pbrt_find_point3(ps, "from", (ts_vec3){0, 0, 0}, &from, im->err));
+        TRY(ts_pbrt_find_point3(ps, "to", (ts_vec3){0, 0, 1}, &to, im->err));
+        d.type = TS_LIGHT_DISTANT;
+        d.color = (ts_rgb){L.r * scale.r, L.g * scale.g, L.b * scale.b};
+        d.from = to_vec3(mat_point(l->light_to_world, from));
+        d.to = to_vec3(mat_point(l->light_to_world, to));
+        if (d.to.x == d.from.x && d.to.y == d.from.y && d.to.z == d.from.z) {
+            cJSON_Delete(j);
+            return derr(im, ps, l->loc, TS_ERR_INVALID, "\"point from\" and \"point to\" must differ");
+        }
+        if (j)
+            jok = jstring(j, "type", "distant") && jvec3(j, "from", d.from) && jvec3(j, "to", d.to) &&
+                  jrgb(j, "irradiance", d.color);
+    } else if (strcmp(t, "infinite") == 0) {
+        ts_rgb L;
+        TRY(get_rgb(im, ps, "L", ts_rgb_gray(1), &L));
+        const char *map;
+        TRY(ts_pbrt_find_string(ps, "mapname", "", &map, im->err));
+        int32_t ns;
+        TRY(ts_pbrt_find_int(ps, "nsamples", 1, &ns, im->err));
+        TRY(ts_pbrt_find_int(ps, "samples", ns, &ns, im->err));
+        if (ns != 1 && im->direct_all)
+            dwarn(im, ps, l->loc,
+                  "\"integer nsamples\" %d is not honoured: one sample per pixel sample is taken (the image "
+                  "converges to the same values)",
+                  ns);
+        d.type = TS_LIGHT_INFINITE;
+        d.color = (ts_rgb){L.r * scale.r, L.g * scale.g, L.b * scale.b};
+        if (!user_xform(l->light_to_world, &d.to_world)) {
+            cJSON_Delete(j);
+            return derr(im, ps, l->loc, TS_ERR_INVALID, "the transformation matrix is singular");
+        }
+        if (map[0]) {
+            st = at(im, ts_scene_builder_load_envmap(im->b, map, &d.map, im->err), ps,
+                    ts_pbrt_params_get(ps, "mapname")->loc);
+            if (st) {
+                cJSON_Delete(j);
+                return st;
+            }
+        }
+        if (j) {
+            jok = jstring(j, "type", "infinite") &&
+                  (map[0] ? jstring(j, "map", map) && jrgb(j, "scale", d.color)
+                          : jrgb(j, "radiance", d.color)) &&
+                  jadd(j, "transform", jtransform(l->light_to_world));
+        }
+    } else {
+        cJSON_Delete(j);
+        return derr(im, ps, l->loc, TS_ERR_UNSUPPORTED,
+                    "is not supported (point, spot, distant, infinite and diffuse area lights are)");
+    }
+    warn_unused(im, ps);
+    st = at(im, ts_scene_builder_add_light(im->b, &d, im->err), ps, l->loc);
+    if (!st && j) {
+        if (!jok || !cJSON_AddItemToArray(im->jlights, j))
+            st = nomem(im);
+        else
+            j = NULL;
+    }
+    cJSON_Delete(j);
+    return st;
+}
+
+/* ---------------------------------------------------------------- the scene */
+
+/* Options the scene did not give have empty parameter lists without a directive name. */
+static void name_option(ts_pbrt_option *o, const char *directive)
+{
+    if (!o->params.directive) o->params.directive = directive;
+    if (!o->params.directive_arg) o->params.directive_arg = o->type;
+}
+
+static ts_status run(imp *im)
+{
+    ts_pbrt_scene *s = im->s;
+    name_option(&s->camera, "Camera");
+    name_option(&s->film, "Film");
+    name_option(&s->sampler, "Sampler");
+    name_option(&s->filter, "PixelFilter");
+    name_option(&s->integrator, "Integrator");
+    name_option(&s->accelerator, "Accelerator");
+    for (size_t i = 0; i < s->warning_count; i++)
+        emit(im, s->warnings[i].loc, s->warnings[i].message);
+    if (s->warnings_dropped)
+        warnf(im, (ts_pbrt_loc){0}, "%zu more warnings of the parser were not kept", s->warnings_dropped);
+    if (s->instance_count > 0) {
+        ts_pbrt_instance *in = &s->instances[0];
+        ts_pbrt_params ps = {.directive = "ObjectInstance", .directive_arg = s->objects[in->object].name};
+        return derr(im, &ps, in->loc, TS_ERR_UNSUPPORTED, "object instancing is not supported yet");
+    }
+    if (s->accelerator.loc.file && s->accelerator.params.count)
+        dwarn(im, &s->accelerator.params, s->accelerator.loc,
+              "is not used: tessera builds Embree's BVH whatever the accelerator");
+    uint32_t w, h;
+    TRY(map_film(im, &w, &h));
+    TRY(map_camera(im, w, h));
+    TRY(map_sampler(im));
+    TRY(map_integrator(im));
+    for (size_t i = 0; i < s->shape_count; i++) {
+        if (s->shapes[i].object >= 0) continue; /* an object nothing instances */
+        TRY(map_shape(im, i));
+    }
+    for (size_t i = 0; i < s->light_count; i++)
+        TRY(map_light(im, i));
+    for (size_t i = 0; i < s->area_light_count; i++)
+        warn_unused(im, &s->area_lights[i].params);
+    for (size_t i = 0; i < s->material_count; i++)
+        if (im->mat_state[i] == MAT_MAPPED) warn_unused(im, &s->materials[i].params);
+    char hex[65];
+    for (int i = 0; i < 32; i++)
+        snprintf(hex + 2 * i, 3, "%02x", s->digest[i]);
+    TRY(ts_scene_builder_set_digest(im->b, hex, im->err));
+    if (im->repeats)
+        warnf(im, (ts_pbrt_loc){0}, "%zu more warnings like the ones above were not repeated", im->repeats);
+    return TS_OK;
+}
+
+ts_status ts_pbrt_import(ts_pbrt_scene *scene, ts_scene_builder *b, cJSON *doc, ts_warning_fn warn,
+                         void *warn_ctx, ts_error *err)
+{
+    ts_error local;
+    if (!err) err = &local;
+    imp im = {.s = scene, .b = b, .doc = doc, .warn = warn, .warn_ctx = warn_ctx, .err = err};
+    ts_status st = TS_OK;
+    im.mat_id = calloc(scene->material_count + 1, sizeof *im.mat_id);
+    im.mat_state = calloc(scene->material_count + 1, 1);
+    if (!im.mat_id || !im.mat_state) st = nomem(&im);
+    if (!st && doc) {
+        im.jmaterials = cJSON_CreateObject();
+        im.jshapes = cJSON_CreateArray();
+        im.jlights = cJSON_CreateArray();
+        bool ok = jnumber(doc, "tessera", 1);
+        /* film, camera, sampler and integrator are added by their mappings, then these. */
+        if (!ok || !im.jmaterials || !im.jshapes || !im.jlights) st = nomem(&im);
+    }
+    if (!st) st = run(&im);
+    if (doc) {
+        if (!st && !(jadd(doc, "materials", im.jmaterials) && jadd(doc, "shapes", im.jshapes) &&
+                     jadd(doc, "lights", im.jlights)))
+            st = nomem(&im);
+        else if (st) {
+            cJSON_Delete(im.jmaterials);
+            cJSON_Delete(im.jshapes);
+            cJSON_Delete(im.jlights);
+        }
+    }
+    for (size_t i = 0; i < im.seen_cap; i++)
+        free(im.seen[i]);
+    free(im.seen);
+    free(im.mat_id);
+    free(im.mat_state);
+    return st;
+}
