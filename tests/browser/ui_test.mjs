@@ -152,6 +152,11 @@ try {
     assert(b.h !== a.h, 'the canvas did not change');
     assert(await page.getAttribute('#canvas', 'data-source') === 'exr', 'tiles are read as EXR (linear floats)');
     assert(b.lit > 0.5 * b.n, 'most of the canvas is painted, lit ' + b.lit);
+    // While it runs: the server's progress (within a pass) and an ETA, in the list and the preview.
+    await page.waitForFunction((id) => /^ \d+% · ETA \d/.test(document.querySelector(`#jobs tr[data-id="${id}"] .progress-text`).textContent) &&
+      / · \d+% · ETA \d/.test(document.getElementById('preview-status').textContent), first.id, { timeout: 10000 });
+    const bar = Number(await jobRow(page, first.id).locator('progress').getAttribute('value'));
+    assert(bar > 0 && bar < 1, 'the progress bar is part-way, value ' + bar);
     await shot('01-live-preview');
   });
 
@@ -210,6 +215,79 @@ try {
     await page.waitForFunction(() => (document.getElementById('plot-error').dataset.seriesPoints || '').split(',')
       .filter((n) => Number(n) >= 2).length === 2, null, { timeout: 20000 });
     await shot('04-overlay');
+  });
+
+  await check('a finished job opened fresh, and after a reload, plots its whole history; halt reasons are said', async () => {
+    // Two jobs that end by a bound other than spp: a time limit, and a target error.
+    const post = async (job) => (await page.request.post(url + 'api/v1/jobs', { headers: { 'Content-Type': 'application/json' },
+      data: small({ job }) })).json();
+    const timed = await post({ name: 'timed', spp: 65536, time_limit_s: 3 });
+    const target = await post({ name: 'targeted', spp: 65536, target_error: 0.1 });
+    assert(timed.id && target.id, 'POSTs answered ' + JSON.stringify([timed, target]));
+    for (const id of [first.id, timed.id, target.id])
+      for (let t = Date.now(); ; ) {
+        const st = await (await page.request.get(url + 'api/v1/jobs/' + id)).json();
+        if (st.state === 'done') break;
+        assert(Date.now() - t < 40000, 'job ' + id + ' did not finish in 40 s: ' + st.state);
+        await new Promise((r) => setTimeout(r, 250));
+      }
+    // The plot shows every point of GET …/history a log axis can draw (elapsed > 0; the error
+    // plot only where the estimate is known).
+    // At least 2 drawable points either way: a tick a second while a job runs and its end;
+    // error points need 2 spp (the target-error job renders at least 4 before it may stop:
+    // its passes at 2 and 4 spp and its end).
+    const expectPlotted = async (p, id, needErr) => {
+      const pts = (await (await p.request.get(url + 'api/v1/jobs/' + id + '/history')).json()).points;
+      const nSpp = pts.filter((q) => q.elapsed_s > 0 && q.spp > 0).length;
+      const nErr = pts.filter((q) => q.elapsed_s > 0 && q.error_estimate > 0).length;
+      assert(nSpp > 1 && (!needErr || nErr > 1), `history of ${id}: ${pts.length} points, ${nSpp} drawable, ${nErr} with an error: ${JSON.stringify(pts)}`);
+      await p.waitForFunction(([a, b]) => document.getElementById('plot-spp').dataset.points === String(a) &&
+        document.getElementById('plot-error').dataset.seriesPoints === String(b), [nSpp, nErr], { timeout: 5000 })
+        .catch(async () => {
+          const got = await p.evaluate(() => [document.getElementById('plot-spp').dataset.points, document.getElementById('plot-error').dataset.seriesPoints]);
+          throw new Error(`job ${id}: plotted ${got[0]} spp and ${got[1]} error points, its history has ${nSpp} and ${nErr} (of ${pts.length})`);
+        });
+      return pts.length;
+    };
+    // A new tab (no sessionStorage): what it plots comes from the server alone.
+    const fresh = await context.newPage();
+    fresh.on('pageerror', (e) => pageErrors.push('fresh page: ' + e));
+    try {
+    await fresh.goto(url, { waitUntil: 'load' });
+    const open = async (p, j) => {
+      await p.getByRole('button', { name: 'show job ' + j.name + ' (' + j.id + ') in the preview' }).click();
+      await p.waitForFunction((id) => document.querySelector(`#jobs tr[data-id="${id}"]`)?.classList.contains('selected') &&
+        document.getElementById('preview-status').textContent.startsWith('done'), j.id, { timeout: 10000 });
+    };
+    await open(fresh, timed);
+    const n = await expectPlotted(fresh, timed.id, false);
+    log(`  the time-limited job's ${n} history points plotted in a fresh tab`);
+    const why = async (p, id) => [await p.textContent(`#jobs tr[data-id="${id}"] .progress-text`), await p.textContent('#preview-status')];
+    let [rowText, status] = await why(fresh, timed.id);
+    assert(rowText.trim() === 'time limit reached' && status.endsWith(' · time limit reached'),
+      `the time-limited job says why it stopped: list "${rowText}", preview "${status}"`);
+    assert(Number(await fresh.locator(`#jobs tr[data-id="${timed.id}"] progress`).getAttribute('value')) === 1, 'a halted job\'s bar is full');
+    await fresh.reload({ waitUntil: 'load' });
+    await open(fresh, timed);
+    await expectPlotted(fresh, timed.id, false);
+    await open(fresh, first);
+    const m = await expectPlotted(fresh, first.id, true);
+    log(`  the first job's ${m} history points plotted after a reload`);
+    // Log axes are labelled at 1, 2 and 5 × 10^k where there is room: more than one label on
+    // the time axis of a job that ran for ~20 s (its first point well under 2 s).
+    const labels = await fresh.evaluate(() => ['xLabels', 'yLabels'].map((k) => document.getElementById('plot-spp').dataset[k].split(' ')));
+    assert(labels[0].length >= 3 && labels[1].length >= 3, 'the axes have labels ' + JSON.stringify(labels));
+    log('  axis labels: elapsed ' + labels[0].join(', ') + '; spp ' + labels[1].join(', '));
+    await shot('16-reloaded-finished-job-plots', fresh);
+    await open(fresh, target);
+    await expectPlotted(fresh, target.id, true);
+    [rowText, status] = await why(fresh, target.id);
+    assert(rowText.trim() === 'target error reached' && status.endsWith(' · target error reached'),
+      `the target-error job says why it stopped: list "${rowText}", preview "${status}"`);
+    await shot('17-halted-by-target-error', fresh);
+    } finally {
+      await fresh.close();
+    }
   });
 
   await check('cancel a job from the list, then delete it', async () => {

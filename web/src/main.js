@@ -67,6 +67,12 @@ function fmtTime(s) {
 const finished = (st) => st === 'done' || st === 'cancelled' || st === 'failed';
 const jobLabel = (j) => (j.name ? j.name + ' ' : '') + '(' + j.id + ')';
 
+// Why a job stopped (its halt_reason), in words.
+const HALT_TEXT = { time_limit: 'time limit reached', target_error: 'target error reached', cancelled: 'cancelled',
+  spp: 'all samples', restored: 'restored' };
+// A running job's progress: the server's fraction of its first halting bound and the ETA.
+const progressOf = (j) => Math.round(100 * (j.progress || 0)) + '%' + (j.eta_s != null ? ' · ETA ' + fmtTime(j.eta_s) : '');
+
 // ------------------------------------------------------------------ jobs list
 function el(tag, attrs = {}, ...kids) {
   const e = document.createElement(tag);
@@ -87,10 +93,7 @@ function renderJobs() {
     // progress: the server's (0–1 of the first halting bound, moving within a pass); a job
     // halted by its time limit or target error reads as such, not as a partial bar.
     const frac = j.progress != null ? j.progress : j.spp_target > 0 ? Math.min(1, j.spp_done / j.spp_target) : 0;
-    const why = { time_limit: 'time limit reached', target_error: 'target error reached', cancelled: 'cancelled',
-      spp: 'all samples', restored: 'restored' }[j.halt_reason];
-    const progressText = finished(j.state) ? (why || j.state)
-      : Math.round(100 * frac) + '%' + (j.eta_s != null ? ' · ETA ' + fmtTime(j.eta_s) : '');
+    const progressText = finished(j.state) ? (HALT_TEXT[j.halt_reason] || j.state) : progressOf(j);
     const row = el('tr', { 'data-id': j.id, class: j.id === selectedId ? 'selected' : '' },
       el('td', { 'data-label': 'Job' }, el('button', { class: 'link', type: 'button', 'aria-label': 'show job ' + jobLabel(j) + ' in the preview',
         'aria-pressed': j.id === selectedId ? 'true' : 'false', onclick: () => select(j.id) }, jobLabel(j)),
@@ -495,8 +498,8 @@ function setPreviewStatus(p) {
   jobState = p.state;
   if (p.pass_spp) passSpp = p.pass_spp;
   $('preview-status').textContent = `${p.state} · ${p.spp} / ${p.spp_target} spp · ${fmtTime(p.elapsed_s)} · ` +
-    `error ${fmtNum(p.error_estimate)} · ${fmtRate(p.samples_per_s)} samples/s` +
-    (p.halt_reason && p.halt_reason !== 'none' ? ' · halted: ' + p.halt_reason : '');
+    `error ${p.error_estimate == null ? 'n/a' : fmtNum(p.error_estimate)} · ${fmtRate(p.samples_per_s)} samples/s` +
+    (finished(p.state) ? (HALT_TEXT[p.halt_reason] ? ' · ' + HALT_TEXT[p.halt_reason] : '') : ' · ' + progressOf(p));
   canvas.dataset.state = p.state;
   drawOutlines();
 }
@@ -506,7 +509,8 @@ function onProgress(id, p, isDone) {
   const j = jobs.get(id);
   if (j) {
     Object.assign(j, { state: p.state, spp_done: p.spp, spp_target: p.spp_target, pass_spp: p.pass_spp, elapsed_s: p.elapsed_s,
-      samples: p.samples, samples_per_s: p.samples_per_s, error_estimate: p.error_estimate, halt_reason: p.halt_reason });
+      samples: p.samples, samples_per_s: p.samples_per_s, error_estimate: p.error_estimate, halt_reason: p.halt_reason,
+      progress: p.progress, eta_s: p.eta_s });
   }
   if (id === selectedId) setPreviewStatus(p);
   scheduleRender();
@@ -620,7 +624,14 @@ $('outline').addEventListener('change', drawOutlines);
 async function loadHistory(id) {
   const r = await api('/api/v1/jobs/' + encodeURIComponent(id) + '/history');
   if (!r.ok || !r.body || !Array.isArray(r.body.points)) return;
-  for (const p of r.body.points) addPoint(id, p.elapsed_s, p.error_estimate, p.spp);
+  // The server's series replaces what this page saw (a status poll or a progress event
+  // may already have put the job's latest point here, which would hide every older one);
+  // points seen here after the server's last are kept. Log axes: elapsed 0 cannot be drawn.
+  const pts = r.body.points.filter((p) => p.elapsed_s > 0).map((p) => ({ t: p.elapsed_s,
+    err: p.error_estimate == null || !(p.error_estimate > 0) ? null : p.error_estimate, spp: p.spp > 0 ? p.spp : null }));
+  const last = pts.length ? pts[pts.length - 1].t : 0;
+  history.set(id, [...pts, ...(history.get(id) || []).filter((p) => p.t > last)]);
+  saveHistory();
   updatePlots(true);
 }
 
@@ -650,17 +661,34 @@ function logTicks(u, splits) {
     return v >= 1e4 || v < 1e-3 ? v.toExponential(0) : String(Number(v.toPrecision(3)));
   });
 }
+// Which of those ticks get a label: 1, 2 and 5 where 5 and 10 lie `space` pixels apart, else
+// 1 of every decade (or of every k-th where decades are narrower than `space`). uPlot's own
+// filter measures 9 → 10 as a y axis does, so on an x axis it keeps only the 1s.
+function logFilter(u, splits, axisIdx) {
+  const ax = u.axes[axisIdx], space = ax._space || 30;
+  const decade = Math.abs(u.valToPos(10, ax.scale) - u.valToPos(1, ax.scale));
+  const all = decade * Math.log10(2) >= space, step = decade >= space ? 1 : Math.ceil(space / decade);
+  return splits.map((v) => {
+    if (v == null || !(v > 0)) return null;
+    const e = Math.floor(Math.log10(v) + 1e-9), lead = v / 10 ** e;
+    if (Math.abs(lead - 1) < 1e-6) return e % step === 0 ? v : null;
+    return all && (Math.abs(lead - 2) < 1e-6 || Math.abs(lead - 5) < 1e-6) ? v : null;
+  });
+}
 function makePlot(target, title, ylabel, names) {
   const colors = ['#2f7ed8', '#e4572e'];
   return new uPlot({
     title, width: plotWidth(), height: PLOT_H, padding: [8, 18, 0, 0],
     scales: { x: { time: false, distr: 3 }, y: { distr: 3 } },
     // Log axes with a label at every 1, 2, 5 × 10^k, so a curve can be read off.
-    axes: [{ label: 'elapsed (s)', space: 36, incrs: LOG_INCRS, values: logTicks },
-      { label: ylabel, size: 64, space: 22, incrs: LOG_INCRS, values: logTicks }],
+    axes: [{ label: 'elapsed (s)', space: 36, incrs: LOG_INCRS, values: logTicks, filter: logFilter },
+      { label: ylabel, size: 64, space: 22, incrs: LOG_INCRS, values: logTicks, filter: logFilter }],
     series: [{ label: 'elapsed (s)' }, ...names.map((n, i) => ({ label: n, stroke: colors[i], width: 2, spanGaps: true,
       points: { show: true, size: 5 } }))],
     legend: { show: true, live: false },
+    // The labels drawn (on the canvas), for tests and curious readers of the DOM.
+    hooks: { draw: [(u) => { target.dataset.xLabels = (u.axes[0]._values || []).filter(Boolean).join(' ');
+      target.dataset.yLabels = (u.axes[1]._values || []).filter(Boolean).join(' '); }] },
   }, [[], ...names.map(() => [])], target);
 }
 function seriesData(field) {
