@@ -254,6 +254,7 @@ typedef struct render_run {
     uint64_t done_px;           /* pixel-samples this process rendered */
     uint32_t *tile_spp;         /* per tile, what it holds */
     int last_permille;
+    double last_bar_elapsed_s;  /* the job's elapsed time in the reading the bar last drew */
     double t0;
     /* checkpoints: only on_pass (one at a time per job) and, after the job, main */
     ts_film *complete;          /* the last complete pass (or the starting film) */
@@ -283,8 +284,11 @@ static void on_tile(void *user, ts_sched_job *job, const ts_tile_event *ev)
     r->done_px += (uint64_t)ev->w * (uint64_t)ev->h * (ev->spp - *held);
     *held = ev->spp;
     int permille = (int)(1000 * p.progress);
-    if (r->bar && permille != r->last_permille) {
+    /* Two threads' readings can reach the lock in either order: an older one is not drawn
+     * over a newer one (the bar went 1 spp, 3.1% → 0 spp, 2.7%). */
+    if (r->bar && permille != r->last_permille && p.elapsed_s >= r->last_bar_elapsed_s) {
         r->last_permille = permille;
+        r->last_bar_elapsed_s = p.elapsed_s;
         int bars = permille * 30 / 1000;
         char bar[31], eta[32] = "?", error[32] = "n/a";
         for (int i = 0; i < 30; i++) bar[i] = i < bars ? '#' : '.';

@@ -83,6 +83,15 @@ static void test_estimate(void **state)
     in = (ts_progress_in){100, 0, 10, 0, 0.1, 100, 0.2, 25, false};
     ts_progressive_estimate(&js, &in, &p, &eta);
     assert_true(fabs(p - 0.25) < 1e-9 && fabs(eta - 30) < 1e-6);
+    /* A target error before its first estimate: the spp cap's 99.9 s is no estimate of
+     * when the render ends; a time limit bounds it. */
+    in = (ts_progress_in){1, 0, 0.1, 0, -1, 0, -1, 0, false};
+    ts_progressive_estimate(&js, &in, &p, &eta);
+    assert_true(fabs(p - 0.001) < 1e-12 && eta < 0);
+    js.time_limit_s = 50;
+    ts_progressive_estimate(&js, &in, &p, &eta);
+    assert_true(fabs(p - 0.1 / 50) < 1e-12 && fabs(eta - 49.9) < 1e-9);
+    js.time_limit_s = 0;
     /* No speed yet: progress known, ETA not. */
     in = (ts_progress_in){0, 0, 0, 0, -1, 0, -1, 0, false};
     ts_progressive_estimate(&js, &in, &p, &eta);

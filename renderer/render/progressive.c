@@ -91,6 +91,14 @@ void ts_progressive_estimate(const ts_job_settings *js, const ts_progress_in *in
         if (et < 0) et = 0;
         if (eta < 0 || et < eta) eta = et;
     }
+    /* A target error before its first estimate (below 2 spp): the render may stop at any
+     * pass from 4 spp on, so the time to the spp cap (hours, for a large one) is no
+     * estimate of when it ends; a time limit still bounds it. Else unknown, until the
+     * error says. */
+    if (js->target_error > 0 && !(in->error > 0 && in->error_spp > 0)) {
+        double et = js->time_limit_s - in->elapsed_s;
+        eta = js->time_limit_s > 0 ? (et > 0 ? et : 0) : -1;
+    }
     if (js->target_error > 0 && in->error > 0 && in->error_spp > 0) {
         double slope = -0.5;
         if (in->prev_error > 0 && in->prev_error_spp > 0 && in->prev_error_spp != in->error_spp) {

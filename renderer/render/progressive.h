@@ -84,7 +84,8 @@ typedef struct ts_progress_in {
 } ts_progress_in;
 
 /* Progress (0–1) towards whichever halting bound comes first and the seconds still to go
- * (*eta_s < 0 while it cannot be estimated: no measured speed yet). The sample target
+ * (*eta_s < 0 while it cannot be estimated: no measured speed yet, or a target error
+ * without an error estimate yet). The sample target
  * counts samples held; a time limit counts time; a target error is turned into the spp
  * expected to reach it from the convergence slope of the last two estimates (error ∝
  * spp^slope, slope clamped to [-1, -0.25]; -0.5, Monte Carlo's, until two are known). A
