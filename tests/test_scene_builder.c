@@ -174,7 +174,8 @@ static void test_same_scene_as_json(void **state)
         assert_int_equal(x->type, y->type);
         assert_int_equal(x->material, y->material);
         assert_int_equal(x->first_light, y->first_light);
-        assert_int_equal(x->flip_normal, y->flip_normal);
+        assert_int_equal(x->reverse_orientation, y->reverse_orientation);
+        assert_int_equal(x->partial, y->partial);
         assert_memory_equal(&x->to_world, &y->to_world, sizeof x->to_world);
     }
     assert_memory_equal(&bs->shapes[0].sphere, &js->shapes[0].sphere, sizeof bs->shapes[0].sphere);

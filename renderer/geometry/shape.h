@@ -14,6 +14,26 @@
  * composed with the placement from center/normal/p0,p1). Triangles face along
  * (p1 − p0) × (p2 − p0) in world space.
  *
+ * Partial quadrics (pbrt-v3's Sphere, Disk, Cylinder): with `partial` set, only the points
+ * with φ = atan2(y, x) ∈ [0, phi_max] belong to the shape, and of a sphere only those with
+ * z ∈ [z_min, z_max]; a ray whose nearer root falls outside tries the farther one. The
+ * parameterisation is pbrt-v3's: u = φ/phi_max; sphere v = (θ − θ_min)/(θ_max − θ_min)
+ * with θ_min = acos(z_min/r), θ_max = acos(z_max/r); disk v = (radius − r)/(radius −
+ * inner_radius); cylinder v = z/height; ∂p/∂u = phi_max·(−y, x, 0), ∂p/∂v as pbrt-v3.
+ * A whole shape (partial false, the zero value) is the same with phi_max = 2π, z_min =
+ * −radius, z_max = radius, and takes none of the cut tests (pbrt-v3's zmin/zmax/phimax
+ * defaults give exactly the whole shape, which the builder stores as not partial).
+ * A cylinder's pbrt-v3 z range and a disk's height are the builder's to fold into
+ * to_world (scene_builder.h), so here the tube always starts at z = 0 and the disk lies
+ * in z = 0.
+ *
+ * Orientation (docs/design.md §4): the front side of an analytic shape is pbrt-v3's
+ * normalize(∂p/∂u × ∂p/∂v) mapped by to_world's inverse transpose — outwards, or the
+ * disk's +z — whatever to_world's handedness (pbrt-v3 flips the world cross product when
+ * the transform swaps handedness, which comes to the same); reverse_orientation flips it
+ * (pbrt-v3's ReverseOrientation). Meshes carry their orientation in their winding (the
+ * builder reverses the winding of a reversed or mirrored mesh).
+ *
  * Shapes are immutable after scene build and read by all threads. */
 #ifndef TS_SHAPE_H
 #define TS_SHAPE_H
@@ -48,9 +68,13 @@ typedef struct ts_shape {
     ts_rgb emission;      /* radiance leaving the front side (both sides if two_sided) */
     uint32_t first_light; /* index of this shape's first area light (meshes: + triangle) */
     ts_xform to_world;    /* object → world (identity for meshes) */
-    bool flip_normal;     /* to_world mirrors handedness: analytic normals flipped back out */
+    bool reverse_orientation; /* analytic shapes: the front side is the inside (disk: −z) */
+    bool partial;         /* analytic shapes: cut by phi_max (and a sphere by z_min, z_max) */
+    double phi_max;       /* partial: radians in (0, 2π] */
     union {
-        struct { double radius; } sphere;
+        /* z_min < z_max within [−radius, radius], theta_min = acos(z_min/radius) >
+         * theta_max = acos(z_max/radius): read only when partial */
+        struct { double radius, z_min, z_max, theta_min, theta_max; } sphere;
         struct { double radius, inner_radius; } disk;
         struct { double radius, height; } cylinder;
         ts_mesh mesh;
@@ -97,6 +121,12 @@ bool ts_shape_triangle_ahead_cached(const ts_shape *s, const ts_tri_cache *c, ui
 
 /* Surface area in world space (meshes: of one triangle prim; other shapes ignore prim). */
 double ts_shape_area(const ts_shape *s, uint32_t prim);
+/* pbrt-v3's Area() of an analytic shape in object space: a sphere φ_max·r·(z_max − z_min),
+ * a disk φ_max/2·(r² − r_i²), a cylinder φ_max·r·height (φ_max = 2π, z = ±r when whole);
+ * 0 for meshes. */
+double ts_shape_object_area(const ts_shape *s);
+/* True if to_world's linear part is a rotation times a uniform scale (to 1e-9 relative). */
+bool ts_shape_is_similarity(const ts_shape *s);
 
 /* Ray leaving si in direction d (skips si's own triangle when si is on a mesh). */
 ts_ray ts_spawn_ray(const ts_interaction *si, const ts_shape *shapes, ts_vec3 d);

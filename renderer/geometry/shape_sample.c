@@ -72,17 +72,7 @@ static double area_jacobian(const ts_shape *s, const ts_shape_sample_info *info,
     return info->det_abs * ts_dvec3_length(ts_xform_normal(&s->to_world, n_obj));
 }
 
-static double object_area(const ts_shape *s)
-{
-    switch (s->type) {
-    case TS_SHAPE_SPHERE: return 4.0 * TS_PI_D * s->sphere.radius * s->sphere.radius;
-    case TS_SHAPE_DISK:
-        return TS_PI_D * (s->disk.radius * s->disk.radius - s->disk.inner_radius * s->disk.inner_radius);
-    case TS_SHAPE_CYLINDER: return 2.0 * TS_PI_D * s->cylinder.radius * s->cylinder.height;
-    case TS_SHAPE_MESH: break;
-    }
-    return 0;
-}
+static double object_area(const ts_shape *s) { return ts_shape_object_area(s); }
 
 /* Unit object-space normal of an analytic shape at object point p_obj. */
 static ts_dvec3 object_normal(const ts_shape *s, ts_dvec3 p_obj)
@@ -132,6 +122,16 @@ ts_status ts_shape_sample_info_init(const ts_shape *s, uint32_t prim, ts_triangl
                        fabs(ts_dvec3_dot(c[0], c[1])) <= tol && fabs(ts_dvec3_dot(c[0], c[2])) <= tol &&
                        fabs(ts_dvec3_dot(c[1], c[2])) <= tol;
     double a_obj = object_area(s);
+    if (s->partial) {
+        /* pbrt-v3's partial quadrics: shape.c's area (exact under a similarity). */
+        if (s->type == TS_SHAPE_SPHERE) {
+            info->center = ts_xform_point(&s->to_world, (ts_dvec3){0, 0, 0});
+            info->radius = s->sphere.radius * l0;
+        }
+        info->area = ts_shape_area(s, 0);
+        if (!isfinite(info->area)) info->area = 0;
+        return TS_OK;
+    }
     switch (s->type) {
     case TS_SHAPE_SPHERE: {
         info->center = ts_xform_point(&s->to_world, (ts_dvec3){0, 0, 0});
@@ -193,7 +193,35 @@ bool ts_shape_sample_area(const ts_shape *s, uint32_t prim, const ts_shape_sampl
         return isfinite(out->pdf) && out->pdf > 0;
     }
     ts_dvec3 p_obj, n_obj;
-    switch (s->type) {
+    if (s->partial) {
+        /* Uniform over the partial surface in object space (pbrt-v3's own Sample ignores
+         * the cut: docs/design.md §4). Sphere: z uniform in [z_min, z_max] (Archimedes)
+         * and φ in [0, φ_max]; disk: r² uniform in [r_i², r²]; tube: z and φ uniform. */
+        double phi = (double)u.y * s->phi_max, cp = cos(phi), sp = sin(phi);
+        switch (s->type) {
+        case TS_SHAPE_SPHERE: {
+            double r = s->sphere.radius, z = s->sphere.z_min + (double)u.x * (s->sphere.z_max - s->sphere.z_min);
+            double ct = fmax(-1.0, fmin(1.0, z / r)), st = sqrt(fmax(0.0, 1 - ct * ct));
+            n_obj = (ts_dvec3){st * cp, st * sp, ct};
+            p_obj = ts_dvec3_scale(n_obj, r);
+            break;
+        }
+        case TS_SHAPE_DISK: {
+            double ri = s->disk.inner_radius, ro = s->disk.radius;
+            double rho = sqrt(ri * ri + (double)u.x * (ro * ro - ri * ri));
+            p_obj = (ts_dvec3){rho * cp, rho * sp, 0};
+            n_obj = (ts_dvec3){0, 0, 1};
+            break;
+        }
+        case TS_SHAPE_CYLINDER: {
+            double r = s->cylinder.radius;
+            n_obj = (ts_dvec3){cp, sp, 0};
+            p_obj = (ts_dvec3){r * cp, r * sp, (double)u.x * s->cylinder.height};
+            break;
+        }
+        default: return false;
+        }
+    } else switch (s->type) {
     case TS_SHAPE_SPHERE:
         n_obj = ts_dvec3_normalize(ts_dvec3_from(ts_sample_uniform_sphere(u)));
         p_obj = ts_dvec3_scale(n_obj, s->sphere.radius);
@@ -224,7 +252,9 @@ bool ts_shape_sample_area(const ts_shape *s, uint32_t prim, const ts_shape_sampl
     ts_dvec3 p = ts_xform_point(&s->to_world, p_obj);
     out->p = ts_dvec3_to_vec3(p);
     out->p_error = rounding_error(p);
-    out->n = ts_dvec3_to_vec3(ts_dvec3_normalize(ts_xform_normal(&s->to_world, n_obj)));
+    ts_dvec3 n_w = ts_dvec3_normalize(ts_xform_normal(&s->to_world, n_obj));
+    if (s->reverse_orientation) n_w = ts_dvec3_scale(n_w, -1);
+    out->n = ts_dvec3_to_vec3(n_w);
     out->pdf = (float)pdf;
     return out->pdf > 0 && isfinite(out->pdf);
 }
@@ -244,7 +274,8 @@ static ts_dvec3 normal_at(const ts_shape *s, const ts_shape_sample_info *info, t
 {
     if (s->type == TS_SHAPE_MESH) return info->tri_n;
     ts_dvec3 n_obj = object_normal(s, ts_xform_point_inv(&s->to_world, p));
-    return ts_dvec3_normalize(ts_xform_normal(&s->to_world, n_obj));
+    ts_dvec3 n_w = ts_dvec3_normalize(ts_xform_normal(&s->to_world, n_obj));
+    return s->reverse_orientation ? ts_dvec3_scale(n_w, -1) : n_w;
 }
 
 /* ---- intersection: shape.c's exact, conservative routines ---- */
@@ -319,7 +350,8 @@ static bool edge_on(const ts_shape *s, const ts_shape_sample_info *info, const t
  * origin does: from there the cone degenerates to the point itself. */
 static bool sphere_cone(const ts_shape *s, const ts_shape_sample_info *info, const ts_interaction *ref)
 {
-    if (s->type != TS_SHAPE_SPHERE || !info->similarity) return false;
+    /* Not for a partial sphere: the cone covers the whole sphere's silhouette. */
+    if (s->type != TS_SHAPE_SPHERE || !info->similarity || s->partial) return false;
     ts_dvec3 p_ref = dv(ref->p);
     ts_dvec3 dc = ts_dvec3_sub(info->center, p_ref);
     double slack = ts_dvec3_length(dv(ref->p_error)) + 4 * FLT_EPSILON * dmax3(dabs(p_ref));
@@ -473,6 +505,7 @@ bool ts_shape_sample_solid_angle(const ts_shape *s, uint32_t prim, const ts_shap
         ts_dvec3 n = ts_dvec3_add(ts_dvec3_add(ts_dvec3_scale(wx, -sin_a * cos(phi)), ts_dvec3_scale(wy, -sin_a * sin(phi))),
                                   ts_dvec3_scale(wc, -cos_a));
         ts_dvec3 p = ts_dvec3_add(info->center, ts_dvec3_scale(n, r));
+        if (s->reverse_orientation) n = ts_dvec3_scale(n, -1);
         out->p = ts_dvec3_to_vec3(p);
         out->p_error = rounding_error(p);
         out->n = ts_dvec3_to_vec3(n);

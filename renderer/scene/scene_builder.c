@@ -513,6 +513,87 @@ static ts_status check_mesh(const ts_scene_builder *b, const ts_mesh *m, ts_erro
     return TS_OK;
 }
 
+/* The cut of a partial quadric (scene_builder.h, ts_shape_cut): finite values that leave
+ * some area. */
+static ts_status check_cut(const ts_shape_desc *d, ts_error *err)
+{
+    const ts_shape_cut *c = &d->cut;
+    if (!c->partial) return TS_OK;
+    if (isnan(c->phi_max))
+        return ts_error_set(err, TS_ERR_INVALID, "phimax: expected an angle in degrees, got %g", c->phi_max);
+    if (!(c->phi_max > 0))
+        return ts_error_set(err, TS_ERR_INVALID, "phimax: %g degrees leaves the shape no area", c->phi_max);
+    if (d->type == TS_SHAPE_DISK) return TS_OK;
+    if (isnan(c->z_min) || isnan(c->z_max) || (d->type == TS_SHAPE_CYLINDER && !(isfinite(c->z_min) && isfinite(c->z_max))))
+        return ts_error_set(err, TS_ERR_INVALID, "zmin, zmax: expected %s numbers, got %g and %g",
+                            d->type == TS_SHAPE_CYLINDER ? "finite" : "", c->z_min, c->z_max);
+    double lo = fmin(c->z_min, c->z_max), hi = fmax(c->z_min, c->z_max);
+    if (d->type == TS_SHAPE_SPHERE) {
+        double r = d->sphere.radius;
+        lo = fmin(fmax(lo, -r), r), hi = fmin(fmax(hi, -r), r);
+        if (!(lo < hi))
+            return ts_error_set(err, TS_ERR_INVALID,
+                                "zmin, zmax: %g and %g clamp to the same height on a sphere of radius %g, which "
+                                "leaves it no area",
+                                c->z_min, c->z_max, r);
+    } else if (!(lo < hi)) {
+        return ts_error_set(err, TS_ERR_INVALID, "zmin, zmax: both %g, which leaves the cylinder no area", lo);
+    }
+    return TS_OK;
+}
+
+/* The analytic part of shape sh from d (checked): sizes, the cut in pbrt-v3's terms with
+ * its clamping, and to_world with a disk's height and a cylinder's z_min folded in (the
+ * translation composed only when non-zero, so shapes without them keep their transform
+ * bit for bit). A cut that keeps the whole shape is no cut. */
+static void place_analytic(const ts_shape_desc *d, ts_shape *sh)
+{
+    const ts_shape_cut *c = &d->cut;
+    double phi_max = c->partial ? fmin(c->phi_max, 360.0) * (TS_PI_D / 180.0) : 2 * TS_PI_D;
+    bool phi_cut = c->partial && c->phi_max < 360;
+    sh->to_world = d->to_world;
+    double z_shift = 0;
+    switch (d->type) {
+    case TS_SHAPE_SPHERE: {
+        double r = d->sphere.radius;
+        sh->sphere.radius = r;
+        double lo = fmin(c->z_min, c->z_max), hi = fmax(c->z_min, c->z_max);
+        lo = fmin(fmax(lo, -r), r), hi = fmin(fmax(hi, -r), r);
+        bool z_cut = c->partial && (lo > -r || hi < r);
+        sh->partial = phi_cut || z_cut;
+        if (sh->partial) {
+            sh->sphere.z_min = lo;
+            sh->sphere.z_max = hi;
+            sh->sphere.theta_min = acos(fmin(fmax(lo / r, -1.0), 1.0));
+            sh->sphere.theta_max = acos(fmin(fmax(hi / r, -1.0), 1.0));
+        }
+        break;
+    }
+    case TS_SHAPE_DISK:
+        sh->disk.radius = d->disk.radius;
+        sh->disk.inner_radius = d->disk.inner_radius;
+        sh->partial = phi_cut;
+        z_shift = d->disk.height;
+        break;
+    case TS_SHAPE_CYLINDER:
+        sh->cylinder.radius = d->cylinder.radius;
+        sh->cylinder.height = d->cylinder.height;
+        if (c->partial) {
+            double lo = fmin(c->z_min, c->z_max), hi = fmax(c->z_min, c->z_max);
+            sh->cylinder.height = hi - lo;
+            z_shift = lo;
+        }
+        sh->partial = phi_cut;
+        break;
+    case TS_SHAPE_MESH: break;
+    }
+    sh->phi_max = sh->partial ? phi_max : 0;
+    if (z_shift != 0) {
+        ts_xform up = ts_xform_translate((ts_dvec3){0, 0, z_shift});
+        sh->to_world = ts_xform_compose(&d->to_world, &up);
+    }
+}
+
 static ts_status check_shape(const ts_scene_builder *b, const ts_shape_desc *d, ts_error *err)
 {
     if (b->n_shapes >= b->lim.max_shapes)
@@ -537,25 +618,29 @@ static ts_status check_shape(const ts_scene_builder *b, const ts_shape_desc *d, 
         if (!(d->disk.inner_radius >= 0 && d->disk.inner_radius < d->disk.radius))
             return ts_error_set(err, TS_ERR_INVALID, "inner_radius: expected a number in [0, radius), got %g",
                                 d->disk.inner_radius);
+        if (!isfinite(d->disk.height))
+            return ts_error_set(err, TS_ERR_INVALID, "height: expected a finite number, got %g", d->disk.height);
         break;
     case TS_SHAPE_CYLINDER:
         if (!(d->cylinder.radius > 0))
             return ts_error_set(err, TS_ERR_INVALID, "radius: expected a positive number, got %g",
                                 d->cylinder.radius);
-        if (!(d->cylinder.height > 0))
+        if (!d->cut.partial && !(d->cylinder.height > 0))
             return ts_error_set(err, TS_ERR_INVALID, "height: expected a positive number, got %g",
                                 d->cylinder.height);
         break;
     case TS_SHAPE_MESH:
+        if (d->cut.partial)
+            return ts_error_set(err, TS_ERR_INVALID, "a mesh takes no zmin, zmax or phimax (partial quadrics only)");
         return check_mesh(b, &d->mesh, err);
     default:
         return ts_error_set(err, TS_ERR_INVALID, "type: unknown shape type %d", (int)d->type);
     }
-    return TS_OK;
+    return check_cut(d, err);
 }
 
 /* Copies the object-space mesh m into the arena, in world space (xf). */
-static ts_status place_mesh(ts_scene_builder *b, const ts_mesh *m, const ts_xform *xf, ts_mesh *out,
+static ts_status place_mesh(ts_scene_builder *b, const ts_mesh *m, const ts_xform *xf, bool reverse, ts_mesh *out,
                             ts_error *err)
 {
     ts_arena *arena = &b->s->arena;
@@ -570,7 +655,8 @@ static ts_status place_mesh(ts_scene_builder *b, const ts_mesh *m, const ts_xfor
     if (uv) memcpy(uv, m->uv, (size_t)nv * 2 * sizeof *uv);
     memcpy(idx, m->index, (size_t)nt * 3 * sizeof *idx);
     /* To world space. A mirroring transform reverses the winding so that triangles keep
-     * facing the way they did in object space (as pbrt's ReverseOrientation does). */
+     * facing the way they did in object space (what pbrt-v3's XOR of ReverseOrientation
+     * with TransformSwapsHandedness does); ReverseOrientation reverses it (once more). */
     if (!ts_xform_is_identity(xf)) {
         for (uint32_t k = 0; k < nv; k++) {
             ts_dvec3 q = ts_xform_point(xf, (ts_dvec3){p[3 * k], p[3 * k + 1], p[3 * k + 2]});
@@ -583,12 +669,7 @@ static ts_status place_mesh(ts_scene_builder *b, const ts_mesh *m, const ts_xfor
                 n[3 * k] = (float)w.x, n[3 * k + 1] = (float)w.y, n[3 * k + 2] = (float)w.z;
             }
         }
-        if (ts_xform_swaps_handedness(xf))
-            for (uint32_t t = 0; t < nt; t++) {
-                uint32_t tmp = idx[3 * t + 1];
-                idx[3 * t + 1] = idx[3 * t + 2];
-                idx[3 * t + 2] = tmp;
-            }
+        if (ts_xform_swaps_handedness(xf)) reverse = !reverse;
     } else if (n) {
         for (uint32_t k = 0; k < nv; k++) {
             ts_vec3 v = {n[3 * k], n[3 * k + 1], n[3 * k + 2]};
@@ -598,6 +679,12 @@ static ts_status place_mesh(ts_scene_builder *b, const ts_mesh *m, const ts_xfor
             n[3 * k] = w.x, n[3 * k + 1] = w.y, n[3 * k + 2] = w.z;
         }
     }
+    if (reverse)
+        for (uint32_t t = 0; t < nt; t++) {
+            uint32_t tmp = idx[3 * t + 1];
+            idx[3 * t + 1] = idx[3 * t + 2];
+            idx[3 * t + 2] = tmp;
+        }
     *out = (ts_mesh){nv, nt, p, n, uv, idx};
     return TS_OK;
 }
@@ -614,24 +701,13 @@ ts_status ts_scene_builder_add_shape(ts_scene_builder *b, const ts_shape_desc *d
     sh.emission = d->emission;
     sh.emissive = !ts_rgb_is_black(d->emission);
     sh.two_sided = d->two_sided;
-    switch (d->type) {
-    case TS_SHAPE_SPHERE:
-        sh.sphere.radius = d->sphere.radius;
-        break;
-    case TS_SHAPE_DISK:
-        sh.disk.radius = d->disk.radius;
-        sh.disk.inner_radius = d->disk.inner_radius;
-        break;
-    case TS_SHAPE_CYLINDER:
-        sh.cylinder.radius = d->cylinder.radius;
-        sh.cylinder.height = d->cylinder.height;
-        break;
-    case TS_SHAPE_MESH:
-        TRY(place_mesh(b, &d->mesh, &d->to_world, &sh.mesh, err));
-        break;
+    if (d->type == TS_SHAPE_MESH) {
+        TRY(place_mesh(b, &d->mesh, &d->to_world, d->reverse_orientation, &sh.mesh, err));
+        sh.to_world = ts_xform_identity();
+    } else {
+        place_analytic(d, &sh);
+        sh.reverse_orientation = d->reverse_orientation;
     }
-    sh.to_world = d->type == TS_SHAPE_MESH ? ts_xform_identity() : d->to_world;
-    sh.flip_normal = d->type != TS_SHAPE_MESH && ts_xform_swaps_handedness(&sh.to_world);
     if (d->type == TS_SHAPE_MESH) b->n_triangles += d->mesh.n_triangles;
     if (sh.emissive) b->n_area_lights += d->type == TS_SHAPE_MESH ? d->mesh.n_triangles : 1;
     b->shapes[b->n_shapes] = sh;

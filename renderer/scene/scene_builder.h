@@ -144,17 +144,48 @@ ts_status ts_scene_builder_add_material(ts_scene_builder *b, const char *name, c
 /* The id of the material added under name, or TS_NONE (also for name NULL). */
 uint32_t ts_scene_builder_find_material(const ts_scene_builder *b, const char *name);
 
+/* pbrt-v3's partial quadrics: its Sphere (zmin, zmax, phimax), Disk (phimax) and
+ * Cylinder (zmin, zmax, phimax) parameters with pbrt-v3's semantics. `partial` false (the
+ * zero value): the whole shape, the other fields unread. true: all three fields are read
+ * (a front end passes pbrt-v3's defaults for the ones a file leaves out: zmin −radius,
+ * zmax radius for a sphere, −1 and 1 for a cylinder, phimax 360):
+ *   - phi_max: degrees, clamped to [0, 360] as pbrt-v3 does; the shape is the part with
+ *     φ = atan2(y, x) in [0, phi_max] (object space);
+ *   - sphere: z_min, z_max in either order, clamped to [−radius, radius] (pbrt-v3);
+ *   - cylinder: the tube spans z from min(z_min, z_max) to max(z_min, z_max) (pbrt-v3),
+ *     replacing the desc's 0 … height; the builder folds the offset into to_world;
+ *   - disk: z_min and z_max unread (its height is the desc's own field).
+ * A cut that leaves no area (phi_max 0, z_min = z_max after clamping) is refused; one that
+ * keeps the whole shape is stored as the whole shape (same pixels, and the whole sphere's
+ * cone sampling). */
+typedef struct ts_shape_cut {
+    bool partial;
+    double z_min, z_max, phi_max;
+} ts_shape_cut;
+
 typedef struct ts_shape_desc {
     ts_shape_type type;
     uint32_t material; /* an id from ts_scene_builder_add_material */
     ts_xform to_world; /* object → world (shape.h's object spaces) */
     ts_rgb emission;   /* radiance, each channel ≥ 0; not black: a diffuse area light */
     bool two_sided;    /* an emitter emits on both sides */
+    /* pbrt-v3's ReverseOrientation: the front side (where a one-sided emitter emits, where
+     * the normal points) becomes the other side. The builder applies exactly this flag; a
+     * front end gives it as pbrt-v3's graphics state holds it (ReverseOrientation toggled
+     * per attribute block) and must NOT fold in the handedness of to_world: the builder
+     * already keeps every shape facing the way it faces in object space under a mirroring
+     * transform, which is what pbrt-v3's XOR with TransformSwapsHandedness achieves. So
+     * the world front side is: analytic shapes M^-T·n_obj (outwards, the disk's +z),
+     * negated when set; meshes the object-space winding's side, reversed when set (the
+     * builder swaps two indices of every triangle). */
+    bool reverse_orientation;
+    ts_shape_cut cut;  /* sphere, disk, cylinder only (zero for meshes) */
     /* clang-format off */
     union {
         struct { double radius; } sphere;              /* > 0 */
-        struct { double radius, inner_radius; } disk;  /* > 0; in [0, radius) */
-        struct { double radius, height; } cylinder;    /* > 0; > 0 */
+        /* > 0; in [0, radius); pbrt-v3's height: the disk lies in the plane z = height */
+        struct { double radius, inner_radius, height; } disk;
+        struct { double radius, height; } cylinder;    /* > 0; > 0 unless cut.partial */
         ts_mesh mesh; /* object space, copied: n_vertices, n_triangles ≥ 1, finite positions,
                          indices < n_vertices, finite non-zero normals (or NULL), finite uvs
                          (or NULL) */

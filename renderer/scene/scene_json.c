@@ -588,6 +588,33 @@ static ts_status parse_mesh(loader *ld, const cJSON *sh, const char *path, ts_me
     return TS_OK;
 }
 
+/* The partial-quadric keys of shape sh (docs/design.md §4): any of z_min, z_max (spheres,
+ * object space along the sphere's z, defaults ∓radius) and phi_max (degrees in (0, 360],
+ * default 360) makes the shape partial; without them it is whole, as before. */
+static ts_status parse_cut(loader *ld, const cJSON *sh, const char *path, double radius, ts_shape_cut *cut)
+{
+    *cut = (ts_shape_cut){0};
+    const bool any = cJSON_GetObjectItemCaseSensitive(sh, "z_min") || cJSON_GetObjectItemCaseSensitive(sh, "z_max") ||
+                     cJSON_GetObjectItemCaseSensitive(sh, "phi_max");
+    if (!any) return TS_OK;
+    double z_min = -radius, z_max = radius, phi_max = 360;
+    TRY(ts_json_number(sh, path, "z_min", false, TS_J_ANY, &z_min, ld->err));
+    TRY(ts_json_number(sh, path, "z_max", false, TS_J_ANY, &z_max, ld->err));
+    TRY(ts_json_number(sh, path, "phi_max", false, TS_J_POSITIVE, &phi_max, ld->err));
+    if (phi_max > 360) {
+        ts_jpath pp = ts_jpath_key(path, "phi_max");
+        return ts_error_set(ld->err, TS_ERR_INVALID, "%s: expected at most 360 degrees, got %g", pp.s, phi_max);
+    }
+    if (radius > 0 && !(fmin(fmax(z_min, -radius), radius) < fmin(fmax(z_max, -radius), radius))) {
+        ts_jpath zp = ts_jpath_key(path, "z_max");
+        return ts_error_set(ld->err, TS_ERR_INVALID,
+                            "%s: expected more than z_min (%g) within [-radius, radius] ([%g, %g]), got %g", zp.s, z_min,
+                            -radius, radius, z_max);
+    }
+    *cut = (ts_shape_cut){true, z_min, z_max, phi_max};
+    return TS_OK;
+}
+
 /* Reads shape sh into *d (a mesh's arrays into *arrays, which the caller frees). */
 static ts_status parse_shape(loader *ld, const cJSON *sh, const char *path, ts_shape_desc *d, ts_mesh_data *arrays)
 {
@@ -595,10 +622,10 @@ static ts_status parse_shape(loader *ld, const cJSON *sh, const char *path, ts_s
     if (!cJSON_IsObject(sh)) return ts_json_check_object(sh, path, types, ld->err);
     int type = 0;
     TRY(ts_json_enum(sh, path, "type", true, types, &type, ld->err));
-#define COMMON "type", "material", "transform", "emission", "two_sided"
-    static const char *const k_sphere[] = {COMMON, "center", "radius", NULL};
-    static const char *const k_disk[] = {COMMON, "center", "normal", "radius", "inner_radius", NULL};
-    static const char *const k_cyl[] = {COMMON, "p0", "p1", "radius", NULL};
+#define COMMON "type", "material", "transform", "emission", "two_sided", "reverse_orientation"
+    static const char *const k_sphere[] = {COMMON, "center", "radius", "z_min", "z_max", "phi_max", NULL};
+    static const char *const k_disk[] = {COMMON, "center", "normal", "radius", "inner_radius", "phi_max", NULL};
+    static const char *const k_cyl[] = {COMMON, "p0", "p1", "radius", "phi_max", NULL};
     static const char *const k_mesh[] = {COMMON, "positions", "indices", "normals", "uvs", "file", NULL};
 #undef COMMON
     const char *const *keys[] = {k_sphere, k_disk, k_cyl, k_mesh};
@@ -616,6 +643,7 @@ static ts_status parse_shape(loader *ld, const cJSON *sh, const char *path, ts_s
     d->emission = ts_rgb_gray(0);
     TRY(ts_json_rgb(sh, path, "emission", false, TS_J_NONNEG, &d->emission, ld->err));
     TRY(ts_json_bool(sh, path, "two_sided", false, &d->two_sided, ld->err));
+    TRY(ts_json_bool(sh, path, "reverse_orientation", false, &d->reverse_orientation, ld->err));
     ts_xform user;
     TRY(parse_transform(ld, sh, path, &user));
 
@@ -629,6 +657,7 @@ static ts_status parse_shape(loader *ld, const cJSON *sh, const char *path, ts_s
         ts_xform place = ts_xform_translate(ts_dvec3_from(center));
         d->to_world = ts_xform_compose(&user, &place);
         d->sphere.radius = (float)radius;
+        TRY(parse_cut(ld, sh, path, d->sphere.radius, &d->cut));
         break;
     }
     case TS_SHAPE_DISK: {
@@ -646,6 +675,7 @@ static ts_status parse_shape(loader *ld, const cJSON *sh, const char *path, ts_s
         d->to_world = ts_xform_compose(&user, &place);
         d->disk.radius = (float)radius;
         d->disk.inner_radius = (float)inner;
+        TRY(parse_cut(ld, sh, path, 0, &d->cut));
         break;
     }
     case TS_SHAPE_CYLINDER: {
@@ -660,6 +690,8 @@ static ts_status parse_shape(loader *ld, const cJSON *sh, const char *path, ts_s
         d->to_world = ts_xform_compose(&user, &place);
         d->cylinder.radius = (float)radius;
         d->cylinder.height = h;
+        TRY(parse_cut(ld, sh, path, 0, &d->cut));
+        if (d->cut.partial) d->cut.z_min = 0, d->cut.z_max = h; /* the tube from p0 to p1 */
         break;
     }
     case TS_SHAPE_MESH:
