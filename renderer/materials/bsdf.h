@@ -23,7 +23,7 @@
 #include "core/vecmath.h"
 #include "materials/bxdf.h"
 
-#define TS_BSDF_MAX_BXDFS 4
+#define TS_BSDF_MAX_BXDFS 8 /* pbrt-v3's MaxBxDFs; uber has 5 lobes, a mix the sum of its two (scene_builder.h) */
 
 typedef struct ts_bsdf {
     ts_vec3 ng;          /* geometric normal (world) */

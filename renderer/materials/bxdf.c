@@ -96,6 +96,19 @@ ts_bxdf ts_bxdf_fresnel_specular(ts_rgb r, ts_rgb t, float eta_a, float eta_b)
                      .eta_a = eta_a, .eta_b = eta_b};
 }
 
+ts_bxdf ts_bxdf_lambertian_transmission(ts_rgb t)
+{
+    return (ts_bxdf){.type = TS_BXDF_LAMBERTIAN_TRANSMISSION, .flags = TS_BXDF_TRANSMISSION | TS_BXDF_DIFFUSE,
+                     .t = t};
+}
+
+ts_bxdf ts_bxdf_scaled(ts_bxdf b, ts_rgb s)
+{
+    b.scale = b.scaled ? ts_rgb_mul(b.scale, s) : s;
+    b.scaled = true;
+    return b;
+}
+
 ts_bxdf ts_bxdf_fourier(const struct ts_fourier_table *table)
 {
     return (ts_bxdf){.type = TS_BXDF_FOURIER, .flags = TS_BXDF_REFLECTION | TS_BXDF_TRANSMISSION | TS_BXDF_GLOSSY,
@@ -204,11 +217,13 @@ static ts_rgb coupled_diffuse_f(const ts_bxdf *b, ts_vec3 wo, ts_vec3 wi)
     return rgb_finite(ts_rgb_scale(ts_rgb_mul(b->r, t), TS_INV_PI));
 }
 
-ts_rgb ts_bxdf_f(const ts_bxdf *b, ts_vec3 wo, ts_vec3 wi)
+/* f of the lobe without its ScaledBxDF factor. */
+static ts_rgb lobe_f(const ts_bxdf *b, ts_vec3 wo, ts_vec3 wi)
 {
     if (wo.z == 0 || !ts_vec3_is_finite(wo) || !ts_vec3_is_finite(wi)) return black();
     switch (b->type) {
     case TS_BXDF_LAMBERTIAN: return b->diffuse_coupled ? coupled_diffuse_f(b, wo, wi) : ts_rgb_scale(b->r, TS_INV_PI);
+    case TS_BXDF_LAMBERTIAN_TRANSMISSION: return ts_rgb_scale(b->t, TS_INV_PI); /* the BSDF picks the side pair */
     case TS_BXDF_OREN_NAYAR: return oren_nayar_f(b, wo, wi);
     case TS_BXDF_MICROFACET_REFLECTION: return microfacet_reflection_f(b, wo, wi);
     case TS_BXDF_MICROFACET_TRANSMISSION:
@@ -223,9 +238,20 @@ ts_rgb ts_bxdf_f(const ts_bxdf *b, ts_vec3 wo, ts_vec3 wi)
     return black();
 }
 
+ts_rgb ts_bxdf_f(const ts_bxdf *b, ts_vec3 wo, ts_vec3 wi)
+{
+    ts_rgb f = lobe_f(b, wo, wi);
+    return b->scaled ? rgb_finite(ts_rgb_mul(f, b->scale)) : f;
+}
+
 /* ------------------------------------------------------------- lobes: pdf ---- */
 
 static float cosine_pdf(ts_vec3 wo, ts_vec3 wi) { return ts_same_hemisphere(wo, wi) ? fabsf(wi.z) * TS_INV_PI : 0; }
+/* The cosine density on the hemisphere opposite wo (diffuse transmission). */
+static float cosine_pdf_opposite(ts_vec3 wo, ts_vec3 wi)
+{
+    return ts_same_hemisphere(wo, wi) || wi.z == 0 ? 0 : fabsf(wi.z) * TS_INV_PI;
+}
 
 static float microfacet_reflection_pdf(const ts_microfacet *d, ts_vec3 wo, ts_vec3 wi)
 {
@@ -257,6 +283,7 @@ float ts_bxdf_pdf(const ts_bxdf *b, ts_vec3 wo, ts_vec3 wi)
     switch (b->type) {
     case TS_BXDF_LAMBERTIAN:
     case TS_BXDF_OREN_NAYAR: return cosine_pdf(wo, wi);
+    case TS_BXDF_LAMBERTIAN_TRANSMISSION: return cosine_pdf_opposite(wo, wi);
     case TS_BXDF_MICROFACET_REFLECTION: return microfacet_reflection_pdf(&b->dist, wo, wi);
     case TS_BXDF_MICROFACET_TRANSMISSION:
         if (b->flags & TS_BXDF_SPECULAR) return 0;
@@ -292,7 +319,7 @@ static bool finish_sample(const ts_bxdf *b, ts_vec3 wo, ts_vec3 wi, uint32_t fla
     out->wi = wi;
     out->pdf = ts_bxdf_pdf(b, wo, wi);
     if (!(out->pdf > 0)) return false;
-    out->f = ts_bxdf_f(b, wo, wi);
+    out->f = lobe_f(b, wo, wi);
     out->flags = flags;
     out->eta = eta;
     return true;
@@ -306,7 +333,8 @@ static bool sample_reflected_wh(const ts_microfacet *d, ts_vec3 wo, ts_vec2 u, t
     return ts_same_hemisphere(wo, *wi);
 }
 
-bool ts_bxdf_sample_f(const ts_bxdf *b, ts_vec3 wo, ts_vec2 u, ts_bxdf_sample *out)
+/* A sample of the lobe, its f without the ScaledBxDF factor. */
+static bool sample_lobe(const ts_bxdf *b, ts_vec3 wo, ts_vec2 u, ts_bxdf_sample *out)
 {
     if (wo.z == 0 || !ts_vec3_is_finite(wo)) return false;
     u.x = ts_clampf(u.x, 0, TS_ONE_MINUS_EPSILON);
@@ -314,6 +342,11 @@ bool ts_bxdf_sample_f(const ts_bxdf *b, ts_vec3 wo, ts_vec2 u, ts_bxdf_sample *o
     switch (b->type) {
     case TS_BXDF_LAMBERTIAN:
     case TS_BXDF_OREN_NAYAR: return finish_sample(b, wo, cosine_sample(wo, u), b->flags, 1, out);
+    case TS_BXDF_LAMBERTIAN_TRANSMISSION: {
+        ts_vec3 wi = cosine_sample(wo, u);
+        wi.z = -wi.z;
+        return finish_sample(b, wo, wi, b->flags, 1, out);
+    }
     case TS_BXDF_MICROFACET_REFLECTION: {
         ts_vec3 wi;
         if (!sample_reflected_wh(&b->dist, wo, u, &wi)) return false;
@@ -397,6 +430,13 @@ bool ts_bxdf_sample_f(const ts_bxdf *b, ts_vec3 wo, ts_vec2 u, ts_bxdf_sample *o
     }
     }
     return false;
+}
+
+bool ts_bxdf_sample_f(const ts_bxdf *b, ts_vec3 wo, ts_vec2 u, ts_bxdf_sample *out)
+{
+    if (!sample_lobe(b, wo, u, out)) return false;
+    if (b->scaled) out->f = rgb_finite(ts_rgb_mul(out->f, b->scale));
+    return true;
 }
 
 /* ------------------------------------------------------------ reflectance ---- */

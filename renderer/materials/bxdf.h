@@ -39,6 +39,7 @@ enum {
 
 typedef enum ts_bxdf_type {
     TS_BXDF_LAMBERTIAN,             /* r: reflectance; diffuse_coupled: × (1 − rs·F(|cosθo|))(1 − rs·F(|cosθi|)) */
+    TS_BXDF_LAMBERTIAN_TRANSMISSION,/* t: f = t/π between opposite hemispheres (pbrt-v3 §8.3) */
     TS_BXDF_OREN_NAYAR,             /* r, on_a, on_b */
     TS_BXDF_MICROFACET_REFLECTION,  /* r, dist, fresnel */
     TS_BXDF_MICROFACET_TRANSMISSION,/* t, dist, eta_a (outside, +z side), eta_b (inside) */
@@ -58,6 +59,8 @@ typedef struct ts_bxdf {
     float eta_a, eta_b; /* indices outside (+z side) and inside */
     bool blend_glossy;  /* FresnelBlend has its glossy term */
     bool diffuse_coupled; /* Lambertian under a specular coat (plastic): see ts_bxdf_lambertian_coupled */
+    bool scaled;        /* f (and a sample's f) multiplied by scale: pbrt-v3's ScaledBxDF (mix) */
+    ts_rgb scale;
     ts_microfacet dist;
     ts_fresnel fresnel;
     const struct ts_fourier_table *fourier;
@@ -88,6 +91,12 @@ ts_bxdf ts_bxdf_specular_reflection(ts_rgb r, ts_fresnel fresnel);
 ts_bxdf ts_bxdf_specular_transmission(ts_rgb t, float eta_a, float eta_b);
 ts_bxdf ts_bxdf_fresnel_specular(ts_rgb r, ts_rgb t, float eta_a, float eta_b);
 ts_bxdf ts_bxdf_fourier(const struct ts_fourier_table *table);
+/* Lambertian transmission (pbrt-v3's LambertianTransmission): f = t/π for wo and wi on
+ * opposite sides, cosine-weighted sampling of wo's opposite hemisphere. */
+ts_bxdf ts_bxdf_lambertian_transmission(ts_rgb t);
+/* b with its f multiplied by s (pdf and sampling unchanged): pbrt-v3's ScaledBxDF, which
+ * its MixMaterial wraps around every lobe. Scaling a scaled lobe multiplies the scales. */
+ts_bxdf ts_bxdf_scaled(ts_bxdf b, ts_rgb s);
 
 /* ---- evaluation ---- */
 ts_rgb ts_bxdf_f(const ts_bxdf *b, ts_vec3 wo, ts_vec3 wi);   /* 0 for specular lobes */

@@ -13,6 +13,14 @@ ts_microfacet ts_microfacet_make(ts_microfacet_type type, float alpha_x, float a
     return m;
 }
 
+float ts_microfacet_roughness_to_alpha(float roughness)
+{
+    if (!(roughness >= 1e-3f)) roughness = 1e-3f; /* max(roughness, 1e-3), NaN included */
+    if (roughness > 1e30f) roughness = 1e30f;      /* ln stays finite */
+    float x = logf(roughness);
+    return 1.62142f + 0.819955f * x + 0.1734f * x * x + 0.0171201f * x * x * x + 0.000640711f * x * x * x * x;
+}
+
 /* sin²θ from x, y (accurate near the pole) and the azimuthal terms. */
 static inline float sin2_xy(ts_vec3 w) { return w.x * w.x + w.y * w.y; }
 

@@ -36,6 +36,14 @@ static inline bool ts_microfacet_is_specular(float alpha_x, float alpha_y)
     return !(alpha_x >= TS_MICROFACET_SPECULAR_ALPHA) || !(alpha_y >= TS_MICROFACET_SPECULAR_ALPHA);
 }
 
+/* pbrt-v3's RoughnessToAlpha (TrowbridgeReitzDistribution's, which its Beckmann
+ * distribution shares): α = 1.62142 + 0.819955x + 0.1734x² + 0.0171201x³ +
+ * 0.000640711x⁴ with x = ln max(roughness, 1e-3), in float and in pbrt-v3's order of
+ * operations, so the same roughness gives the same α bit for bit. Its minimum, at
+ * roughness ≤ 1e-3, is α ≈ 0.0472; NaN gives that minimum too. The materials' `remap
+ * roughness` flag (material.h) applies it. */
+float ts_microfacet_roughness_to_alpha(float roughness);
+
 /* Normal distribution D(wh) (per unit solid angle of wh, ∫ D cosθh dωh = 1). */
 float ts_microfacet_d(const ts_microfacet *m, ts_vec3 wh);
 /* Smith Λ(w), G1(w) = 1 / (1 + Λ(w)), and the height-correlated G(wo, wi). */
