@@ -4,6 +4,10 @@
  * raster → screen → camera chain, filters against their formulas, spectra against the
  * CIE's normalisation — or against the JSON v1 document it is equivalent to; and the
  * error sentences, exactly. */
+#ifndef _XOPEN_SOURCE
+#define _XOPEN_SOURCE 700 /* mkdtemp, nftw */
+#endif
+
 // clang-format off
 #include <setjmp.h>
 #include <stdarg.h>
@@ -11,13 +15,52 @@
 #include <cmocka.h>
 // clang-format on
 
+#include <ftw.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
+#include "image/exr.h"
+#include "render/render.h"
+#include "scene/scene_json.h"
 #include "scene/scene_load.h"
 #include "scene/spectrum.h"
+
+static char tmp_dir[256];
+
+static int rm_entry(const char *path, const struct stat *sb, int flag, struct FTW *ftw)
+{
+    (void)sb, (void)flag, (void)ftw;
+    return remove(path);
+}
+
+static int group_setup(void **state)
+{
+    (void)state;
+    const char *t = getenv("TMPDIR");
+    snprintf(tmp_dir, sizeof tmp_dir, "%s/ts_test_pbrt_import_XXXXXX",
+             t && *t && strlen(t) < 200 ? t : "/tmp");
+    return mkdtemp(tmp_dir) ? 0 : -1;
+}
+
+static int group_teardown(void **state)
+{
+    (void)state;
+    nftw(tmp_dir, rm_entry, 16, FTW_DEPTH | FTW_PHYS);
+    return 0;
+}
+
+static void write_file(const char *rel, const char *text, char *path, size_t len)
+{
+    snprintf(path, len, "%s/%s", tmp_dir, rel);
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(text, 1, strlen(text), f), strlen(text));
+    assert_int_equal(fclose(f), 0);
+}
 
 typedef struct warnings {
     int n;
@@ -198,12 +241,336 @@ static void error_sentences(void **state)
         "2]");
 }
 
+/* Lights: positions through the light's CTM, colours times scale, pbrt-v3's defaults. */
+static void lights_mapped(void **state)
+{
+    (void)state;
+    warnings w = {0};
+    ts_scene *s =
+        load("WorldBegin\n"
+             "AttributeBegin Translate 1 2 3\n"
+             "LightSource \"point\" \"rgb I\" [1 2 3] \"rgb scale\" [2 2 2] \"point from\" [0 0 1]\n"
+             "AttributeEnd\n"
+             "LightSource \"spot\" \"point from\" [0 0 0] \"point to\" [0 0 -2] \"float coneangle\" 40\n"
+             "LightSource \"distant\" \"point from\" [0 10 0] \"point to\" [0 0 0] \"rgb L\" [3 3 3]\n"
+             "Shape \"sphere\"\nWorldEnd\n",
+             &w);
+    assert_int_equal(s->n_lights, 3);
+    const ts_light *pt = &s->lights[0], *sp = &s->lights[1], *di = &s->lights[2];
+    assert_int_equal(pt->type, TS_LIGHT_POINT);
+    assert_vec_near(pt->position, 1, 2, 4, 0);
+    assert_true(pt->color.r == 2 && pt->color.g == 4 && pt->color.b == 6);
+    assert_int_equal(sp->type, TS_LIGHT_SPOT);
+    assert_vec_near(sp->direction, 0, 0, -1, 1e-7);
+    assert_float_equal(sp->cos_total, cos(40 * TS_PI_D / 180), 1e-6);
+    assert_float_equal(sp->cos_falloff_start, cos(35 * TS_PI_D / 180), 1e-6); /* conedelta 5 */
+    assert_true(sp->color.r == 1);                                            /* I defaults to 1 */
+    assert_int_equal(di->type, TS_LIGHT_DISTANT);
+    assert_vec_near(di->direction, 0, -1, 0, 1e-7);
+    assert_true(di->color.g == 3);
+    ts_scene_destroy(s);
+}
+
+/* Shapes: a sphere's radius and placement, a disk at its height, a cylinder from zmin to
+ * zmax, a mesh's vertices through the CTM. */
+static void shapes_mapped(void **state)
+{
+    (void)state;
+    warnings w = {0};
+    ts_scene *s = load("WorldBegin\n"
+                       "AttributeBegin Translate 1 0 0 Shape \"sphere\" \"float radius\" 2 AttributeEnd\n"
+                       "Shape \"disk\" \"float height\" 0.5 \"float radius\" 3 \"float innerradius\" 1\n"
+                       "Shape \"cylinder\" \"float radius\" 0.5 \"float zmin\" -2 \"float zmax\" 1\n"
+                       "AttributeBegin Scale 2 2 2\n"
+                       "Shape \"trianglemesh\" \"point P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\n"
+                       "AttributeEnd\nWorldEnd\n",
+                       &w);
+    assert_int_equal(s->n_shapes, 4);
+    const ts_shape *sp = &s->shapes[0], *dk = &s->shapes[1], *cy = &s->shapes[2], *me = &s->shapes[3];
+    assert_int_equal(sp->type, TS_SHAPE_SPHERE);
+    assert_float_equal(sp->sphere.radius, 2, 0);
+    assert_float_equal(sp->to_world.m.m[0][3], 1, 0);
+    assert_int_equal(dk->type, TS_SHAPE_DISK);
+    assert_float_equal(dk->disk.radius, 3, 0);
+    assert_float_equal(dk->disk.inner_radius, 1, 0);
+    assert_float_equal(dk->to_world.m.m[2][3], 0.5, 0);
+    assert_int_equal(cy->type, TS_SHAPE_CYLINDER);
+    assert_float_equal(cy->cylinder.height, 3, 0);
+    assert_float_equal(cy->to_world.m.m[2][3], -2, 0);
+    assert_int_equal(me->type, TS_SHAPE_MESH);
+    assert_float_equal(me->mesh.p[3], 2, 0); /* vertex 1's x, in world space */
+    /* The default material is pbrt-v3's matte, Kd 0.5. */
+    assert_int_equal(s->materials[sp->material].type, TS_MATERIAL_DIFFUSE);
+    assert_float_equal(s->materials[sp->material].reflectance.g, 0.5f, 0);
+    ts_scene_destroy(s);
+}
+
+/* Facing: a triangle faces along (p1 − p0) × (p2 − p0); ReverseOrientation flips it; with
+ * normals pbrt-v3 turns the geometric normal toward them. An emitter shows it. */
+static void mesh_orientation(void **state)
+{
+    (void)state;
+    static const char *const cases[] = {
+        /* winding faces +z (toward the camera at z = 1 looking down −z) */
+        "Shape \"trianglemesh\" \"point P\" [-9 -9 0 9 -9 0 0 9 0] \"integer indices\" [0 1 2]\n",
+        "ReverseOrientation\n"
+        "Shape \"trianglemesh\" \"point P\" [-9 -9 0 9 -9 0 0 9 0] \"integer indices\" [0 1 2]\n",
+        /* winding faces −z, the normals +z: the normals win */
+        "Shape \"trianglemesh\" \"point P\" [-9 -9 0 0 9 0 9 -9 0] \"integer indices\" [0 1 2]"
+        " \"normal N\" [0 0 1 0 0 1 0 0 1]\n",
+    };
+    const bool lit[] = {true, false, true};
+    for (int i = 0; i < 3; i++) {
+        char text[1024];
+        snprintf(text, sizeof text,
+                 "LookAt 0 0 1  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 30\n"
+                 "Film \"image\" \"integer xresolution\" 4 \"integer yresolution\" 4\n"
+                 "Integrator \"path\" \"integer maxdepth\" 0\nWorldBegin\n"
+                 "AreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\n%sWorldEnd\n",
+                 cases[i]);
+        warnings w = {0};
+        ts_scene *s = load(text, &w);
+        ts_error err = {0};
+        ts_film *f = ts_film_create(4, 4, 0, 0, 4, 4, &err);
+        ts_render_stats st = {0};
+        ts_render_request req = {s, s->integrator.type, f, 0, 4, 1, NULL, NULL, NULL};
+        assert_int_equal(ts_render(&req, &st, &err), TS_OK);
+        float v = ts_film_pixel_rgb(f, 2, 2).g;
+        if ((v == 1) != lit[i]) fprintf(stderr, "case %d: centre pixel %g\n", i, v);
+        assert_true(lit[i] ? v == 1 : v == 0);
+        ts_film_destroy(f);
+        ts_scene_destroy(s);
+    }
+}
+
+/* Materials: pbrt-v3's parameter names, defaults and roughness remapping. */
+static void materials_mapped(void **state)
+{
+    (void)state;
+    warnings w = {0};
+    ts_scene *s =
+        load("WorldBegin\n"
+             "Material \"plastic\" \"rgb Kd\" [0.1 0.2 0.3] \"float roughness\" 0.3\n"
+             "Shape \"sphere\"\n"
+             "Material \"plastic\" \"float roughness\" 0.3 \"bool remaproughness\" \"false\"\n"
+             "Shape \"sphere\"\n"
+             "Material \"metal\"\nShape \"sphere\"\n"
+             "Material \"glass\" \"float index\" 1.33\nShape \"sphere\"\n"
+             "Material \"mirror\"\nShape \"sphere\"\n"
+             "Material \"substrate\" \"float uroughness\" 0.2 \"float vroughness\" 0.2\nShape \"sphere\"\n"
+             "Material \"matte\" \"spectrum Kd\" [300 0.5 800 0.5] \"float sigma\" 20\nShape \"sphere\"\n"
+             "WorldEnd\n",
+             &w);
+    const ts_material *m[7];
+    for (int i = 0; i < 7; i++)
+        m[i] = &s->materials[s->shapes[i].material];
+    assert_int_equal(m[0]->type, TS_MATERIAL_PLASTIC);
+    assert_true(m[0]->diffuse.b == 0.3f && m[0]->specular.r == 0.25f);
+    float x = logf(0.3f);
+    float alpha =
+        1.62142f + 0.819955f * x + 0.1734f * x * x + 0.0171201f * x * x * x + 0.000640711f * x * x * x * x;
+    assert_float_equal(m[0]->roughness, alpha, 1e-7);
+    assert_float_equal(m[1]->roughness, 0.3f, 0);
+    assert_int_equal(m[2]->type, TS_MATERIAL_CONDUCTOR);
+    ts_rgb eta, k;
+    ts_spectrum_copper(&eta, &k);
+    assert_true(m[2]->conductor_eta.r == eta.r && m[2]->conductor_k.b == k.b);
+    /* copper: n falls and k rises toward the red */
+    assert_true(eta.r < eta.b && k.r > k.b);
+    assert_int_equal(m[3]->type, TS_MATERIAL_DIELECTRIC);
+    assert_float_equal(m[3]->eta, 1.33f, 0);
+    assert_float_equal(m[3]->roughness, 0, 0);
+    assert_int_equal(m[4]->type, TS_MATERIAL_MIRROR);
+    assert_float_equal(m[4]->reflectance.r, 0.9f, 0);
+    assert_int_equal(m[5]->type, TS_MATERIAL_SUBSTRATE);
+    assert_int_equal(m[6]->type, TS_MATERIAL_DIFFUSE);
+    assert_float_equal(m[6]->sigma_deg, 20, 0);
+    ts_scene_destroy(s);
+}
+
+/* Every parameter nothing reads is warned about, once per message. */
+static void unused_parameters_warned(void **state)
+{
+    (void)state;
+    warnings w = {0};
+    ts_scene *s = load("WorldBegin\nShape \"sphere\" \"float radius\" 1 \"float bogus\" 2\n"
+                       "Shape \"sphere\" \"float bogus\" 2\nWorldEnd\n",
+                       &w);
+    assert_int_equal(w.n, 2); /* the first, then the count of repeats */
+    assert_string_equal(w.last, "1 more warnings like the ones above were not repeated");
+    ts_scene_destroy(s);
+    w = (warnings){0};
+    s = load("WorldBegin\nShape \"sphere\" \"float bogus\" 2\nWorldEnd\n", &w);
+    assert_int_equal(w.n, 1);
+    assert_string_equal(w.last, "t.pbrt:2:16: Shape \"sphere\": \"float bogus\" is not used");
+    ts_scene_destroy(s);
+}
+
+/* The same scene in two films: each pixel's value, bit for bit. */
+static void assert_same_pixels(const ts_scene *a, const ts_scene *b, uint32_t spp)
+{
+    assert_int_equal(a->width, b->width);
+    assert_int_equal(a->height, b->height);
+    ts_error err = {0};
+    ts_film *f[2];
+    const ts_scene *s[2] = {a, b};
+    for (int i = 0; i < 2; i++) {
+        f[i] = ts_film_create(s[i]->width, s[i]->height, s[i]->crop_x0, s[i]->crop_y0,
+                              s[i]->crop_x1 - s[i]->crop_x0, s[i]->crop_y1 - s[i]->crop_y0, &err);
+        assert_non_null(f[i]);
+        ts_render_stats st = {0};
+        ts_render_request req = {s[i], s[i]->integrator.type, f[i], 0, spp, 1, NULL, NULL, NULL};
+        assert_int_equal(ts_render(&req, &st, &err), TS_OK);
+    }
+    int differ = 0;
+    double sum = 0;
+    for (int y = a->crop_y0; y < a->crop_y1; y++)
+        for (int x = a->crop_x0; x < a->crop_x1; x++) {
+            ts_rgb p = ts_film_pixel_rgb(f[0], x, y), q = ts_film_pixel_rgb(f[1], x, y);
+            differ += memcmp(&p, &q, sizeof p) != 0;
+            sum += p.r + p.g + p.b;
+        }
+    assert_int_equal(differ, 0);
+    assert_true(sum > 0); /* the scene is not black: the comparison means something */
+    ts_film_destroy(f[0]);
+    ts_film_destroy(f[1]);
+}
+
+/* A scene using every mapping, for the round trips. */
+static const char every_mapping[] =
+    "LookAt 0 1 6  0 0.5 0  0 1 0\n"
+    "Camera \"perspective\" \"float fov\" 40 \"float lensradius\" 0.02 \"float focaldistance\" 6\n"
+    "Film \"image\" \"integer xresolution\" 24 \"integer yresolution\" 16 \"float cropwindow\" [0.1 0.9 0 "
+    "1]\n"
+    "PixelFilter \"mitchell\" \"float B\" 0.5 \"float C\" 0.25\n"
+    "Sampler \"halton\" \"integer pixelsamples\" 4\n"
+    "Integrator \"path\" \"integer maxdepth\" 4\n"
+    "WorldBegin\n"
+    "LightSource \"infinite\" \"blackbody L\" [5500 0.3]\n"
+    "LightSource \"spot\" \"point from\" [0 4 0] \"point to\" [0 0 0] \"rgb I\" [4 4 4]\n"
+    "LightSource \"distant\" \"point from\" [1 1 1] \"point to\" [0 0 0] \"rgb L\" [0.5 0.4 0.3]\n"
+    "AttributeBegin Translate 0 3 0 AreaLightSource \"diffuse\" \"rgb L\" [3 3 3] \"bool twosided\" "
+    "\"true\"\n"
+    "  Shape \"disk\" \"float radius\" 0.5 AttributeEnd\n"
+    "Material \"plastic\" \"rgb Kd\" [0.5 0.3 0.2]\n"
+    "Shape \"trianglemesh\" \"point P\" [-5 0 -5 5 0 -5 5 0 5 -5 0 5] \"integer indices\" [0 1 2 0 2 3]"
+    " \"float uv\" [0 0 1 0 1 1 0 1]\n"
+    "AttributeBegin Translate -1 0.5 0 Material \"glass\" Shape \"sphere\" \"float radius\" 0.5 "
+    "AttributeEnd\n"
+    "AttributeBegin Translate 1 0.5 0 Rotate 90 1 0 0 Material \"metal\" \"float roughness\" 0.1\n"
+    "  Shape \"cylinder\" \"float radius\" 0.3 \"float zmin\" -0.5 \"float zmax\" 0.5 AttributeEnd\n"
+    "AttributeBegin Translate 0 0.3 1 Scale 0.3 0.3 0.3 ReverseOrientation Material \"substrate\"\n"
+    "  Shape \"trianglemesh\" \"point P\" [0 0 0 1 0 0 0 1 0 0 0 1] \"integer indices\" [0 1 2 0 1 3 0 2 3 1 "
+    "2 3]\n"
+    "  \"normal N\" [-1 -1 -1 1 0 0 0 1 0 0 0 1]\n"
+    "AttributeEnd\nWorldEnd\n";
+
+/* `convert`'s document loads as JSON v1 and renders bit-identically to the .pbrt. */
+static void convert_round_trip(void **state)
+{
+    (void)state;
+    char path[512];
+    write_file("every.pbrt", every_mapping, path, sizeof path);
+    warnings w = {0};
+    char *json = NULL;
+    size_t len = 0;
+    ts_error err = {0};
+    assert_int_equal(ts_scene_convert_pbrt_path(path, NULL, on_warning, &w, &json, &len, &err), TS_OK);
+    ts_scene *a = NULL, *b = NULL;
+    assert_int_equal(ts_scene_load_path(path, NULL, NULL, NULL, &a, &err), TS_OK);
+    if (ts_scene_load_text(json, len, tmp_dir, "every", NULL, &b, &err)) fail_msg("%s", err.message);
+    assert_string_equal(a->name, b->name);
+    assert_int_equal(a->n_shapes, b->n_shapes);
+    assert_int_equal(a->n_lights, b->n_lights);
+    assert_same_pixels(a, b, 4);
+    free(json);
+    ts_scene_destroy(a);
+    ts_scene_destroy(b);
+}
+
+/* The same through the command line: render .pbrt and render of its conversion write the
+ * same EXR pixels. */
+static void cli_convert_and_render(void **state)
+{
+    (void)state;
+    const char *bin = getenv("TS_BINARY");
+    if (!bin) skip();
+    char pbrt[512], cmd[4096];
+    write_file("cli.pbrt", every_mapping, pbrt, sizeof pbrt);
+    snprintf(cmd, sizeof cmd,
+             "'%s' convert '%s' -o '%s/cli.json' --quiet && '%s' render '%s' --spp 2 --threads 2 --quiet -o "
+             "'%s/a.exr' 2>/dev/null && '%s' render '%s/cli.json' --spp 2 --threads 1 --quiet -o '%s/b.exr'",
+             bin, pbrt, tmp_dir, bin, pbrt, tmp_dir, bin, tmp_dir, tmp_dir);
+    assert_int_equal(system(cmd), 0);
+    char pa[512], pb[512];
+    snprintf(pa, sizeof pa, "%s/a.exr", tmp_dir);
+    snprintf(pb, sizeof pb, "%s/b.exr", tmp_dir);
+    ts_image ia = {0}, ib = {0};
+    ts_error err = {0};
+    assert_int_equal(ts_exr_read(pa, &ia, &err), TS_OK);
+    assert_int_equal(ts_exr_read(pb, &ib, &err), TS_OK);
+    assert_int_equal(ia.width, ib.width);
+    assert_int_equal(ia.n_channels, ib.n_channels);
+    assert_memory_equal(ia.data, ib.data, (size_t)ia.width * ia.height * ia.n_channels * sizeof(float));
+    ts_image_fini(&ia);
+    ts_image_fini(&ib);
+    /* A refused scene: exit 1, the sentence with its position, nothing written. */
+    write_file("bad.pbrt", "WorldBegin\nShape \"sphere\" \"float radius\" [1 2]\nWorldEnd\n", pbrt,
+               sizeof pbrt);
+    snprintf(cmd, sizeof cmd, "'%s' convert '%s' -o '%s/bad.json' 2>'%s/err.txt'", bin, pbrt, tmp_dir,
+             tmp_dir);
+    int rc = system(cmd);
+    assert_true(WIFEXITED(rc) && WEXITSTATUS(rc) == 1);
+    snprintf(pa, sizeof pa, "%s/bad.json", tmp_dir);
+    assert_int_not_equal(access(pa, F_OK), 0);
+    snprintf(pa, sizeof pa, "%s/err.txt", tmp_dir);
+    FILE *f = fopen(pa, "r");
+    char line[1024] = "";
+    assert_non_null(fgets(line, sizeof line, f));
+    fclose(f);
+    assert_non_null(strstr(line, "bad.pbrt:2:16: Shape \"sphere\": \"float radius\" expects 1 value, got 2"));
+}
+
+/* The digest: a function of the bytes read, not of the path; any byte changes it. */
+static void digest_of_bytes(void **state)
+{
+    (void)state;
+    char p1[512], p2[512], p3[512];
+    write_file("d1.pbrt", every_mapping, p1, sizeof p1);
+    write_file("d2.pbrt", every_mapping, p2, sizeof p2);
+    char changed[sizeof every_mapping];
+    memcpy(changed, every_mapping, sizeof changed);
+    *strstr(changed, "fov\" 40") = 'F'; /* "Fov": another parameter, same length */
+    write_file("d3.pbrt", changed, p3, sizeof p3);
+    ts_scene *a, *b, *c;
+    ts_error err = {0};
+    assert_int_equal(ts_scene_load_path(p1, NULL, NULL, NULL, &a, &err), TS_OK);
+    assert_int_equal(ts_scene_load_path(p2, NULL, NULL, NULL, &b, &err), TS_OK);
+    assert_int_equal(ts_scene_load_path(p3, NULL, NULL, NULL, &c, &err), TS_OK);
+    assert_string_equal(a->digest, b->digest);
+    assert_string_not_equal(a->digest, c->digest);
+    ts_scene_destroy(a);
+    ts_scene_destroy(b);
+    ts_scene_destroy(c);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(camera_lookat_orientation), cmocka_unit_test(camera_screen_window),
-        cmocka_unit_test(camera_orthographic),       cmocka_unit_test(filter_gaussian),
-        cmocka_unit_test(spectrum_equal_energy),     cmocka_unit_test(error_sentences),
+        cmocka_unit_test(camera_lookat_orientation),
+        cmocka_unit_test(camera_screen_window),
+        cmocka_unit_test(camera_orthographic),
+        cmocka_unit_test(filter_gaussian),
+        cmocka_unit_test(spectrum_equal_energy),
+        cmocka_unit_test(error_sentences),
+        cmocka_unit_test(lights_mapped),
+        cmocka_unit_test(shapes_mapped),
+        cmocka_unit_test(mesh_orientation),
+        cmocka_unit_test(materials_mapped),
+        cmocka_unit_test(unused_parameters_warned),
+        cmocka_unit_test(convert_round_trip),
+        cmocka_unit_test(cli_convert_and_render),
+        cmocka_unit_test(digest_of_bytes),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return cmocka_run_group_tests(tests, group_setup, group_teardown);
 }
