@@ -318,9 +318,12 @@ static void mesh_orientation(void **state)
         /* winding faces −z, the normals +z: the normals win */
         "Shape \"trianglemesh\" \"point P\" [-9 -9 0 0 9 0 9 -9 0] \"integer indices\" [0 1 2]"
         " \"normal N\" [0 0 1 0 0 1 0 0 1]\n",
+        /* a disk faces +z; ReverseOrientation turns it away */
+        "Shape \"disk\" \"float radius\" 9\n",
+        "ReverseOrientation Shape \"disk\" \"float radius\" 9\n",
     };
-    const bool lit[] = {true, false, true};
-    for (int i = 0; i < 3; i++) {
+    const bool lit[] = {true, false, true, true, false};
+    for (int i = 0; i < 5; i++) {
         char text[1024];
         snprintf(text, sizeof text,
                  "LookAt 0 0 1  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 30\n"
@@ -456,6 +459,12 @@ static const char every_mapping[] =
     "Shape \"trianglemesh\" \"point P\" [-5 0 -5 5 0 -5 5 0 5 -5 0 5] \"integer indices\" [0 1 2 0 2 3]"
     " \"float uv\" [0 0 1 0 1 1 0 1]\n"
     "AttributeBegin Translate -1 0.5 0 Material \"glass\" Shape \"sphere\" \"float radius\" 0.5 "
+    "AttributeEnd\n"
+    "AttributeBegin Translate 0 1.5 -1 Shape \"sphere\" \"float radius\" 0.4 \"float zmin\" -0.2 \"float "
+    "phimax\" 270\n"
+    "  ReverseOrientation AreaLightSource \"diffuse\" \"rgb L\" [1 2 1]\n"
+    "  Shape \"disk\" \"float radius\" 0.3 \"float phimax\" 200 \"float height\" 0.2\n"
+    "  Shape \"cylinder\" \"float radius\" 0.2 \"float zmin\" 0.5 \"float zmax\" -0.1 \"float phimax\" 120\n"
     "AttributeEnd\n"
     "AttributeBegin Translate 1 0.5 0 Rotate 90 1 0 0 Material \"metal\" \"float roughness\" 0.1\n"
     "  Shape \"cylinder\" \"float radius\" 0.3 \"float zmin\" -0.5 \"float zmax\" 0.5 AttributeEnd\n"

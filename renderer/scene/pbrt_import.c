@@ -1078,74 +1078,71 @@ static ts_status map_shape(imp *im, size_t si)
     ts_mesh_data md = {0};
     ts_status st = TS_OK;
     if (analytic) {
-        float phimax;
-        TRY(ts_pbrt_find_float(ps, "phimax", 360, &phimax, im->err));
-        if (phimax < 360) {
-            cJSON_Delete(j);
-            return derr(im, ps, sh->loc, TS_ERR_UNSUPPORTED,
-                        "partial shapes (phimax %g < 360) are not supported yet", phimax);
-        }
-        if (sh->reverse_orientation && (emits && !d.two_sided)) {
-            cJSON_Delete(j);
-            return derr(im, ps, sh->loc, TS_ERR_UNSUPPORTED,
-                        "ReverseOrientation on an emitting %s is not supported yet", t);
-        }
-        if (sh->reverse_orientation) {
-            /* Only a dielectric's inside is told by the normal; other BSDFs are two-sided. */
-            if (sh->material >= 0 && strcmp(im->s->materials[sh->material].type, "glass") == 0) {
-                cJSON_Delete(j);
-                return derr(im, ps, sh->loc, TS_ERR_UNSUPPORTED,
-                            "ReverseOrientation on a glass %s is not supported yet", t);
-            }
-        }
-        float radius;
-        TRY(ts_pbrt_find_float(ps, "radius", 1, &radius, im->err));
+        /* pbrt-v3's partial quadrics (scene_builder.h's ts_shape_cut) and its
+         * ReverseOrientation, which the builder applies as pbrt-v3's graphics state holds it. */
+        float phimax, radius;
+        if ((st = ts_pbrt_find_float(ps, "phimax", 360, &phimax, im->err)) ||
+            (st = ts_pbrt_find_float(ps, "radius", 1, &radius, im->err)))
+            goto fail;
+        phimax = ts_clampf(phimax, 0, 360);
         if (!(radius > 0) || !isfinite(radius)) {
-            cJSON_Delete(j);
-            return ts_pbrt_param_error(ps, ts_pbrt_params_get(ps, "radius"), im->err, TS_ERR_INVALID,
-                                       "must be a positive number, got %g", radius);
+            st = ts_pbrt_param_error(ps, ts_pbrt_params_get(ps, "radius"), im->err, TS_ERR_INVALID,
+                                     "must be a positive number, got %g", radius);
+            goto fail;
         }
+        if (!(phimax > 0)) {
+            st = ts_pbrt_param_error(ps, ts_pbrt_params_get(ps, "phimax"), im->err, TS_ERR_INVALID,
+                                     "leaves no surface (pbrt-v3 clamps it to [0, 360])");
+            goto fail;
+        }
+        d.reverse_orientation = sh->reverse_orientation;
         ts_xform place;
         if (t[0] == 's') {
             float zmin, zmax;
-            TRY(ts_pbrt_find_float(ps, "zmin", -radius, &zmin, im->err));
-            TRY(ts_pbrt_find_float(ps, "zmax", radius, &zmax, im->err));
-            if (fminf(zmin, zmax) > -radius || fmaxf(zmin, zmax) < radius) {
-                cJSON_Delete(j);
-                return derr(im, ps, sh->loc, TS_ERR_UNSUPPORTED,
-                            "partial spheres (zmin %g, zmax %g inside the radius %g) are not supported yet",
-                            zmin, zmax, radius);
-            }
+            if ((st = ts_pbrt_find_float(ps, "zmin", -radius, &zmin, im->err)) ||
+                (st = ts_pbrt_find_float(ps, "zmax", radius, &zmax, im->err)))
+                goto fail;
             d.type = TS_SHAPE_SPHERE;
             place = ts_xform_translate((ts_dvec3){0, 0, 0});
             d.sphere.radius = radius;
-            if (j) jok = jstring(j, "type", "sphere") && jnumber(j, "radius", radius);
+            if (phimax < 360 || fminf(zmin, zmax) > -radius || fmaxf(zmin, zmax) < radius)
+                d.cut = (ts_shape_cut){true, zmin, zmax, phimax};
+            if (j) {
+                jok = jstring(j, "type", "sphere") && jnumber(j, "radius", radius);
+                if (jok && d.cut.partial)
+                    jok = jnumber(j, "z_min", zmin) && jnumber(j, "z_max", zmax) &&
+                          jnumber(j, "phi_max", phimax);
+            }
         } else if (t[0] == 'd') {
             float height, inner;
-            TRY(ts_pbrt_find_float(ps, "height", 0, &height, im->err));
-            TRY(ts_pbrt_find_float(ps, "innerradius", 0, &inner, im->err));
+            if ((st = ts_pbrt_find_float(ps, "height", 0, &height, im->err)) ||
+                (st = ts_pbrt_find_float(ps, "innerradius", 0, &inner, im->err)))
+                goto fail;
             if (!(inner >= 0 && inner < radius)) {
-                cJSON_Delete(j);
-                return ts_pbrt_param_error(ps, ts_pbrt_params_get(ps, "innerradius"), im->err, TS_ERR_INVALID,
-                                           "must be in [0, radius %g), got %g", radius, inner);
+                st = ts_pbrt_param_error(ps, ts_pbrt_params_get(ps, "innerradius"), im->err, TS_ERR_INVALID,
+                                         "must be in [0, radius %g), got %g", radius, inner);
+                goto fail;
             }
             d.type = TS_SHAPE_DISK;
             ts_vec3 center = {0, 0, height}, normal = {0, 0, 1};
             place = ts_xform_frame(ts_dvec3_from(center), ts_dvec3_from(normal));
             d.disk.radius = radius;
             d.disk.inner_radius = inner;
+            if (phimax < 360) d.cut = (ts_shape_cut){true, 0, 0, phimax};
             if (j)
                 jok = jstring(j, "type", "disk") && jvec3(j, "center", center) &&
-                      jnumber(j, "radius", radius) && (inner == 0 || jnumber(j, "inner_radius", inner));
+                      jnumber(j, "radius", radius) && (inner == 0 || jnumber(j, "inner_radius", inner)) &&
+                      (!d.cut.partial || jnumber(j, "phi_max", phimax));
         } else {
             float zmin, zmax;
-            TRY(ts_pbrt_find_float(ps, "zmin", -1, &zmin, im->err));
-            TRY(ts_pbrt_find_float(ps, "zmax", 1, &zmax, im->err));
+            if ((st = ts_pbrt_find_float(ps, "zmin", -1, &zmin, im->err)) ||
+                (st = ts_pbrt_find_float(ps, "zmax", 1, &zmax, im->err)))
+                goto fail;
             float lo = fminf(zmin, zmax), hi = fmaxf(zmin, zmax);
             if (!(hi > lo)) {
-                cJSON_Delete(j);
-                return derr(im, ps, sh->loc, TS_ERR_INVALID, "zmin and zmax must differ, got %g and %g", zmin,
-                            zmax);
+                st = derr(im, ps, sh->loc, TS_ERR_INVALID, "zmin and zmax must differ, got %g and %g", zmin,
+                          zmax);
+                goto fail;
             }
             d.type = TS_SHAPE_CYLINDER;
             ts_vec3 p0 = {0, 0, lo}, p1 = {0, 0, hi};
@@ -1153,10 +1150,13 @@ static ts_status map_shape(imp *im, size_t si)
             place = ts_xform_frame(ts_dvec3_from(p0), axis);
             d.cylinder.radius = radius;
             d.cylinder.height = ts_dvec3_length(axis);
+            /* as the JSON front end gives it: the tube from p0 to p1 */
+            if (phimax < 360) d.cut = (ts_shape_cut){true, 0, d.cylinder.height, phimax};
             if (j)
                 jok = jstring(j, "type", "cylinder") && jvec3(j, "p0", p0) && jvec3(j, "p1", p1) &&
-                      jnumber(j, "radius", radius);
+                      jnumber(j, "radius", radius) && (!d.cut.partial || jnumber(j, "phi_max", phimax));
         }
+        if (j && d.reverse_orientation) jok = jok && jbool(j, "reverse_orientation", true);
         d.to_world = ts_xform_compose(&user, &place);
     } else {
         d.type = TS_SHAPE_MESH;
@@ -1209,6 +1209,7 @@ static ts_status map_shape(imp *im, size_t si)
         else
             j = NULL;
     }
+fail:
     cJSON_Delete(j);
     ts_mesh_data_free(&md);
     return st;
