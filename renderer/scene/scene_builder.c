@@ -18,6 +18,7 @@
 #include "lights/envmap.h"
 #include "materials/fourier_bsdf.h"
 #include "scene/mesh_file.h"
+#include "scene/mesh_subdiv.h"
 #include "scene/scene_path.h"
 
 struct ts_scene_builder {
@@ -714,6 +715,20 @@ ts_status ts_scene_builder_add_shape(ts_scene_builder *b, const ts_shape_desc *d
     if (id) *id = b->n_shapes;
     b->n_shapes++;
     return TS_OK;
+}
+
+ts_status ts_scene_builder_loop_subdivide(ts_scene_builder *b, const ts_mesh *control, uint32_t levels,
+                                          ts_mesh_data *out, ts_error *err)
+{
+    *out = (ts_mesh_data){0};
+    TRY(usable(b, err));
+    uint64_t left = b->lim.max_triangles > b->n_triangles ? b->lim.max_triangles - b->n_triangles : 0;
+    ts_status st = ts_mesh_loop_subdivide(control->p, control->n_vertices, control->index, control->n_triangles,
+                                          levels, left ? left : 1, out, err);
+    if (st == TS_ERR_LIMIT)
+        return ts_error_set(err, TS_ERR_LIMIT, "%u levels of subdivision exceed the scene's limit of %llu triangles",
+                            levels, (unsigned long long)b->lim.max_triangles);
+    return st;
 }
 
 /* ---------------------------------------------------------------- lights */

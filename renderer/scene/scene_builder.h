@@ -132,6 +132,13 @@ ts_status ts_scene_builder_load_envmap(ts_scene_builder *b, const char *rel_path
 ts_status ts_scene_builder_load_mesh(ts_scene_builder *b, const char *rel_path, ts_mesh_data *out,
                                      ts_error *err);
 
+/* pbrt-v3's `loopsubdiv` (mesh_subdiv.h): the limit surface of the control mesh (object
+ * space; its positions and indices only) after `levels` Loop refinements, into *out
+ * (object space, with normals; owned by the caller, ts_mesh_data_free) for
+ * ts_scene_builder_add_shape, bounded by what is left of limits.max_triangles. */
+ts_status ts_scene_builder_loop_subdivide(ts_scene_builder *b, const ts_mesh *control, uint32_t levels,
+                                          ts_mesh_data *out, ts_error *err);
+
 /* ---- elements */
 
 /* Adds a material (copied) under name (copied; unique; NULL: an anonymous material no

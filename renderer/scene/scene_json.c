@@ -18,6 +18,7 @@
 #include "integrators/effects.h"
 #include "scene/json_check.h"
 #include "scene/mesh_read.h"
+#include "scene/mesh_subdiv.h"
 #include "scene/scene_digest.h"
 #include "scene/scene_path.h"
 
@@ -618,7 +619,7 @@ static ts_status parse_cut(loader *ld, const cJSON *sh, const char *path, double
 /* Reads shape sh into *d (a mesh's arrays into *arrays, which the caller frees). */
 static ts_status parse_shape(loader *ld, const cJSON *sh, const char *path, ts_shape_desc *d, ts_mesh_data *arrays)
 {
-    static const char *const types[] = {"sphere", "disk", "cylinder", "mesh", NULL};
+    static const char *const types[] = {"sphere", "disk", "cylinder", "mesh", "loopsubdiv", NULL};
     if (!cJSON_IsObject(sh)) return ts_json_check_object(sh, path, types, ld->err);
     int type = 0;
     TRY(ts_json_enum(sh, path, "type", true, types, &type, ld->err));
@@ -627,12 +628,14 @@ static ts_status parse_shape(loader *ld, const cJSON *sh, const char *path, ts_s
     static const char *const k_disk[] = {COMMON, "center", "normal", "radius", "inner_radius", "phi_max", NULL};
     static const char *const k_cyl[] = {COMMON, "p0", "p1", "radius", "phi_max", NULL};
     static const char *const k_mesh[] = {COMMON, "positions", "indices", "normals", "uvs", "file", NULL};
+    static const char *const k_subdiv[] = {COMMON, "positions", "indices", "levels", NULL};
 #undef COMMON
-    const char *const *keys[] = {k_sphere, k_disk, k_cyl, k_mesh};
+    const char *const *keys[] = {k_sphere, k_disk, k_cyl, k_mesh, k_subdiv};
     TRY(ts_json_check_object(sh, path, keys[type], ld->err));
 
     *d = (ts_shape_desc){0};
-    d->type = (ts_shape_type)type;
+    const bool subdiv = type == 4; /* a loopsubdiv control mesh: refined into a mesh here */
+    d->type = subdiv ? TS_SHAPE_MESH : (ts_shape_type)type;
     const char *mat;
     TRY(ts_json_string(sh, path, "material", true, &mat, ld->err));
     d->material = ts_scene_builder_find_material(ld->b, mat);
@@ -697,6 +700,19 @@ static ts_status parse_shape(loader *ld, const cJSON *sh, const char *path, ts_s
     case TS_SHAPE_MESH:
         d->to_world = user; /* the builder takes the vertices to world space */
         TRY(parse_mesh(ld, sh, path, arrays, &d->mesh));
+        if (subdiv) {
+            double levels = 3;
+            TRY(ts_json_number(sh, path, "levels", false, TS_J_NONNEG, &levels, ld->err));
+            ts_jpath lp = ts_jpath_key(path, "levels");
+            if (levels != floor(levels) || levels > TS_SUBDIV_MAX_LEVELS)
+                return ts_error_set(ld->err, TS_ERR_INVALID, "%s: expected an integer in [0, %d], got %g", lp.s,
+                                    TS_SUBDIV_MAX_LEVELS, levels);
+            ts_mesh_data fine = {0};
+            TRY(at(ts_scene_builder_loop_subdivide(ld->b, &d->mesh, (uint32_t)levels, &fine, ld->err), path, ld->err));
+            ts_mesh_data_free(arrays);
+            *arrays = fine;
+            d->mesh = (ts_mesh){fine.n_vertices, fine.n_triangles, fine.p, fine.n, fine.uv, fine.index};
+        }
         break;
     }
     return TS_OK;
