@@ -12,7 +12,7 @@ CMAKE_ARGS ?=
 
 # Debian packages the build and tests need (docs/design.md §3).
 DEB_PACKAGES := cmake make gcc pkg-config libembree-dev libopenexr-dev libpng-dev libcjson-dev nettle-dev \
-                libmicrohttpd-dev libcmocka-dev libcurl4-openssl-dev \
+                libmicrohttpd-dev libarchive-dev libcmocka-dev libcurl4-openssl-dev \
                 clang libclang-rt-14-dev wrk curl
 # (clang + libclang-rt: the libFuzzer harnesses, whose smoke runs are part of `make test`;
 #  wrk + curl: the load test bench/load, whose light version is part of `make test`.)

@@ -7,9 +7,13 @@
 #include <string.h>
 #include <strings.h>
 #include <arpa/inet.h>
+#include <errno.h>
+#include <sys/random.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
 
 #include "assets.h"
+#include "bundle.h"
 #include "job_store.h"
 #include "persist.h"
 #include "tessera.h"
@@ -182,10 +186,13 @@ static bool media_type_is(const char *v, const char *want)
  * so no page of another site can post through a browser (HTML forms and "simple" fetches
  * can only send text/plain, form encodings or none); with a token (which such a page
  * cannot send) also text/plain, application/x-www-form-urlencoded or none, read as JSON. */
-static bool post_type_ok(srv_request *r)
+static bool post_type_ok(srv_request *r, srv_route route)
 {
     const char *type = MHD_lookup_connection_value(r->conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_TYPE);
     if (type && media_type_is(type, "application/json")) return true;
+    /* A bundle's types are not ones a page of another site can send without a CORS
+     * preflight either (docs/security.md). */
+    if (route == SRV_ROUTE_JOBS && srv_bundle_media_type(type)) return true;
     if (!((srv_api *)r->app)->token) return false;
     return !type || media_type_is(type, "text/plain") || media_type_is(type, "application/x-www-form-urlencoded");
 }
@@ -452,6 +459,132 @@ static int post_job(srv_request *r)
     return srv_http_queue(r, 201, resp);
 }
 
+/* ---------------------------------------------------------------- bundles */
+
+/* The 201 of a job just accepted, as the reply of request r (deferred or not): its
+ * status document and Location. Persists it first with --data. */
+static void accepted(srv_request *r, srv_job *j)
+{
+    const srv_api *a = r->app;
+    if (a->data_dir) {
+        ts_error perr = {0};
+        if (srv_persist_save_submitted(a->data_dir, j, &perr) && srv_job_set_checkpoint_error(j, perr.message))
+            fprintf(stderr, "tessera: recording job %s failed, it renders on unrecorded: %s\n", j->id, perr.message);
+    }
+    cJSON *o = srv_job_status_json(j);
+    char *s = o ? cJSON_PrintUnformatted(o) : NULL;
+    cJSON_Delete(o);
+    if (!s) {
+        srv_http_set_error(r, 500, "out of memory");
+        return;
+    }
+    r->reply_status = 201;
+    r->reply_type = "application/json";
+    r->reply_body = (unsigned char *)s;
+    r->reply_len = strlen(s);
+    snprintf(r->reply_location, sizeof r->reply_location, API_PREFIX "/%s", j->id);
+}
+
+/* Reads a regular file of at most max bytes (NUL-terminated); NULL with errno. */
+static char *read_scene_file(const char *path, uint64_t max, size_t *len)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return NULL;
+    char *buf = NULL;
+    size_t n = 0, cap = 0;
+    for (;;) {
+        if (n + 65537 > cap) {
+            cap = cap ? 2 * cap : 65536 + 1;
+            char *b = realloc(buf, cap);
+            if (!b) break;
+            buf = b;
+        }
+        size_t k = fread(buf + n, 1, cap - n - 1, f);
+        n += k;
+        if (k == 0 || n > max) break;
+    }
+    bool ok = buf && !ferror(f) && n <= max && n + 1 <= cap;
+    fclose(f);
+    if (!ok) {
+        free(buf);
+        errno = EIO;
+        return NULL;
+    }
+    buf[n] = '\0';
+    *len = n;
+    return buf;
+}
+
+/* On an encoder thread (bundle.h: unpacking writes files): unpack into
+ * ROOT/incoming/<random>, load the scene from there, and the store moves the folder to the
+ * job's once the scene loaded; anything that fails removes the folder. */
+static void bundle_task(void *arg)
+{
+    srv_request *r = arg;
+    const srv_api *a = r->app;
+    ts_error err = {0};
+    int status = 500;
+    char staging[4096] = "";
+    unsigned char rnd[8];
+    if (!srv_store_has_room(a->store)) {
+        srv_http_set_error(r, 503, "this server already holds as many jobs as its limit (--max-jobs); no new job can be "
+                                   "queued");
+        goto done;
+    }
+    if (getrandom(rnd, sizeof rnd, 0) != (ssize_t)sizeof rnd) {
+        srv_http_set_error(r, 500, "no random bytes for a folder name: %s", strerror(errno));
+        goto done;
+    }
+    snprintf(staging, sizeof staging, "%s/incoming", a->files_root);
+    if (mkdir(staging, 0700) != 0 && errno != EEXIST) {
+        srv_http_set_error(r, 500, "cannot make the folder for bundles: %s", strerror(errno));
+        staging[0] = '\0';
+        goto done;
+    }
+    snprintf(staging, sizeof staging, "%s/incoming/%02x%02x%02x%02x%02x%02x%02x%02x", a->files_root, rnd[0], rnd[1],
+             rnd[2], rnd[3], rnd[4], rnd[5], rnd[6], rnd[7]);
+    srv_bundle_info info;
+    if (srv_bundle_unpack(r->body, r->body_len, staging, a->bundle, &info, &status, &err)) {
+        srv_http_set_error(r, (unsigned)status, "%s", err.message);
+        staging[0] = '\0'; /* the unpacker removed it */
+        goto done;
+    }
+    char path[4200];
+    snprintf(path, sizeof path, "%s/%s", staging, info.scene_file);
+    size_t len = 0;
+    char *text = read_scene_file(path, a->bundle->max_entry_bytes, &len);
+    if (!text) {
+        srv_http_set_error(r, 500, "the bundle's %s cannot be read back: %s", info.scene_file, strerror(errno));
+        goto done;
+    }
+    srv_submit_files files = {!strcmp(info.scene_file, "scene.pbrt"), staging, a->files_root};
+    srv_job *j = srv_store_submit_files(a->store, text, len, &files, &status, &err);
+    free(text);
+    if (!j) {
+        srv_http_set_error(r, (unsigned)status, "%s: %s", info.scene_file, err.message);
+        goto done;
+    }
+    staging[0] = '\0'; /* the job's now */
+    accepted(r, j);
+    srv_job_release(j);
+done:
+    if (staging[0] && srv_bundle_remove_tree(staging) != 0)
+        fprintf(stderr, "tessera: removing a refused bundle's folder %s: %s\n", staging, strerror(errno));
+    srv_http_complete(r);
+}
+
+static int post_bundle(srv_request *r)
+{
+    const srv_api *a = r->app;
+    if (!a->bundle || !a->files_root)
+        return srv_http_error(r, 415, "this server takes no bundles: post the scene as JSON");
+    const char *enc = MHD_lookup_connection_value(r->conn, MHD_HEADER_KIND, "Content-Encoding");
+    if (enc && strcasecmp(enc, "gzip") && strcasecmp(enc, "x-gzip") && strcasecmp(enc, "identity"))
+        return srv_http_error(r, 415, "a bundle may be gzip-compressed, not '%s' (Content-Encoding)", enc);
+    if (!r->body_len) return srv_http_error(r, 400, "the request body is empty: send a tar of scene.json or scene.pbrt and its files");
+    return srv_http_defer(r, bundle_task);
+}
+
 static int list_jobs(srv_request *r)
 {
     int n = 0;
@@ -574,9 +707,16 @@ static int handle(srv_request *r)
         MHD_add_response_header(resp, MHD_HTTP_HEADER_WWW_AUTHENTICATE, "Bearer realm=\"tessera\"");
         return srv_http_queue(r, 401, resp);
     }
-    if (!strcmp(m, "POST") && !post_type_ok(r)) {
+    if (!strcmp(m, "POST") && !post_type_ok(r, p.route)) {
         const char *type = MHD_lookup_connection_value(r->conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_TYPE);
-        return srv_http_error(r, 415, "a POST is JSON: send Content-Type: application/json (got %s)",
+        if (p.route == SRV_ROUTE_JOBS)
+            return srv_http_error(r, 415,
+                                  "a job is posted as JSON (Content-Type: application/json) or as a tar bundle of a scene "
+                                  "with its files (application/x-tar, optionally gzip-compressed); got %s",
+                                  type ? type : "none");
+        return srv_http_error(r, 415,
+                              "a POST needs Content-Type: application/json (an empty body is fine): pages of other sites "
+                              "cannot send it (got %s)",
                               type ? type : "none");
     }
     switch (p.route) {
@@ -593,6 +733,9 @@ static int handle(srv_request *r)
         if (!get) return srv_http_method_not_allowed(r, "GET, HEAD");
         return metrics(r);
     case SRV_ROUTE_JOBS:
+        if (!strcmp(m, "POST") &&
+            srv_bundle_media_type(MHD_lookup_connection_value(r->conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_TYPE)))
+            return post_bundle(r);
         if (!strcmp(m, "POST")) return post_job(r);
         if (!get) return srv_http_method_not_allowed(r, "GET, HEAD, POST");
         return list_jobs(r);
@@ -613,7 +756,14 @@ static int handle(srv_request *r)
                 return srv_http_error(r, 409, "job '%s' has not ended; cancel it first (POST %s/%s/cancel)", p.id,
                                       API_PREFIX, p.id);
             }
-            if (srv_store_remove(cfg->store, j) && cfg->data_dir) srv_persist_remove(cfg->data_dir, j);
+            bool removed = srv_store_remove(cfg->store, j);
+            if (removed && cfg->data_dir) srv_persist_remove(cfg->data_dir, j); /* the bundle's folder with it */
+            else if (removed && j->files_dir) {
+                char folder[4096];
+                snprintf(folder, sizeof folder, "%s/jobs/%s", cfg->files_root, j->id);
+                if (srv_bundle_remove_tree(folder) != 0)
+                    fprintf(stderr, "tessera: removing %s: %s\n", folder, strerror(errno));
+            }
             srv_job_release(j);
             return srv_http_reply(r, 204, NULL, "", 0);
         }

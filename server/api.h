@@ -28,6 +28,11 @@ typedef struct srv_api {
     struct srv_metrics *metrics;
     struct srv_events_limits *sse_limits; /* event-stream subscriber caps */
     struct srv_persist_stats *persist;    /* checkpoint counters (--data), or NULL */
+    /* Bundles (POST of a tar, bundle.h): their limits, and the folder under which jobs'
+     * files go (incoming/ while unpacking, jobs/<id>/files after): --data, or the server's
+     * temporary folder. NULL: bundles are refused (415). */
+    const struct srv_bundle_limits *bundle;
+    const char *files_root;
 } srv_api;
 
 /* The handler table of API v1 over api (srv_http_start takes it). */

@@ -1,5 +1,6 @@
 /* http.c — libmicrohttpd glue; see http.h. */
 #include "http.h"
+#include "bundle.h"
 
 #include <arpa/inet.h>
 #include <cjson/cJSON.h>
@@ -85,6 +86,26 @@ static void utf8_clean(const char *s, char *out, size_t out_len)
         u += n ? n : 1;
     }
     out[at] = '\0';
+}
+
+void srv_http_set_error(srv_request *r, unsigned status, const char *fmt, ...)
+{
+    char text[1024], msg[1024];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(text, sizeof text, fmt, ap);
+    va_end(ap);
+    utf8_clean(text, msg, sizeof msg);
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddStringToObject(o, "error", msg);
+    cJSON_AddNumberToObject(o, "status", status);
+    char *s = cJSON_PrintUnformatted(o);
+    cJSON_Delete(o);
+    free(r->reply_body);
+    r->reply_status = s ? status : 500;
+    r->reply_type = "application/json";
+    r->reply_body = (unsigned char *)(s ? s : strdup("{\"error\":\"out of memory\",\"status\":500}"));
+    r->reply_len = r->reply_body ? strlen((char *)r->reply_body) : 0;
 }
 
 int srv_http_error(srv_request *r, unsigned status, const char *fmt, ...)
@@ -173,6 +194,7 @@ static int reply_deferred(srv_request *r)
     r->reply_body = NULL; /* the response frees it */
     if (r->reply_type) MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, r->reply_type);
     if (r->reply_disposition[0]) MHD_add_response_header(resp, "Content-Disposition", r->reply_disposition);
+    if (r->reply_location[0]) MHD_add_response_header(resp, MHD_HTTP_HEADER_LOCATION, r->reply_location);
     return srv_http_queue(r, r->reply_status, resp);
 }
 
@@ -221,12 +243,17 @@ static enum MHD_Result handler(void *cls, struct MHD_Connection *conn, const cha
             r->body_too_large = true; /* discard the body */
             return (enum MHD_Result)srv_http_error(r, 400, "the request has %d Content-Length headers; send one", n_cl);
         }
+        /* A bundle (a tar of a scene with its files, bundle.h) has a cap of its own. */
+        r->max_body = h->cfg.max_body;
+        if (h->cfg.max_bundle_body &&
+            srv_bundle_media_type(MHD_lookup_connection_value(conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_TYPE)))
+            r->max_body = h->cfg.max_bundle_body;
         const char *cl = MHD_lookup_connection_value(conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH);
-        if (cl && strtoull(cl, NULL, 10) > h->cfg.max_body) {
+        if (cl && strtoull(cl, NULL, 10) > r->max_body) {
             r->method = method, r->url = url;
             r->body_too_large = true;
             return (enum MHD_Result)srv_http_error(r, 413, "the request body (%s bytes) is larger than the limit of %zu bytes",
-                                                   cl, h->cfg.max_body);
+                                                   cl, r->max_body);
         }
         return MHD_YES;
     }
@@ -239,7 +266,7 @@ static enum MHD_Result handler(void *cls, struct MHD_Connection *conn, const cha
     if (*upload_size) {
         size_t n = *upload_size;
         *upload_size = 0;
-        if (r->body_too_large || r->body_len + n > h->cfg.max_body) {
+        if (r->body_too_large || r->body_len + n > r->max_body) {
             r->body_too_large = true;
             return MHD_YES; /* keep reading, discard */
         }
@@ -258,7 +285,7 @@ static enum MHD_Result handler(void *cls, struct MHD_Connection *conn, const cha
     }
     if (r->body_too_large)
         return (enum MHD_Result)srv_http_error(r, 413, "the request body is larger than the limit of %zu bytes",
-                                               h->cfg.max_body);
+                                               r->max_body);
     return (enum MHD_Result)h->handlers.handle(r);
 }
 

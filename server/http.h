@@ -33,6 +33,7 @@ typedef struct srv_request {
     char *body;
     size_t body_len, body_cap;
     bool body_too_large;
+    size_t max_body;          /* this request's body cap (config.max_body, or max_bundle_body) */
     srv_route route;
     unsigned status;          /* answered status, for metrics */
     double t_start;           /* monotonic seconds at its first call, for the log */
@@ -45,6 +46,7 @@ typedef struct srv_request {
     unsigned char *reply_body; /* malloc'd; ownership passes to the response */
     size_t reply_len;
     char reply_disposition[128];
+    char reply_location[96];  /* a Location header, or "" */
     void *task;               /* api.c's task state */
 } srv_request;
 
@@ -60,6 +62,7 @@ typedef struct srv_http_config {
     struct srv_metrics *metrics; /* every answer is counted here */
     struct srv_offload *offload; /* the pool srv_http_defer runs tasks on */
     struct srv_log *log;         /* every request at debug level (method, URL, status, time); NULL: none */
+    size_t max_bundle_body;      /* the cap of a body sent as a bundle (srv_bundle_media_type); 0: max_body */
 } srv_http_config;
 
 /* The routes: `route` names a URL's route (for metrics) on a request's first call,
@@ -91,6 +94,8 @@ int srv_http_reply(srv_request *r, unsigned status, const char *type, const void
 /* Replies with a JSON document ({"error": message} for srv_http_error). */
 int srv_http_reply_json(srv_request *r, unsigned status, const char *json);
 int srv_http_error(srv_request *r, unsigned status, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+/* For a deferred task: sets the reply to that error document (as srv_http_error's). */
+void srv_http_set_error(srv_request *r, unsigned status, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 /* 405 with Allow. */
 int srv_http_method_not_allowed(srv_request *r, const char *allow);
 /* Queues a prepared response (takes ownership). */

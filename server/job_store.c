@@ -1,13 +1,16 @@
 /* job_store.c — jobs, their events and status documents; see job_store.h. */
 #include "job_store.h"
 
+#include <errno.h>
 #include <fcntl.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/random.h>
+#include <sys/stat.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "tessera.h"
 
@@ -39,6 +42,7 @@ static void job_free(srv_job *j)
     free(j->hist);
     free(j->name);
     free(j->scene_text);
+    free(j->files_dir);
     free(j);
 }
 
@@ -403,9 +407,24 @@ static void release_slot(srv_store *st)
     pthread_mutex_unlock(&st->mu);
 }
 
-static srv_job *submit(srv_store *st, const char *text, size_t len, int *http_status, ts_error *err);
+static srv_job *submit(srv_store *st, const char *text, size_t len, const srv_submit_files *files, int *http_status,
+                       ts_error *err);
+
+bool srv_store_has_room(srv_store *st)
+{
+    pthread_mutex_lock(&st->mu);
+    bool ok = st->cfg.max_jobs <= 0 || st->n_jobs + st->n_pending < st->cfg.max_jobs;
+    pthread_mutex_unlock(&st->mu);
+    return ok;
+}
 
 srv_job *srv_store_submit(srv_store *st, const char *text, size_t len, int *http_status, ts_error *err)
+{
+    return srv_store_submit_files(st, text, len, NULL, http_status, err);
+}
+
+srv_job *srv_store_submit_files(srv_store *st, const char *text, size_t len, const srv_submit_files *files,
+                                int *http_status, ts_error *err)
 {
     /* Checked before the document is parsed: a full server allocates nothing for it. */
     int max_jobs = st->cfg.max_jobs;
@@ -415,7 +434,7 @@ srv_job *srv_store_submit(srv_store *st, const char *text, size_t len, int *http
                      "this server already holds %d jobs, its limit (--max-jobs); no new job can be queued", max_jobs);
         return NULL;
     }
-    srv_job *j = submit(st, text, len, http_status, err);
+    srv_job *j = submit(st, text, len, files, http_status, err);
     release_slot(st); /* after store_add: the job now counts in n_jobs */
     return j;
 }
@@ -447,7 +466,35 @@ static bool strings_fit(const cJSON *o, char *path, size_t at, size_t cap, ts_er
     return true;
 }
 
-static srv_job *submit(srv_store *st, const char *text, size_t len, int *http_status, ts_error *err)
+/* Moves a bundle's unpacked folder to ROOT/jobs/<id>/files: false with errno on failure. */
+static bool move_files(const srv_submit_files *files, const char *id, char **out)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/jobs", files->files_root);
+    if (mkdir(path, 0700) != 0 && errno != EEXIST) return false;
+    snprintf(path, sizeof path, "%s/jobs/%s", files->files_root, id);
+    if (mkdir(path, 0700) != 0 && errno != EEXIST) return false;
+    snprintf(path, sizeof path, "%s/jobs/%s/files", files->files_root, id);
+    if (rename(files->staging_dir, path) != 0) {
+        int e = errno;
+        snprintf(path, sizeof path, "%s/jobs/%s", files->files_root, id);
+        rmdir(path);
+        errno = e;
+        return false;
+    }
+    if (!(*out = strdup(path))) {
+        /* Put it back, so the caller's clean-up finds it. */
+        (void)rename(path, files->staging_dir);
+        snprintf(path, sizeof path, "%s/jobs/%s", files->files_root, id);
+        rmdir(path);
+        errno = ENOMEM;
+        return false;
+    }
+    return true;
+}
+
+static srv_job *submit(srv_store *st, const char *text, size_t len, const srv_submit_files *files, int *http_status,
+                       ts_error *err)
 {
     const srv_store_config *cfg = &st->cfg;
     /* Every string has a length limit, checked before anything is loaded. A document that
@@ -469,7 +516,9 @@ static srv_job *submit(srv_store *st, const char *text, size_t len, int *http_st
     lim.max_width = def.max_width, lim.max_height = def.max_height;
     lim.max_pixels = def.max_pixels, lim.max_spp = def.max_spp;
     ts_scene *s = NULL;
-    ts_status stt = ts_scene_load_text(text, len, cfg->assets_dir, "scene", &lim, &s, err);
+    ts_status stt = !files ? ts_scene_load_text(text, len, cfg->assets_dir, "scene", &lim, &s, err)
+                    : files->pbrt ? ts_scene_load_pbrt_text(text, len, files->staging_dir, "scene", &lim, NULL, NULL, &s, err)
+                                  : ts_scene_load_text(text, len, files->staging_dir, "scene", &lim, &s, err);
     if (stt) {
         *http_status = stt == TS_ERR_LIMIT ? 413 : stt == TS_ERR_NOMEM ? 500 : 400;
         return NULL;
@@ -529,6 +578,16 @@ static srv_job *submit(srv_store *st, const char *text, size_t len, int *http_st
         if (j) job_free(j);
         goto fail_scene;
     }
+    if (files) {
+        /* The scene is loaded (files are read only while loading): the folder moves under
+         * the job's id before the job is listed. */
+        j->scene_pbrt = files->pbrt;
+        if (!move_files(files, j->id, &j->files_dir)) {
+            ts_error_set(err, TS_ERR_IO, "cannot move the bundle into the job's folder: %s", strerror(errno));
+            job_free(j);
+            goto fail_scene;
+        }
+    }
     j->settings = js;
     srv_events_set_items(j->events, j->nx * j->ny);
     struct timespec now;
@@ -576,6 +635,12 @@ srv_job *srv_store_restore(srv_store *st, const srv_restore *r, ts_error *err)
     j->settings = r->settings;
     j->created_unix = r->created_unix;
     if ((r->name && !(j->name = strdup(r->name))) || (r->scene && !describe_scene(j, r->scene))) {
+        job_free(j);
+        ts_error_set(err, TS_ERR_NOMEM, "out of memory for a job");
+        return NULL;
+    }
+    j->scene_pbrt = r->scene_pbrt;
+    if (r->files_dir && !(j->files_dir = strdup(r->files_dir))) {
         job_free(j);
         ts_error_set(err, TS_ERR_NOMEM, "out of memory for a job");
         return NULL;

@@ -26,8 +26,10 @@ typedef struct srv_job {
     /* immutable once the job is in the store */
     char id[24];
     char *name;                  /* may be NULL */
-    char *scene_text;            /* the posted document */
+    char *scene_text;            /* the posted document (a bundle's scene file) */
     size_t scene_len;
+    char *files_dir;             /* a bundle's folder (ROOT/jobs/<id>/files, bundle.h), or NULL */
+    bool scene_pbrt;             /* scene_text is pbrt-v3 text (a bundle's scene.pbrt) */
     srv_display *display;        /* streaming to a tev display server, or NULL (thread-safe itself) */
     char integrator[16];
     char effects[256];           /* "diffuse, area_lights, …" */
@@ -94,6 +96,21 @@ void srv_store_destroy(srv_store *st);
  * err's sentence say why. The returned job carries a reference for the caller. */
 srv_job *srv_store_submit(srv_store *st, const char *text, size_t len, int *http_status, ts_error *err);
 
+/* A posted bundle's scene (api.c, bundle.h): its scene file's text is loaded with the
+ * folder the bundle was unpacked in as the base of every file it names; once the scene
+ * loaded, that folder is renamed to files_root/jobs/<id>/files (the job's files_dir,
+ * removed with the job). On failure the unpacked folder is left to the caller. */
+typedef struct srv_submit_files {
+    bool pbrt;                /* the scene file is scene.pbrt; else scene.json */
+    const char *staging_dir;  /* where the bundle was unpacked */
+    const char *files_root;   /* --data DIR, or the server's temporary folder */
+} srv_submit_files;
+srv_job *srv_store_submit_files(srv_store *st, const char *text, size_t len, const srv_submit_files *files,
+                                int *http_status, ts_error *err);
+/* False when the store holds config.max_jobs jobs (a hint before unpacking a bundle; the
+ * submission itself decides). */
+bool srv_store_has_room(srv_store *st);
+
 /* Restores a checkpointed job (persist.c): takes ownership of scene (may be NULL when
  * finished) and film; tile_spp per tile. Returns a new reference or NULL. */
 typedef struct srv_restore {
@@ -108,6 +125,8 @@ typedef struct srv_restore {
     ts_job_settings settings;    /* integrator: the scene's, or AO when there is none */
     const char *failure;         /* non-NULL: register as failed with this message */
     const cJSON *history;        /* the checkpoint's "history" array, or NULL */
+    const char *files_dir;       /* a bundle job's folder (copied), or NULL */
+    bool scene_pbrt;             /* scene_text is a bundle's scene.pbrt */
 } srv_restore;
 srv_job *srv_store_restore(srv_store *st, const srv_restore *r, ts_error *err);
 

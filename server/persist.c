@@ -12,6 +12,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "bundle.h"
 #include "tessera.h"
 
 /* film.bin: the header, the tiles' spp (uint32 each), the pixels (ts_film_pixel each). The
@@ -109,7 +110,10 @@ static ts_status save_files(const char *dir, srv_job *j, bool with_film, ts_erro
     if (st) return st;
     snprintf(path, sizeof path, "%s/scene.json", folder);
     struct stat sb;
-    if (stat(path, &sb) != 0 && (st = ts_image_write_file_atomic(path, j->scene_text, j->scene_len, err))) return st;
+    /* A bundle's job keeps its scene file in files/ (bundle.h), with the files it names. */
+    if (!j->files_dir && stat(path, &sb) != 0 &&
+        (st = ts_image_write_file_atomic(path, j->scene_text, j->scene_len, err)))
+        return st;
     /* The state is taken before the film, so job.json is never ahead of film.bin (a job
      * recorded as done has its whole film on disk); restoring takes the sample counts
      * from the film. */
@@ -209,7 +213,9 @@ void srv_persist_remove(const char *dir, srv_job *j)
     for (struct dirent *e = d ? readdir(d) : NULL; e; e = readdir(d)) {
         if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
         snprintf(path, sizeof path, "%s/%s", folder, e->d_name);
-        if (unlink(path) != 0) fprintf(stderr, "tessera: removing %s: %s\n", path, strerror(errno));
+        /* files/: a bundle's folder (bundle.h), removed whole, following no link */
+        if (!strcmp(e->d_name, "files") ? srv_bundle_remove_tree(path) != 0 : unlink(path) != 0)
+            fprintf(stderr, "tessera: removing %s: %s\n", path, strerror(errno));
     }
     if (d) closedir(d);
     if (rmdir(folder) != 0 && errno != ENOENT) fprintf(stderr, "tessera: removing %s: %s\n", folder, strerror(errno));
@@ -402,7 +408,18 @@ static void restore_one(const char *dir, const char *id, srv_store *st, const ts
     const char *jwhy, *swhy;
     snprintf(path, sizeof path, "%s/job.json", folder);
     char *jtext = read_all(path, &jlen, &jwhy);
-    snprintf(path, sizeof path, "%s/scene.json", folder);
+    /* A bundle's job: files/ holds its scene file (scene.json or scene.pbrt) and the files
+     * it names, which resolve there. */
+    char files[4200], sname_rel[64] = "scene.json";
+    struct stat fsb;
+    snprintf(files, sizeof files, "%s/files", folder);
+    bool bundle = lstat(files, &fsb) == 0 && S_ISDIR(fsb.st_mode), pbrt = false;
+    if (bundle) {
+        snprintf(path, sizeof path, "%s/scene.pbrt", files);
+        pbrt = lstat(path, &fsb) == 0;
+        snprintf(sname_rel, sizeof sname_rel, "files/scene.%s", pbrt ? "pbrt" : "json");
+    }
+    snprintf(path, sizeof path, "%s/%s", folder, sname_rel);
     char *stext = read_all(path, &slen, &swhy);
     cJSON *meta = jtext ? cJSON_ParseWithLength(jtext, jlen) : NULL;
     ts_error err = {0};
@@ -410,12 +427,14 @@ static void restore_one(const char *dir, const char *id, srv_store *st, const ts
     r.id = id;
     r.scene_text = stext;
     r.scene_len = slen;
+    r.files_dir = bundle ? files : NULL;
+    r.scene_pbrt = pbrt;
     ts_scene *scene = NULL;
     ts_film *film = NULL;
     uint32_t *tile_spp = NULL;
     char failure[600] = "", damaged[600] = "";
     if (!stext) {
-        snprintf(failure, sizeof failure, "the checkpoint of job %s is unusable: jobs/%s/scene.json %s", id, id, swhy);
+        snprintf(failure, sizeof failure, "the checkpoint of job %s is unusable: jobs/%s/%s %s", id, id, sname_rel, swhy);
         goto add;
     }
     if (!meta) snprintf(damaged, sizeof damaged, "jobs/%s/job.json %s", id, jtext ? "does not parse" : jwhy);
@@ -441,7 +460,8 @@ static void restore_one(const char *dir, const char *id, srv_store *st, const ts
     if (r.state == TS_JOB_FAILED) {
         snprintf(failure, sizeof failure, "%s", cJSON_IsString(fail) ? fail->valuestring : "failed");
     }
-    if (ts_scene_load_text(stext, slen, assets_dir, "scene", limits, &scene, &err)) {
+    if (pbrt ? ts_scene_load_pbrt_text(stext, slen, files, "scene", limits, NULL, NULL, &scene, &err)
+             : ts_scene_load_text(stext, slen, bundle ? files : assets_dir, "scene", limits, &scene, &err)) {
         snprintf(failure, sizeof failure, "the checkpointed scene no longer loads: %s", err.message);
         goto add;
     }
@@ -534,7 +554,10 @@ int srv_persist_restore_all(const char *dir, srv_store *st, const ts_scene_limit
             snprintf(jp, sizeof jp, "%s/job.json", folder);
             if (lstat(jp, &sb) != 0 && errno == ENOENT) {
                 /* Neither file ever landed (a submission on a full disk, a crash before
-                 * the first rename): nothing was accepted from here. */
+                 * the first rename): nothing was accepted from here (a bundle's files/
+                 * may have been moved in: they go too). */
+                snprintf(jp, sizeof jp, "%s/files", folder);
+                if (lstat(jp, &sb) == 0 && S_ISDIR(sb.st_mode)) srv_bundle_remove_tree(jp);
                 if (rmdir(folder) != 0) stray++;
                 continue;
             }

@@ -54,6 +54,12 @@ static void usage(FILE *f)
             "  --max-subscribers N         event streams open at once, all jobs, to 4000 (default 2048)\n"
             "  --max-job-subscribers N     event streams of one job at once, to 4000 (default 1024)\n"
             "  --max-work RAYS             most rays one job may ask for: rays a sample x spp x pixels (default 1e13)\n"
+            "A job may be posted as a tar (optionally gzip) of scene.json or scene.pbrt and its files:\n"
+            "  --max-bundle-bytes BYTES    largest bundle as posted (default 268435456)\n"
+            "  --max-bundle-entries N      most entries in a bundle, folders included (default 10000)\n"
+            "  --max-bundle-expanded BYTES most bytes of all a bundle's files together (default 1073741824)\n"
+            "  --max-bundle-entry-bytes BYTES  largest file in a bundle (default 268435456)\n"
+            "  --max-bundle-path BYTES     longest path of a bundle's entry (default 1024)\n"
             "  --log-format text|json      job events as text lines or JSON lines on stderr (default text)\n"
             "  --log-level LEVEL           error, warn, info (job events; default) or debug (and every request)\n"
             "  --queue-builtin             queue the built-in Cornell box as the first job (make run)\n"
@@ -222,6 +228,25 @@ bool srv_server_start(srv_server *srv, int *port_out, char *err, size_t err_len)
         int n = srv_persist_restore_all(cfg->data_dir, srv->store, &cfg->limits, cfg->assets_dir, &srv->persist);
         if (n) fprintf(stderr, "tessera serve: %d job(s) restored from %s\n", n, cfg->data_dir);
     }
+    /* Where bundles' files go: under --data (a crashed run's half-unpacked bundles are
+     * swept), else a temporary folder of this run, removed at shutdown. */
+    if (cfg->data_dir) {
+        char incoming[4096];
+        snprintf(incoming, sizeof incoming, "%s/incoming", cfg->data_dir);
+        if (srv_bundle_remove_tree(incoming) != 0)
+            fprintf(stderr, "tessera serve: --data: cannot sweep %s: %s\n", incoming, strerror(errno));
+        srv->files_root = cfg->data_dir;
+    } else {
+        const char *tmp = getenv("TMPDIR");
+        snprintf(srv->files_tmp, sizeof srv->files_tmp, "%s/tessera-serve-XXXXXX", tmp && tmp[0] ? tmp : "/tmp");
+        if (!mkdtemp(srv->files_tmp)) {
+            snprintf(err, err_len, "cannot make a temporary folder for posted bundles (%s): %s", srv->files_tmp,
+                     strerror(errno));
+            srv->files_tmp[0] = '\0';
+            goto fail;
+        }
+        srv->files_root = srv->files_tmp;
+    }
     if (cfg->assets_dir)
         fprintf(stderr, "tessera serve: posted scenes may read files under %s (each at most %llu bytes)\n",
                 cfg->assets_dir, (unsigned long long)cfg->limits.max_file_bytes);
@@ -244,10 +269,10 @@ bool srv_server_start(srv_server *srv, int *port_out, char *err, size_t err_len)
     atomic_init(&srv->sse_limits.total, 0);
     atomic_init(&srv->sse_limits.dropped, 0);
     srv->api = (srv_api){cfg->token, cfg->data_dir, cfg->cors_origin, cfg->bind, cfg->allowed_hosts, srv->store, srv->sched, srv->metrics,
-                         &srv->sse_limits, &srv->persist};
+                         &srv->sse_limits, &srv->persist, &cfg->bundle, srv->files_root};
     srv_http_config hc = {cfg->bind,       cfg->port,        cfg->http_threads, cfg->client_timeout_s,
                           cfg->max_client_conns, cfg->max_body, cfg->cors_origin, srv->metrics,
-                          srv->offload, &srv->log};
+                          srv->offload, &srv->log, (size_t)cfg->bundle.max_bytes};
     srv_http_handlers handlers = srv_api_handlers(&srv->api);
     srv->http = srv_http_start(&hc, &handlers, port_out, err, err_len);
     if (!srv->http) goto fail;
@@ -282,6 +307,9 @@ void srv_server_stop(srv_server *srv, bool checkpoint)
     ts_scheduler_destroy(srv->sched);
     srv_metrics_destroy(srv->metrics);
     srv->http = NULL, srv->offload = NULL, srv->store = NULL, srv->sched = NULL, srv->metrics = NULL;
+    if (srv->files_tmp[0] && srv_bundle_remove_tree(srv->files_tmp) != 0)
+        fprintf(stderr, "tessera serve: removing %s: %s\n", srv->files_tmp, strerror(errno));
+    srv->files_tmp[0] = '\0';
     srv_log_fini(&srv->log);
     pthread_cond_destroy(&srv->cv);
     pthread_mutex_destroy(&srv->mu);
@@ -296,7 +324,8 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
         OPT_BIND = 256, OPT_PORT, OPT_THREADS, OPT_DATA, OPT_TOKEN, OPT_MAX_RUNNING, OPT_HTTP_THREADS, OPT_MAX_BODY,
         OPT_MAX_PIXELS, OPT_MAX_RES, OPT_MAX_SPP, OPT_MAX_TRIS, OPT_MAX_SHAPES, OPT_CKPT, OPT_CORS, OPT_BUILTIN, OPT_HELP,
         OPT_TOKEN_FILE, OPT_ASSETS, OPT_MAX_ASSET_BYTES, OPT_MAX_JOBS, OPT_CLIENT_TIMEOUT, OPT_MAX_CLIENT_CONNS,
-        OPT_LOG_FORMAT, OPT_LOG_LEVEL, OPT_MAX_WORK, OPT_MAX_SUBS, OPT_MAX_JOB_SUBS, OPT_ALLOWED_HOSTS, OPT_DISPLAY, OPT_ALLOW_JOB_DISPLAY
+        OPT_LOG_FORMAT, OPT_LOG_LEVEL, OPT_MAX_WORK, OPT_MAX_SUBS, OPT_MAX_JOB_SUBS, OPT_ALLOWED_HOSTS, OPT_DISPLAY, OPT_ALLOW_JOB_DISPLAY,
+        OPT_BUNDLE_BYTES, OPT_BUNDLE_ENTRIES, OPT_BUNDLE_EXPANDED, OPT_BUNDLE_ENTRY_BYTES, OPT_BUNDLE_PATH
     };
     static const struct option opts[] = {
         {"bind", required_argument, NULL, OPT_BIND},
@@ -329,6 +358,11 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
         {"allow-job-display-server", no_argument, NULL, OPT_ALLOW_JOB_DISPLAY},
         {"log-format", required_argument, NULL, OPT_LOG_FORMAT},
         {"log-level", required_argument, NULL, OPT_LOG_LEVEL},
+        {"max-bundle-bytes", required_argument, NULL, OPT_BUNDLE_BYTES},
+        {"max-bundle-entries", required_argument, NULL, OPT_BUNDLE_ENTRIES},
+        {"max-bundle-expanded", required_argument, NULL, OPT_BUNDLE_EXPANDED},
+        {"max-bundle-entry-bytes", required_argument, NULL, OPT_BUNDLE_ENTRY_BYTES},
+        {"max-bundle-path", required_argument, NULL, OPT_BUNDLE_PATH},
         {"help", no_argument, NULL, OPT_HELP},
         {NULL, 0, NULL, 0}};
     memset(cfg, 0, sizeof *cfg);
@@ -357,6 +391,7 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
     cfg->max_job_subscribers = 1024;
     const char *token_file = NULL, *assets = NULL;
     cfg->limits.max_memory = 2ull << 30;
+    srv_bundle_limits_default(&cfg->bundle);
     unsigned long long v;
     optind = 1;
     opterr = 0;
@@ -452,6 +487,26 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
             cfg->checkpoint_interval_s = s;
             break;
         }
+        case OPT_BUNDLE_BYTES:
+            if (!parse_u64(optarg, 64, 1ull << 32, &v)) return usage_error("--max-bundle-bytes: expected 64 to 4294967296 bytes, got '%s'", optarg);
+            cfg->bundle.max_bytes = v;
+            break;
+        case OPT_BUNDLE_ENTRIES:
+            if (!parse_u64(optarg, 1, 1000000, &v)) return usage_error("--max-bundle-entries: expected 1 to 1000000, got '%s'", optarg);
+            cfg->bundle.max_entries = (uint32_t)v;
+            break;
+        case OPT_BUNDLE_EXPANDED:
+            if (!parse_u64(optarg, 1, 1ull << 40, &v)) return usage_error("--max-bundle-expanded: expected 1 to 1099511627776 bytes, got '%s'", optarg);
+            cfg->bundle.max_expanded = v;
+            break;
+        case OPT_BUNDLE_ENTRY_BYTES:
+            if (!parse_u64(optarg, 1, 1ull << 40, &v)) return usage_error("--max-bundle-entry-bytes: expected 1 to 1099511627776 bytes, got '%s'", optarg);
+            cfg->bundle.max_entry_bytes = v;
+            break;
+        case OPT_BUNDLE_PATH:
+            if (!parse_u64(optarg, 16, 4000, &v)) return usage_error("--max-bundle-path: expected 16 to 4000 bytes, got '%s'", optarg);
+            cfg->bundle.max_path = (uint32_t)v;
+            break;
         case OPT_BUILTIN: cfg->queue_builtin = true; break;
         case OPT_DISPLAY: {
             ts_error derr = {0};

@@ -15,6 +15,7 @@
 #include <stdint.h>
 
 #include "api.h"
+#include "bundle.h"
 #include "http.h"
 #include "job_store.h"
 #include "log.h"
@@ -48,6 +49,7 @@ typedef struct srv_config {
     bool allow_job_display_server; /* --allow-job-display-server: a job's job.display_server may name any address */
     srv_log_format log_format;   /* --log-format text|json */
     srv_log_level log_level;     /* --log-level: info (job events) by default, debug adds requests */
+    srv_bundle_limits bundle;    /* --max-bundle-*: posted tar bundles (bundle.h) */
 } srv_config;
 
 typedef struct srv_server {
@@ -62,6 +64,8 @@ typedef struct srv_server {
     char builtin_job[24];           /* the id of the queued built-in scene (--queue-builtin), or "" */
     srv_events_limits sse_limits;   /* caps from cfg; its count is atomic */
     srv_persist_stats persist;      /* checkpoint and restore counters (atomics) */
+    const char *files_root;         /* bundles' files: --data, or files_tmp */
+    char files_tmp[4200];           /* without --data: this run's temporary folder, removed at stop; or "" */
     /* maintenance thread */
     pthread_t maint;
     bool maint_started;
