@@ -226,10 +226,9 @@ static void error_sentences(void **state)
     (void)state;
     expect_error("WorldBegin\nShape \"sphere\" \"float radius\" [1 2]\nWorldEnd\n",
                  "t.pbrt:2:16: Shape \"sphere\": \"float radius\" expects 1 value, got 2");
-    expect_error(
-        "WorldBegin\nShape \"hyperboloid\"\nWorldEnd\n",
-        "t.pbrt:2:1: Shape \"hyperboloid\" is not supported (sphere, disk, cylinder, trianglemesh and "
-        "plymesh are)");
+    expect_error("WorldBegin\nShape \"hyperboloid\"\nWorldEnd\n",
+                 "t.pbrt:2:1: Shape \"hyperboloid\" is not supported (sphere, disk, cylinder, trianglemesh, "
+                 "plymesh and loopsubdiv are)");
     expect_error("Camera \"environment\"\nWorldBegin\nWorldEnd\n",
                  "t.pbrt:1:1: Camera \"environment\" is not supported (perspective and orthographic are)");
     expect_error("WorldBegin\nMaterial \"disney\"\nShape \"sphere\"\nWorldEnd\n",
@@ -321,9 +320,17 @@ static void mesh_orientation(void **state)
         /* a disk faces +z; ReverseOrientation turns it away */
         "Shape \"disk\" \"float radius\" 9\n",
         "ReverseOrientation Shape \"disk\" \"float radius\" 9\n",
+        /* loopsubdiv: pbrt-v3's limit normals point to the back of the control winding and
+         * its triangles face them (mesh_subdiv.h), so an octahedron wound outwards faces in */
+        "Translate 0 0 -2.5 Scale 2 2 2 Shape \"loopsubdiv\" \"integer nlevels\" 1 \"point P\" [1 0 0 -1 0 0 "
+        "0 1 0 0 -1 0 0 0 1 0 0 -1]"
+        " \"integer indices\" [0 2 4 1 4 2 0 4 3 1 3 4 0 5 2 1 2 5 0 3 5 1 5 3]\n",
+        "Translate 0 0 -2.5 Scale 2 2 2 Shape \"loopsubdiv\" \"integer nlevels\" 1 \"point P\" [1 0 0 -1 0 0 "
+        "0 1 0 0 -1 0 0 0 1 0 0 -1]"
+        " \"integer indices\" [0 4 2 1 2 4 0 3 4 1 4 3 0 2 5 1 5 2 0 5 3 1 3 5]\n",
     };
-    const bool lit[] = {true, false, true, true, false};
-    for (int i = 0; i < 5; i++) {
+    const bool lit[] = {true, false, true, true, false, false, true};
+    for (int i = 0; i < 7; i++) {
         char text[1024];
         snprintf(text, sizeof text,
                  "LookAt 0 0 1  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 30\n"
@@ -466,6 +473,9 @@ static const char every_mapping[] =
     "  Shape \"disk\" \"float radius\" 0.3 \"float phimax\" 200 \"float height\" 0.2\n"
     "  Shape \"cylinder\" \"float radius\" 0.2 \"float zmin\" 0.5 \"float zmax\" -0.1 \"float phimax\" 120\n"
     "AttributeEnd\n"
+    "AttributeBegin Translate 2 1 -1 Scale 0.5 0.5 0.5 Material \"mirror\"\n"
+    "  Shape \"loopsubdiv\" \"integer nlevels\" 2 \"point P\" [1 1 1 -1 -1 1 -1 1 -1 1 -1 -1]"
+    " \"integer indices\" [0 1 2 0 3 1 0 2 3 1 3 2] AttributeEnd\n"
     "AttributeBegin Translate 1 0.5 0 Rotate 90 1 0 0 Material \"metal\" \"float roughness\" 0.1\n"
     "  Shape \"cylinder\" \"float radius\" 0.3 \"float zmin\" -0.5 \"float zmax\" 0.5 AttributeEnd\n"
     "AttributeBegin Translate 0 0.3 1 Scale 0.3 0.3 0.3 ReverseOrientation Material \"substrate\"\n"

@@ -17,6 +17,7 @@
 #include <cjson/cJSON.h>
 
 #include "scene/mesh_read.h"
+#include "scene/mesh_subdiv.h"
 #include "scene/spectrum.h"
 
 #define TRY(expr)                                                                                            \
@@ -977,6 +978,52 @@ static ts_status read_trianglemesh(imp *im, ts_pbrt_shape *sh, ts_mesh_data *md)
     return TS_OK;
 }
 
+/* pbrt-v3's loopsubdiv: the control mesh's P and indices refined `levels` (3; `nlevels`
+ * too) times by the builder (mesh_subdiv.h) into *md, with its limit normals. pbrt-v3's
+ * limit normals point to the back of the control mesh's winding and its triangles face
+ * their normals whatever ReverseOrientation says, so the surface faces away from the
+ * control winding: the normals are negated here and orient_mesh turns the triangles to
+ * them. */
+static ts_status read_loopsubdiv(imp *im, ts_pbrt_shape *sh, ts_mesh_data *md)
+{
+    ts_pbrt_params *ps = &sh->params;
+    const float *P;
+    const int32_t *idx;
+    size_t np, ni;
+    int32_t levels;
+    TRY(ts_pbrt_find_point3s(ps, "P", &P, &np, im->err));
+    TRY(ts_pbrt_find_ints(ps, "indices", &idx, &ni, im->err));
+    TRY(ts_pbrt_find_int(ps, "nlevels", 3, &levels, im->err));
+    TRY(ts_pbrt_find_int(ps, "levels", levels, &levels, im->err));
+    if (!P || !idx)
+        return derr(im, ps, sh->loc, TS_ERR_INVALID, "\"point3 P\" and \"integer indices\" are required");
+    if (ni % 3 != 0 || ni == 0)
+        return ts_pbrt_param_error(ps, ts_pbrt_params_get(ps, "indices"), im->err, TS_ERR_INVALID,
+                                   "expects a positive multiple of 3 values, got %zu", ni);
+    if (levels < 0 || levels > TS_SUBDIV_MAX_LEVELS)
+        return derr(im, ps, sh->loc, TS_ERR_INVALID, "\"integer levels\" must be in [0, %d], got %d",
+                    TS_SUBDIV_MAX_LEVELS, levels);
+    if (np > UINT32_MAX || ni / 3 > UINT32_MAX)
+        return derr(im, ps, sh->loc, TS_ERR_LIMIT, "the mesh is too large");
+    for (size_t k = 0; k < ni; k++)
+        if (idx[k] < 0 || (size_t)idx[k] >= np)
+            return ts_pbrt_param_error(ps, ts_pbrt_params_get(ps, "indices"), im->err, TS_ERR_INVALID,
+                                       "value %zu is %d, not a vertex index in [0, %zu]", k, idx[k], np - 1);
+    uint32_t *index = malloc(ni * sizeof *index);
+    if (!index) return nomem(im);
+    for (size_t k = 0; k < ni; k++)
+        index[k] = (uint32_t)idx[k];
+    ts_mesh control = {(uint32_t)np, (uint32_t)(ni / 3), P, NULL, NULL, index};
+    ts_status st =
+        at(im, ts_scene_builder_loop_subdivide(im->b, &control, (uint32_t)levels, md, im->err), ps, sh->loc);
+    free(index);
+    if (st) return st;
+    if (md->n)
+        for (size_t k = 0; k < 3 * (size_t)md->n_vertices; k++)
+            md->n[k] = -md->n[k];
+    return TS_OK;
+}
+
 static cJSON *jfloats(const float *v, size_t n)
 {
     cJSON *a = cJSON_CreateArray();
@@ -1011,11 +1058,10 @@ static ts_status map_shape(imp *im, size_t si)
     ts_pbrt_params *ps = &sh->params;
     const char *t = sh->type;
     bool analytic = strcmp(t, "sphere") == 0 || strcmp(t, "disk") == 0 || strcmp(t, "cylinder") == 0;
-    bool mesh = strcmp(t, "trianglemesh") == 0 || strcmp(t, "plymesh") == 0;
+    bool mesh = strcmp(t, "trianglemesh") == 0 || strcmp(t, "plymesh") == 0 || strcmp(t, "loopsubdiv") == 0;
     if (!analytic && !mesh)
-        return derr(im, ps, sh->loc, TS_ERR_UNSUPPORTED, "is not supported%s",
-                    strcmp(t, "loopsubdiv") == 0 ? " yet"
-                                                 : " (sphere, disk, cylinder, trianglemesh and plymesh are)");
+        return derr(im, ps, sh->loc, TS_ERR_UNSUPPORTED,
+                    "is not supported (sphere, disk, cylinder, trianglemesh, plymesh and loopsubdiv are)");
 
     /* The surface, the emission and the cut-out first: they may make the shape vanish. */
     uint32_t mat;
@@ -1163,6 +1209,8 @@ static ts_status map_shape(imp *im, size_t si)
         d.to_world = user;
         if (t[0] == 't') {
             st = read_trianglemesh(im, sh, &md);
+        } else if (t[0] == 'l') {
+            st = read_loopsubdiv(im, sh, &md);
         } else {
             const char *file;
             st = ts_pbrt_find_string(ps, "filename", NULL, &file, im->err);

@@ -60,7 +60,7 @@ typedef struct corpus_scene {
 } corpus_scene;
 
 static const corpus_scene scenes[] = {
-    {"killeroo-simple", 32, "loopsubdiv (subdivision surfaces) is not mapped yet"},
+    {"killeroo-simple", 32, "pbrt-v3's uncoupled plastic: tessera's Fresnel-coupled plastic is darker"},
     {"veach-mis", 32, "pbrt-v3's uncoupled plastic: tessera's Fresnel-coupled plastic is darker"},
     {"f7-19a", 64, "the uber material is not mapped yet"},
     {"teapot-area-light", 32, "pbrt-v3's uncoupled plastic: tessera's Fresnel-coupled plastic is darker"},
