@@ -4,24 +4,123 @@
 
 #include <arpa/inet.h>
 #include <cjson/cJSON.h>
+#include <math.h>
 #include <microhttpd.h>
 #include <netinet/in.h>
+#include <pthread.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/socket.h>
 #include <time.h>
 #include <unistd.h>
 
 #include "log.h"
 #include "offload.h"
 
+/* One open connection, for the request deadline: while a request's headers and body are
+ * arriving it must be complete by `deadline`, however the bytes trickle in (libmicrohttpd's
+ * own timeout is an idle timer, which a byte every few seconds resets). */
+typedef struct conn_entry {
+    int fd;                      /* immutable; valid until the CLOSED notification */
+    double deadline;             /* monotonic seconds; 0 while answering; guarded by conns_mu */
+    bool cut;                    /* guarded by conns_mu */
+    struct conn_entry *prev, *next; /* guarded by conns_mu */
+} conn_entry;
+
 struct srv_http {
     struct MHD_Daemon *d;
     srv_http_config cfg;         /* immutable */
     srv_http_handlers handlers;  /* immutable */
+    /* The deadline thread: cuts connections whose request is late (shutdown(2) of the
+     * socket; libmicrohttpd then closes it). An entry leaves the list in the CLOSED
+     * notification, which libmicrohttpd sends before it closes the descriptor, so under
+     * conns_mu every listed fd is still the connection's. */
+    pthread_mutex_t conns_mu;
+    pthread_cond_t conns_cv;
+    conn_entry *conns;           /* guarded by conns_mu */
+    bool stopping;               /* guarded by conns_mu */
+    pthread_t deadline_thread;
+    bool deadline_started;
 };
+
+static double mono_now(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+static double request_timeout(const srv_http *h) { return h->cfg.request_timeout_s ? h->cfg.request_timeout_s : 60.0; }
+
+/* Sets the deadline of conn's current request (0: none, its answer is being sent). */
+static void set_deadline(srv_http *h, struct MHD_Connection *conn, double deadline)
+{
+    const union MHD_ConnectionInfo *ci = MHD_get_connection_info(conn, MHD_CONNECTION_INFO_SOCKET_CONTEXT);
+    conn_entry *c = ci ? ci->socket_context : NULL;
+    if (!c) return;
+    pthread_mutex_lock(&h->conns_mu);
+    c->deadline = deadline;
+    pthread_mutex_unlock(&h->conns_mu);
+}
+
+static void notify_connection(void *cls, struct MHD_Connection *conn, void **socket_context,
+                              enum MHD_ConnectionNotificationCode code)
+{
+    srv_http *h = cls;
+    if (code == MHD_CONNECTION_NOTIFY_STARTED) {
+        const union MHD_ConnectionInfo *ci = MHD_get_connection_info(conn, MHD_CONNECTION_INFO_CONNECTION_FD);
+        conn_entry *c = ci ? calloc(1, sizeof *c) : NULL;
+        if (!c) return; /* not tracked: only the idle timeout applies */
+        c->fd = ci->connect_fd;
+        pthread_mutex_lock(&h->conns_mu);
+        c->deadline = mono_now() + request_timeout(h);
+        c->next = h->conns;
+        if (h->conns) h->conns->prev = c;
+        h->conns = c;
+        pthread_mutex_unlock(&h->conns_mu);
+        *socket_context = c;
+    } else if (code == MHD_CONNECTION_NOTIFY_CLOSED && *socket_context) {
+        conn_entry *c = *socket_context;
+        pthread_mutex_lock(&h->conns_mu);
+        if (c->prev) c->prev->next = c->next;
+        else h->conns = c->next;
+        if (c->next) c->next->prev = c->prev;
+        pthread_mutex_unlock(&h->conns_mu);
+        free(c);
+        *socket_context = NULL;
+    }
+}
+
+static void *deadline_main(void *arg)
+{
+    srv_http *h = arg;
+    pthread_mutex_lock(&h->conns_mu);
+    while (!h->stopping) {
+        double now = mono_now(), next = now + 1.0;
+        for (conn_entry *c = h->conns; c; c = c->next) {
+            if (c->deadline <= 0 || c->cut) continue;
+            if (c->deadline <= now) {
+                shutdown(c->fd, SHUT_RDWR);
+                c->cut = true;
+                srv_metrics_count_deadline_cut(h->cfg.metrics);
+            } else if (c->deadline < next) {
+                next = c->deadline;
+            }
+        }
+        struct timespec ts;
+        clock_gettime(CLOCK_REALTIME, &ts);
+        double wait = next - now, whole = floor(wait);
+        ts.tv_sec += (time_t)whole;
+        ts.tv_nsec += (long)((wait - whole) * 1e9);
+        if (ts.tv_nsec >= 1000000000L) ts.tv_sec++, ts.tv_nsec -= 1000000000L;
+        pthread_cond_timedwait(&h->conns_cv, &h->conns_mu, &ts);
+    }
+    pthread_mutex_unlock(&h->conns_mu);
+    return NULL;
+}
 
 const srv_http_config *srv_http_config_of(const srv_http *h) { return &h->cfg; }
 
@@ -283,6 +382,7 @@ static enum MHD_Result handler(void *cls, struct MHD_Connection *conn, const cha
         r->body[r->body_len] = '\0';
         return MHD_YES;
     }
+    set_deadline(h, conn, 0); /* the whole request is in: from here only the idle timeout */
     if (r->body_too_large)
         return (enum MHD_Result)srv_http_error(r, 413, "the request body is larger than the limit of %zu bytes",
                                                r->max_body);
@@ -291,8 +391,9 @@ static enum MHD_Result handler(void *cls, struct MHD_Connection *conn, const cha
 
 static void completed(void *cls, struct MHD_Connection *conn, void **con_cls, enum MHD_RequestTerminationCode toe)
 {
-    (void)conn;
     srv_http *h = cls;
+    /* A kept-alive connection's next request has the deadline from now. */
+    set_deadline(h, conn, mono_now() + request_timeout(h));
     srv_request *r = *con_cls;
     if (!r) return;
     if (h->handlers.done) h->handlers.done(r);
@@ -321,6 +422,8 @@ srv_http *srv_http_start(const srv_http_config *cfg, const srv_http_handlers *ha
     }
     h->cfg = *cfg;
     h->handlers = *handlers;
+    pthread_mutex_init(&h->conns_mu, NULL);
+    pthread_cond_init(&h->conns_cv, NULL);
     struct sockaddr_storage ss;
     memset(&ss, 0, sizeof ss);
     const char *bind = h->cfg.bind;
@@ -340,6 +443,7 @@ srv_http *srv_http_start(const srv_http_config *cfg, const srv_http_handlers *ha
     h->d = MHD_start_daemon(flags, (uint16_t)h->cfg.port, NULL, NULL, handler, h,
                             MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&ss,
                             MHD_OPTION_NOTIFY_COMPLETED, completed, h,
+                            MHD_OPTION_NOTIFY_CONNECTION, notify_connection, h,
                             MHD_OPTION_UNESCAPE_CALLBACK, keep_escaped, NULL,
                             MHD_OPTION_THREAD_POOL_SIZE, (unsigned)(h->cfg.threads > 0 ? h->cfg.threads : 1),
                             MHD_OPTION_CONNECTION_LIMIT, (unsigned)4000,
@@ -352,14 +456,22 @@ srv_http *srv_http_start(const srv_http_config *cfg, const srv_http_handlers *ha
                             MHD_OPTION_END);
     if (!h->d) {
         snprintf(err, err_len, "cannot listen on %s port %d (in use, or not an address of this host)", bind, h->cfg.port);
-        free(h);
-        return NULL;
+        goto fail;
     }
+    if (pthread_create(&h->deadline_thread, NULL, deadline_main, h) != 0) {
+        snprintf(err, err_len, "cannot start the request deadline thread");
+        MHD_stop_daemon(h->d);
+        goto fail;
+    }
+    h->deadline_started = true;
     const union MHD_DaemonInfo *info = MHD_get_daemon_info(h->d, MHD_DAEMON_INFO_BIND_PORT);
     *port_out = info ? info->port : h->cfg.port;
     return h;
 bad_addr:
     snprintf(err, err_len, "--bind %s: not a numeric IPv4 or IPv6 address", bind);
+fail:
+    pthread_cond_destroy(&h->conns_cv);
+    pthread_mutex_destroy(&h->conns_mu);
     free(h);
     return NULL;
 }
@@ -380,6 +492,15 @@ unsigned srv_http_connections(srv_http *h)
 void srv_http_stop(srv_http *h)
 {
     if (!h) return;
-    if (h->d) MHD_stop_daemon(h->d);
+    if (h->deadline_started) {
+        pthread_mutex_lock(&h->conns_mu);
+        h->stopping = true;
+        pthread_cond_signal(&h->conns_cv);
+        pthread_mutex_unlock(&h->conns_mu);
+        pthread_join(h->deadline_thread, NULL);
+    }
+    if (h->d) MHD_stop_daemon(h->d); /* its CLOSED notifications empty the list */
+    pthread_cond_destroy(&h->conns_cv);
+    pthread_mutex_destroy(&h->conns_mu);
     free(h);
 }

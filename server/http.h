@@ -10,7 +10,9 @@
  * do (encoding images) goes to the offload pool: srv_http_defer suspends the connection,
  * the task fills the reply and srv_http_complete resumes it; the handler, called again,
  * queues that reply. The daemon uses an internal polling thread pool (epoll/poll) with
- * suspend/resume. */
+ * suspend/resume. Besides libmicrohttpd's idle timeout (client_timeout_s), a thread of
+ * this layer holds every request to a deadline for its headers and body
+ * (request_timeout_s), so a client that trickles bytes cannot keep a connection forever. */
 #ifndef SRV_HTTP_H
 #define SRV_HTTP_H
 
@@ -56,6 +58,8 @@ typedef struct srv_http_config {
     int port;                    /* 0 = any free port */
     int threads;                 /* libmicrohttpd's thread pool */
     unsigned client_timeout_s;   /* a connection idle this long is closed (0: 60 s) */
+    unsigned request_timeout_s;  /* a request's headers and body must arrive within this long of the
+                                  * connection's start or its previous answer, else it is closed (0: 60 s) */
     unsigned max_client_conns;   /* connections from one address at once */
     size_t max_body;             /* request body cap, bytes (413 beyond) */
     const char *cors_origin;     /* NULL = no CORS headers */

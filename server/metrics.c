@@ -13,6 +13,7 @@ typedef struct counter { unsigned status; uint64_t n; } counter;
 struct srv_metrics {
     pthread_mutex_t mu;
     counter c[SRV_ROUTE_COUNT][MAX_STATUSES]; /* guarded by mu */
+    uint64_t deadline_cuts;                   /* guarded by mu */
 };
 
 const char *srv_route_name(srv_route r)
@@ -53,6 +54,14 @@ void srv_metrics_count(srv_metrics *m, srv_route route, unsigned status)
     pthread_mutex_unlock(&m->mu);
 }
 
+void srv_metrics_count_deadline_cut(srv_metrics *m)
+{
+    if (!m) return;
+    pthread_mutex_lock(&m->mu);
+    m->deadline_cuts++;
+    pthread_mutex_unlock(&m->mu);
+}
+
 void srv_buf_printf(char **buf, size_t *len, size_t *cap, const char *fmt, ...)
 {
     va_list ap;
@@ -80,9 +89,15 @@ void srv_metrics_format(srv_metrics *m, char **buf, size_t *len, size_t *cap)
     srv_buf_printf(buf, len, cap, "# HELP tessera_http_requests_total HTTP requests answered, by route and status.\n"
                                   "# TYPE tessera_http_requests_total counter\n");
     pthread_mutex_lock(&m->mu);
+    uint64_t cuts = m->deadline_cuts;
     for (int r = 0; r < SRV_ROUTE_COUNT; r++)
         for (int i = 0; i < MAX_STATUSES && m->c[r][i].status; i++)
             srv_buf_printf(buf, len, cap, "tessera_http_requests_total{route=\"%s\",status=\"%u\"} %llu\n",
                            srv_route_name((srv_route)r), m->c[r][i].status, (unsigned long long)m->c[r][i].n);
     pthread_mutex_unlock(&m->mu);
+    srv_buf_printf(buf, len, cap,
+                   "# HELP tessera_http_deadline_closed_total Connections closed because a request's headers and body "
+                   "did not arrive within --request-timeout.\n"
+                   "# TYPE tessera_http_deadline_closed_total counter\ntessera_http_deadline_closed_total %llu\n",
+                   (unsigned long long)cuts);
 }

@@ -36,6 +36,8 @@ typedef struct srv_metrics srv_metrics;
 srv_metrics *srv_metrics_create(void);
 void srv_metrics_destroy(srv_metrics *m);
 void srv_metrics_count(srv_metrics *m, srv_route route, unsigned status);
+/* A connection closed because its request missed the header/body deadline. */
+void srv_metrics_count_deadline_cut(srv_metrics *m);
 /* Appends the request counters as Prometheus text to a malloc'd buffer (*buf, *len, *cap). */
 void srv_metrics_format(srv_metrics *m, char **buf, size_t *len, size_t *cap);
 /* printf-style append to such a buffer. */

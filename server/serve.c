@@ -50,6 +50,8 @@ static void usage(FILE *f)
             "  --max-triangles N           most triangles in a posted scene (default 5242880)\n"
             "  --max-shapes N              most shapes in a posted scene (default 65536)\n"
             "  --client-timeout S          close a connection idle this many seconds (default 60)\n"
+            "  --request-timeout S         close a connection whose request (headers and body) has not arrived\n"
+            "                              this many seconds after it opened or after its previous answer (default 60)\n"
             "  --max-client-connections N  connections one address may hold, to 4000 (default 1024)\n"
             "  --max-subscribers N         event streams open at once, all jobs, to 4000 (default 2048)\n"
             "  --max-job-subscribers N     event streams of one job at once, to 4000 (default 1024)\n"
@@ -271,7 +273,7 @@ bool srv_server_start(srv_server *srv, int *port_out, char *err, size_t err_len)
     srv->api = (srv_api){cfg->token, cfg->data_dir, cfg->cors_origin, cfg->bind, cfg->allowed_hosts, srv->store, srv->sched, srv->metrics,
                          &srv->sse_limits, &srv->persist, &cfg->bundle, srv->files_root};
     srv_http_config hc = {cfg->bind,       cfg->port,        cfg->http_threads, cfg->client_timeout_s,
-                          cfg->max_client_conns, cfg->max_body, cfg->cors_origin, srv->metrics,
+                          cfg->request_timeout_s, cfg->max_client_conns, cfg->max_body, cfg->cors_origin, srv->metrics,
                           srv->offload, &srv->log, (size_t)cfg->bundle.max_bytes};
     srv_http_handlers handlers = srv_api_handlers(&srv->api);
     srv->http = srv_http_start(&hc, &handlers, port_out, err, err_len);
@@ -323,7 +325,7 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
     enum {
         OPT_BIND = 256, OPT_PORT, OPT_THREADS, OPT_DATA, OPT_TOKEN, OPT_MAX_RUNNING, OPT_HTTP_THREADS, OPT_MAX_BODY,
         OPT_MAX_PIXELS, OPT_MAX_RES, OPT_MAX_SPP, OPT_MAX_TRIS, OPT_MAX_SHAPES, OPT_CKPT, OPT_CORS, OPT_BUILTIN, OPT_HELP,
-        OPT_TOKEN_FILE, OPT_ASSETS, OPT_MAX_ASSET_BYTES, OPT_MAX_JOBS, OPT_CLIENT_TIMEOUT, OPT_MAX_CLIENT_CONNS,
+        OPT_TOKEN_FILE, OPT_ASSETS, OPT_MAX_ASSET_BYTES, OPT_MAX_JOBS, OPT_CLIENT_TIMEOUT, OPT_REQUEST_TIMEOUT, OPT_MAX_CLIENT_CONNS,
         OPT_LOG_FORMAT, OPT_LOG_LEVEL, OPT_MAX_WORK, OPT_MAX_SUBS, OPT_MAX_JOB_SUBS, OPT_ALLOWED_HOSTS, OPT_DISPLAY, OPT_ALLOW_JOB_DISPLAY,
         OPT_BUNDLE_BYTES, OPT_BUNDLE_ENTRIES, OPT_BUNDLE_EXPANDED, OPT_BUNDLE_ENTRY_BYTES, OPT_BUNDLE_PATH
     };
@@ -342,6 +344,7 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
         {"max-subscribers", required_argument, NULL, OPT_MAX_SUBS},
         {"max-job-subscribers", required_argument, NULL, OPT_MAX_JOB_SUBS},
         {"client-timeout", required_argument, NULL, OPT_CLIENT_TIMEOUT},
+        {"request-timeout", required_argument, NULL, OPT_REQUEST_TIMEOUT},
         {"max-client-connections", required_argument, NULL, OPT_MAX_CLIENT_CONNS},
         {"max-running", required_argument, NULL, OPT_MAX_RUNNING},
         {"http-threads", required_argument, NULL, OPT_HTTP_THREADS},
@@ -373,6 +376,7 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
     cfg->max_running = 4;
     cfg->http_threads = 4;
     cfg->client_timeout_s = 60;
+    cfg->request_timeout_s = 60;
     cfg->max_client_conns = 1024;
     cfg->max_body = 16u << 20;
     cfg->checkpoint_interval_s = 30;
@@ -433,6 +437,10 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
         case OPT_CLIENT_TIMEOUT:
             if (!parse_u64(optarg, 1, 86400, &v)) return usage_error("--client-timeout: expected 1 to 86400 seconds, got '%s'", optarg);
             cfg->client_timeout_s = (unsigned)v;
+            break;
+        case OPT_REQUEST_TIMEOUT:
+            if (!parse_u64(optarg, 1, 86400, &v)) return usage_error("--request-timeout: expected 1 to 86400 seconds, got '%s'", optarg);
+            cfg->request_timeout_s = (unsigned)v;
             break;
         case OPT_MAX_CLIENT_CONNS:
             if (!parse_u64(optarg, 1, 4000, &v)) return usage_error("--max-client-connections: expected 1 to 4000, got '%s'", optarg);

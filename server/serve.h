@@ -31,6 +31,7 @@ typedef struct srv_config {
     int max_running;             /* jobs rendering at once */
     int http_threads;            /* libmicrohttpd thread pool */
     unsigned client_timeout_s;   /* a connection idle this long is closed */
+    unsigned request_timeout_s;  /* a request's headers and body must arrive within this long */
     unsigned max_client_conns;   /* connections from one IP address at once; more are refused */
     const char *data_dir;        /* NULL = no persistence */
     const char *token;           /* NULL = no auth; never printed or logged */

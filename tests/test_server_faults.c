@@ -107,6 +107,8 @@ static ts_image get_exr(const test_server *s, const char *id)
 }
 
 static double metric(const test_server *s, const char *name);
+static int subscribe(const test_server *s, const char *id);
+static int status_of(int fd);
 
 /* ================================================================ checkpoint faults */
 
@@ -750,6 +752,69 @@ static void test_slow_clients(void **state)
     assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
 }
 
+/* Slow-loris: a header trickled a byte every 0.5 s, and a body the same way, each faster
+ * than the idle timeout (3 s) resets, are cut at the request deadline (--request-timeout 2;
+ * before it existed they stayed open as long as the bytes came). What is not late is not
+ * cut: an event stream open past the deadline, and a kept-alive connection's next request
+ * (its deadline starts at the previous answer). */
+static void test_slow_loris(void **state)
+{
+    (void)state;
+    test_server s;
+    const char *args[] = {"--threads", "1", "--client-timeout", "3", "--request-timeout", "2", NULL};
+    ts_server_start(&s, args);
+    char *doc = ts_ao_scene("loris", 256, 256, 1 << 14), id[32], head[512], body_head[512];
+    ts_submit(&s, doc, id, sizeof id);
+    ts_wait_field(&s, id, "spp_done", 1, 20);
+    snprintf(head, sizeof head, "GET /api/v1/jobs/%s HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Pad: %0200d\r\n\r\n", id, 0);
+    snprintf(body_head, sizeof body_head,
+             "POST /api/v1/jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\nContent-Length: 100\r\n\r\n");
+    int header_fd = connect_to(&s), body_fd = connect_to(&s), stream_fd = subscribe(&s, id);
+    send_all(body_fd, body_head);
+    double t0 = now_s(), header_cut = 0, body_cut = 0;
+    size_t at = 0;
+    while (now_s() - t0 < 6 && !(header_cut && body_cut)) {
+        char one[2] = {head[at++], 0};
+        if (!header_cut) send(header_fd, one, 1, MSG_NOSIGNAL);
+        if (!body_cut) send(body_fd, "{", 1, MSG_NOSIGNAL);
+        double until = now_s() + 0.5;
+        while (now_s() < until) {
+            if (!header_cut && closed_by_server(header_fd, 0.02)) header_cut = now_s() - t0;
+            if (!body_cut && closed_by_server(body_fd, 0.02)) body_cut = now_s() - t0;
+        }
+        assert_true(at < strlen(head)); /* the header never completes in this time */
+    }
+    /* The stream is still open and events still come; the kept-alive connection answers
+     * a request now and another a second later (more than the deadline after it opened). */
+    char buf[4096];
+    assert_true(recv_some(stream_fd, 1, 2) == 1);
+    assert_false(closed_by_server(stream_fd, 0.01));
+    static const char hz[] = "GET /healthz HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n";
+    int keep_fd = connect_to(&s);
+    for (int k = 0; k < 3; k++) {
+        if (k) ts_sleep_ms(1200);
+        send_all(keep_fd, hz);
+        assert_int_equal(status_of(keep_fd), 200);
+        ts_sleep_ms(50);
+        while (recv(keep_fd, buf, sizeof buf, MSG_DONTWAIT) > 0) {} /* the rest of the answer */
+    }
+    printf("slow-loris at a byte per 0.5 s (--client-timeout 3, --request-timeout 2): header cut after %.2f s, body "
+           "after %.2f s; an event stream and a kept-alive connection stayed\n", header_cut, body_cut);
+    /* The deadline thread wakes at the earliest deadline; 1.5 s of slack for a loaded
+     * machine, and never before the deadline (less the 0.02 s polls). */
+    assert_true(header_cut >= 1.9 && header_cut < 3.5);
+    assert_true(body_cut >= 1.9 && body_cut < 3.5);
+    assert_int_equal((int)metric(&s, "tessera_http_deadline_closed_total"), 2);
+    close(header_fd), close(body_fd), close(stream_fd), close(keep_fd);
+    char path[160];
+    snprintf(path, sizeof path, "/api/v1/jobs/%s/cancel", id);
+    http_resp r;
+    ts_http(&s, "POST", path, NULL, 0, NULL, &r);
+    ts_http_free(&r);
+    assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
+    free(doc);
+}
+
 static long rss_kib(pid_t pid)
 {
     char path[64], line[256];
@@ -885,6 +950,7 @@ static int run_clients(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_disconnects),
         cmocka_unit_test(test_slow_clients),
+        cmocka_unit_test(test_slow_loris),
         cmocka_unit_test(test_idle_subscribers),
     };
     return cmocka_run_group_tests_name("clients", tests, NULL, NULL);
