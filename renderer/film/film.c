@@ -1,6 +1,7 @@
 /* film.c — film allocation, pixel estimates and merging; see film.h. */
 #include "film/film.h"
 
+#include <float.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -75,6 +76,9 @@ ts_rgb ts_film_pixel_variance(const ts_film *f, int x, int y)
          * cancellation (it is exactly 0 for a constant only up to rounding). */
         double s2 = (p->sum_sq[c] - mean * p->sum[c]) / p->weight;
         v[c] = s2 > 0 ? s2 / (n_eff - 1) : 0;
+        /* Samples are at most TS_FILM_SAMPLE_MAX, so s2 fits a float; n_eff − 1 below 1
+         * (negative filter weights) could still lift it beyond: the largest float then. */
+        if (!(v[c] <= FLT_MAX)) v[c] = FLT_MAX;
     }
     return (ts_rgb){(float)v[0], (float)v[1], (float)v[2]};
 }

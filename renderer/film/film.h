@@ -56,6 +56,11 @@ static inline ts_film_pixel *ts_film_pixel_at(const ts_film *f, int x, int y)
     return &f->pixels[(size_t)(x - f->x0) + (size_t)(y - f->y0) * (size_t)f->width];
 }
 
+/* The largest sample component the film takes: its square, which the pixel's variance
+ * (R.var …, written as a float) is made of, must fit a float (√FLT_MAX ≈ 1.84e19).
+ * Larger samples are dropped and counted with the non-finite ones (docs/design.md §6). */
+#define TS_FILM_SAMPLE_MAX 1.8e19f
+
 /* Adds radiance L with filter weight `weight` to full-image pixel (x, y). Samples outside
  * the window are ignored. L and weight must be finite: the integrator rejects (and
  * counts) NaN/Inf before they reach the film (docs/design.md §6). Hot path: no allocation,

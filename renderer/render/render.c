@@ -95,7 +95,8 @@ bool ts_render_tile(const ts_render_request *req, int x0, int y0, int w, int h, 
                 ts_ray ray = ts_camera_ray(&cam, p_raster, u_lens);
                 ts_rgb L = ts_integrator_li(s, req->integrator, fx, &ray, &st, c);
                 c->samples++;
-                if (!ts_rgb_is_finite(L) || L.r < 0 || L.g < 0 || L.b < 0) {
+                if (!ts_rgb_is_finite(L) || L.r < 0 || L.g < 0 || L.b < 0 || L.r > TS_FILM_SAMPLE_MAX ||
+                    L.g > TS_FILM_SAMPLE_MAX || L.b > TS_FILM_SAMPLE_MAX) {
                     c->nonfinite++;
                     continue;
                 }

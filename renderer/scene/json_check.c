@@ -100,12 +100,32 @@ static bool in_range(double v, ts_jrange r)
     return false;
 }
 
+/* Scene numbers become floats (docs/design.md §4): NULL when v (in range as a double) is
+ * also usable as the float it becomes, else why not — beyond the float range (it would be
+ * infinite), or a positive number so small it would be 0. */
+static const char *float_trouble(double v, ts_jrange r)
+{
+    float f = (float)v;
+    if (!isfinite(f)) return "beyond the range of a float (at most 3.4e38 in magnitude)";
+    if (r == TS_J_POSITIVE && f == 0) return "too small for a float (it would be 0)";
+    return NULL;
+}
+
+/* The refusal of a number in range as a double but not as a float (path.key or path). */
+static ts_status not_a_float(ts_error *err, const char *path, const char *key, double v, const char *why)
+{
+    ts_jpath p = key ? ts_jpath_key(path, key) : ts_jpath_key("", path);
+    return ts_error_set(err, TS_ERR_INVALID, "%s: %.9g is %s", p.s, v, why);
+}
+
 ts_status ts_json_number(const cJSON *obj, const char *path, const char *key, bool required, ts_jrange range,
                          double *out, ts_error *err)
 {
     const cJSON *v = get(obj, key);
     if (!v) return required ? missing(err, path, key, range_words(range)) : TS_OK;
     if (!cJSON_IsNumber(v) || !in_range(v->valuedouble, range)) return bad(err, path, key, range_words(range), v);
+    const char *why = float_trouble(v->valuedouble, range);
+    if (why) return not_a_float(err, path, key, v->valuedouble, why);
     *out = v->valuedouble;
     return TS_OK;
 }
@@ -174,6 +194,12 @@ static ts_status numbers(const cJSON *v, const char *path, const char *key, int 
             ts_json_describe(c, d, sizeof d);
             return ts_error_set(err, TS_ERR_INVALID, "%s: expected %s, got %s", pi.s, range_words(range), d);
         }
+        const char *why = float_trouble(c->valuedouble, range);
+        if (why) {
+            ts_jpath p = ts_jpath_key(path, key);
+            ts_jpath pi = ts_jpath_index(p.s, i);
+            return not_a_float(err, pi.s, NULL, c->valuedouble, why);
+        }
         out[i] = (float)c->valuedouble;
     }
     return TS_OK;
@@ -202,6 +228,8 @@ ts_status ts_json_rgb(const cJSON *obj, const char *path, const char *key, bool 
     if (!v) return required ? missing(err, path, key, words) : TS_OK;
     if (cJSON_IsNumber(v)) {
         if (!in_range(v->valuedouble, range)) return bad(err, path, key, words, v);
+        const char *why = float_trouble(v->valuedouble, range);
+        if (why) return not_a_float(err, path, key, v->valuedouble, why);
         *out = ts_rgb_gray((float)v->valuedouble);
         return TS_OK;
     }

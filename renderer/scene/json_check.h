@@ -27,7 +27,9 @@ ts_jpath ts_jpath_key(const char *parent, const char *key);
 /* "parent[i]". */
 ts_jpath ts_jpath_index(const char *parent, int i);
 
-/* Ranges a number may be required to lie in. */
+/* Ranges a number may be required to lie in. Every number is also checked as the float
+ * the scene keeps: beyond ±3.4e38 (infinite as a float), or positive but rounding to 0,
+ * is refused ("x: 1e+39 is beyond the range of a float …"). */
 typedef enum ts_jrange {
     TS_J_ANY,      /* any finite number */
     TS_J_POSITIVE, /* > 0 */

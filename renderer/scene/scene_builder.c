@@ -214,6 +214,15 @@ ts_status ts_scene_builder_set_camera(ts_scene_builder *b, const ts_camera_desc 
     TRY(usable(b, err));
     if (d->type != TS_CAMERA_PERSPECTIVE && d->type != TS_CAMERA_ORTHOGRAPHIC)
         return ts_error_set(err, TS_ERR_INVALID, "camera.type: unknown camera type %d", (int)d->type);
+    /* Where the camera is, before its frame: beyond ±1e15 (the scene's extent, §4) the
+     * view direction's length overflows a float and would read as "up is parallel". */
+    static const char *const names[] = {"camera.from", "camera.to", "camera.up"};
+    const ts_vec3 *pts[] = {&d->from, &d->to, &d->up};
+    for (int k = 0; k < 3; k++)
+        if (!(fabsf(pts[k]->x) <= 1e15f && fabsf(pts[k]->y) <= 1e15f && fabsf(pts[k]->z) <= 1e15f))
+            return ts_error_set(err, TS_ERR_INVALID, "%s: %s ([%g, %g, %g])", names[k],
+                                k < 2 ? "farther than 1e15 units from the origin" : "components beyond ±1e15",
+                                pts[k]->x, pts[k]->y, pts[k]->z);
     /* ts_camera_init's checks do not depend on the film's size. */
     ts_camera probe;
     TRY(ts_camera_init(&probe, d, 1, 1, err));
@@ -865,11 +874,18 @@ static ts_status build(ts_scene_builder *b, ts_error *err)
         !(fabsf(s->bounds.lo.x) <= limit && fabsf(s->bounds.lo.y) <= limit &&
           fabsf(s->bounds.lo.z) <= limit && fabsf(s->bounds.hi.x) <= limit &&
           fabsf(s->bounds.hi.y) <= limit && fabsf(s->bounds.hi.z) <= limit))
+    {
+        /* Bounds of a shape beyond the float range are not printed (they read "-nan"). */
+        if (!ts_vec3_is_finite(s->bounds.lo) || !ts_vec3_is_finite(s->bounds.hi))
+            return ts_error_set(err, TS_ERR_INVALID,
+                                "shapes: the scene reaches beyond ±1e15 units from the origin (its bounds overflow "
+                                "the float range); scale or move it");
         return ts_error_set(
             err, TS_ERR_INVALID,
             "shapes: the scene reaches beyond ±1e15 units from the origin (bounds [%g, %g, %g] to "
             "[%g, %g, %g]); scale or move it",
             s->bounds.lo.x, s->bounds.lo.y, s->bounds.lo.z, s->bounds.hi.x, s->bounds.hi.y, s->bounds.hi.z);
+    }
     ts_vec3 from = s->camera.origin;
     if (!(fabsf(from.x) <= limit && fabsf(from.y) <= limit && fabsf(from.z) <= limit))
         return ts_error_set(err, TS_ERR_INVALID, "camera.from: farther than 1e15 units from the origin");

@@ -110,17 +110,26 @@ static ts_status parse_transform(loader *ld, const cJSON *obj, const char *path,
             ts_mat4 mat;
             int k = 0;
             for (const cJSON *c = m->child; c; c = c->next, k++) {
-                if (!cJSON_IsNumber(c) || !isfinite(c->valuedouble)) {
+                if (!cJSON_IsNumber(c) || !isfinite((float)c->valuedouble)) {
                     ts_jpath ep = ts_jpath_index(mp.s, k);
-                    return ts_error_set(ld->err, TS_ERR_INVALID, "%s: expected a finite number", ep.s);
+                    return ts_error_set(ld->err, TS_ERR_INVALID, "%s: expected a finite number within the float range", ep.s);
                 }
                 mat.m[k / 4][k % 4] = c->valuedouble;
             }
             if (!ts_xform_from_matrix(&mat, &step))
                 return ts_error_set(ld->err, TS_ERR_INVALID, "%s: the matrix is singular", mp.s);
         }
-        /* Applied first to last: the new step goes on the outside. */
+        /* Applied first to last: the new step goes on the outside. Points are made in
+         * double and kept as floats: a composition beyond the float range is refused here,
+         * where it happens, rather than as a shape that vanishes. */
         *out = ts_xform_compose(&step, out);
+        for (int r = 0; r < 4; r++)
+            for (int c = 0; c < 4; c++)
+                if (!isfinite((float)out->m.m[r][c]) || !isfinite((float)out->m_inv.m[r][c]))
+                    return ts_error_set(ld->err, TS_ERR_INVALID,
+                                        "%s: the transform so far overflows the float range (it or its inverse has "
+                                        "an entry of %.3g)",
+                                        p.s, isfinite((float)out->m.m[r][c]) ? out->m_inv.m[r][c] : out->m.m[r][c]);
     }
     return TS_OK;
 }
@@ -224,7 +233,7 @@ static ts_status parse_camera(loader *ld, const cJSON *doc)
     if (win) {
         int n = 0;
         for (const cJSON *v = win->child; v; v = v->next) {
-            if (n >= 4 || !cJSON_IsNumber(v) || !isfinite(v->valuedouble)) n = 5;
+            if (n >= 4 || !cJSON_IsNumber(v) || !isfinite((float)v->valuedouble)) n = 5;
             else d.screen_window[n++] = (float)v->valuedouble;
             if (n == 5) break;
         }
@@ -237,8 +246,10 @@ static ts_status parse_camera(loader *ld, const cJSON *doc)
     TRY(ts_json_number(cam, "camera", "focus_distance", false, TS_J_POSITIVE, &focus, ld->err));
     if (type == 0) {
         TRY(ts_json_number(cam, "camera", "fov", false, TS_J_POSITIVE, &fov, ld->err));
-        if (!(fov < 180))
-            return ts_error_set(ld->err, TS_ERR_INVALID, "camera.fov: expected an angle in (0, 180) degrees, got %g", fov);
+        if (!((float)fov < 180)) /* as the float it becomes: 179.999999 is 180 */
+            return ts_error_set(ld->err, TS_ERR_INVALID,
+                                "camera.fov: expected an angle in (0, 180) degrees, got %.9g%s", fov,
+                                fov < 180 ? " (180 as a float)" : "");
     } else {
         TRY(ts_json_number(cam, "camera", "height", !win, TS_J_POSITIVE, &height, ld->err));
     }
