@@ -29,7 +29,7 @@ static void build(const ts_material *m, ts_bsdf *b)
     memset(&si, 0, sizeof si);
     si.n = si.ns = (ts_vec3){0, 0, 1};
     si.dpdu = (ts_vec3){1, 0, 0};
-    ts_material_bsdf(m, &si, b);
+    ts_material_bsdf(m, &si, NULL, b);
 }
 
 static ts_vec3 dir_cos(double cos_theta, double phi)
@@ -41,31 +41,31 @@ static ts_vec3 dir_cos(double cos_theta, double phi)
 static ts_material plastic(float kd, float ks, float alpha)
 {
     return (ts_material){.type = TS_MATERIAL_PLASTIC,
-                         .diffuse = ts_rgb_gray(kd),
-                         .specular = ts_rgb_gray(ks),
-                         .roughness = alpha};
+                         .diffuse = ts_material_rgb_gray(kd),
+                         .specular = ts_material_rgb_gray(ks),
+                         .roughness = {alpha}};
 }
 static ts_material substrate(float kd, float ks, float alpha)
 {
     return (ts_material){.type = TS_MATERIAL_SUBSTRATE,
-                         .diffuse = ts_rgb_gray(kd),
-                         .specular = ts_rgb_gray(ks),
-                         .roughness = alpha};
+                         .diffuse = ts_material_rgb_gray(kd),
+                         .specular = ts_material_rgb_gray(ks),
+                         .roughness = {alpha}};
 }
 static ts_material dielectric(float eta, float alpha)
 {
     return (ts_material){.type = TS_MATERIAL_DIELECTRIC,
-                         .eta = eta,
-                         .reflectance = ts_rgb_gray(1),
-                         .transmittance = ts_rgb_gray(1),
-                         .roughness = alpha};
+                         .eta = {eta},
+                         .reflectance = ts_material_rgb_gray(1),
+                         .transmittance = ts_material_rgb_gray(1),
+                         .roughness = {alpha}};
 }
 static ts_material conductor(ts_rgb eta, ts_rgb k, float alpha, ts_microfacet_type d)
 {
     return (ts_material){.type = TS_MATERIAL_CONDUCTOR,
-                         .conductor_eta = eta,
-                         .conductor_k = k,
-                         .roughness = alpha,
+                         .conductor_eta = ts_material_rgb_const(eta),
+                         .conductor_k = ts_material_rgb_const(k),
+                         .roughness = {alpha},
                          .distribution = d};
 }
 
@@ -222,17 +222,17 @@ static double fresnel_hh_dielectric(void)
 static double closed_albedo(const ts_material *m, double cos_o, int c)
 {
     double mu = fabs(cos_o);
-    double kd = c == 0 ? m->diffuse.r : (c == 1 ? m->diffuse.g : m->diffuse.b);
-    double ks = c == 0 ? m->specular.r : (c == 1 ? m->specular.g : m->specular.b);
-    bool smooth = m->roughness == 0;
+    double kd = c == 0 ? m->diffuse.value.r : (c == 1 ? m->diffuse.value.g : m->diffuse.value.b);
+    double ks = c == 0 ? m->specular.value.r : (c == 1 ? m->specular.value.g : m->specular.value.b);
+    bool smooth = m->roughness.value == 0;
     switch (m->type) {
     case TS_MATERIAL_DIFFUSE:
-        if (m->sigma_deg > 0) return NAN;
-        return c == 0 ? m->reflectance.r : (c == 1 ? m->reflectance.g : m->reflectance.b);
-    case TS_MATERIAL_MIRROR: return c == 0 ? m->reflectance.r : (c == 1 ? m->reflectance.g : m->reflectance.b);
+        if (m->sigma_deg.value > 0) return NAN;
+        return c == 0 ? m->reflectance.value.r : (c == 1 ? m->reflectance.value.g : m->reflectance.value.b);
+    case TS_MATERIAL_MIRROR: return c == 0 ? m->reflectance.value.r : (c == 1 ? m->reflectance.value.g : m->reflectance.value.b);
     case TS_MATERIAL_CONDUCTOR: {
         if (!smooth) return NAN;
-        ts_rgb f = ts_fresnel_conductor((float)mu, 1, m->conductor_eta, m->conductor_k);
+        ts_rgb f = ts_fresnel_conductor((float)mu, 1, m->conductor_eta.value, m->conductor_k.value);
         return c == 0 ? f.r : (c == 1 ? f.g : f.b);
     }
     case TS_MATERIAL_DIELECTRIC: return smooth ? 1 : NAN;
@@ -307,14 +307,14 @@ static void test_energy(void **state)
     char name[96];
     const float alphas[] = {0, 1e-3f, 0.01f, 0.05f, 0.1f, 0.3f, 0.6f, 1.0f};
     double mx;
-    max_albedo("diffuse R=1", (ts_material){.type = TS_MATERIAL_DIFFUSE, .reflectance = ts_rgb_gray(1)});
+    max_albedo("diffuse R=1", (ts_material){.type = TS_MATERIAL_DIFFUSE, .reflectance = ts_material_rgb_gray(1)});
     max_albedo("diffuse R=0.6",
-               (ts_material){.type = TS_MATERIAL_DIFFUSE, .reflectance = ts_rgb_gray(0.6f)});
+               (ts_material){.type = TS_MATERIAL_DIFFUSE, .reflectance = ts_material_rgb_gray(0.6f)});
     max_albedo("diffuse R=1 σ=20°",
-               (ts_material){.type = TS_MATERIAL_DIFFUSE, .reflectance = ts_rgb_gray(1), .sigma_deg = 20});
+               (ts_material){.type = TS_MATERIAL_DIFFUSE, .reflectance = ts_material_rgb_gray(1), .sigma_deg = {20}});
     max_albedo("diffuse R=1 σ=90°",
-               (ts_material){.type = TS_MATERIAL_DIFFUSE, .reflectance = ts_rgb_gray(1), .sigma_deg = 90});
-    max_albedo("mirror R=1", (ts_material){.type = TS_MATERIAL_MIRROR, .reflectance = ts_rgb_gray(1)});
+               (ts_material){.type = TS_MATERIAL_DIFFUSE, .reflectance = ts_material_rgb_gray(1), .sigma_deg = {90}});
+    max_albedo("mirror R=1", (ts_material){.type = TS_MATERIAL_MIRROR, .reflectance = ts_material_rgb_gray(1)});
     mx = 0;
     for (size_t i = 0; i < sizeof alphas / sizeof alphas[0]; i++) {
         snprintf(name, sizeof name, "plastic kd=ks=1 α=%g", alphas[i]);
@@ -396,8 +396,8 @@ static void test_rho_hh(void **state)
     (void)state;
     double fbar = fresnel_hh_dielectric();
     check_rho_hh("diffuse R=0.5",
-                 (ts_material){.type = TS_MATERIAL_DIFFUSE, .reflectance = ts_rgb_gray(0.5f)}, 0.5);
-    check_rho_hh("mirror R=0.8", (ts_material){.type = TS_MATERIAL_MIRROR, .reflectance = ts_rgb_gray(0.8f)},
+                 (ts_material){.type = TS_MATERIAL_DIFFUSE, .reflectance = ts_material_rgb_gray(0.5f)}, 0.5);
+    check_rho_hh("mirror R=0.8", (ts_material){.type = TS_MATERIAL_MIRROR, .reflectance = ts_material_rgb_gray(0.8f)},
                  0.8);
     check_rho_hh("smooth conductor gold", conductor(gold_eta, gold_k, 0, TS_MICROFACET_GGX),
                  fresnel_hh_conductor(gold_eta, gold_k));
@@ -421,7 +421,7 @@ static void test_reciprocity(void **state)
         plastic(1, 1, 1),
         substrate(0.7f, 0.3f, 0.3f),
         conductor(gold_eta, gold_k, 0.3f, TS_MICROFACET_BECKMANN),
-        (ts_material){.type = TS_MATERIAL_DIFFUSE, .reflectance = ts_rgb_gray(0.9f), .sigma_deg = 30},
+        (ts_material){.type = TS_MATERIAL_DIFFUSE, .reflectance = ts_material_rgb_gray(0.9f), .sigma_deg = {30}},
     };
     ts_pcg32 rng;
     ts_pcg32_seed(&rng, 3, 3);
@@ -462,8 +462,8 @@ static void test_no_nan(void **state)
             dielectric(1, al),
             conductor(gold_eta, gold_k, al, TS_MICROFACET_GGX),
             conductor(gold_eta, gold_k, al, TS_MICROFACET_BECKMANN),
-            (ts_material){.type = TS_MATERIAL_DIFFUSE, .reflectance = ts_rgb_gray(1), .sigma_deg = 20},
-            (ts_material){.type = TS_MATERIAL_MIRROR, .reflectance = ts_rgb_gray(1)},
+            (ts_material){.type = TS_MATERIAL_DIFFUSE, .reflectance = ts_material_rgb_gray(1), .sigma_deg = {20}},
+            (ts_material){.type = TS_MATERIAL_MIRROR, .reflectance = ts_material_rgb_gray(1)},
         };
         for (size_t k = 0; k < sizeof ms / sizeof ms[0]; k++) {
             ts_bsdf b;

@@ -45,7 +45,7 @@ static ts_scene_builder *base(const ts_scene_limits *lim)
                              .ao_distance = INFINITY};
     ok(ts_scene_builder_set_integrator(b, &in, &err), &err);
     ok(ts_scene_builder_set_digest(b, digest, &err), &err);
-    ts_material m = {.type = TS_MATERIAL_DIFFUSE, .reflectance = {0.5f, 0.5f, 0.5f}};
+    ts_material m = {.type = TS_MATERIAL_DIFFUSE, .reflectance = {{0.5f, 0.5f, 0.5f}}};
     uint32_t id = 7;
     ok(ts_scene_builder_add_material(b, "m", &m, &id, &err), &err);
     assert_int_equal(id, 0);
@@ -118,17 +118,17 @@ static void test_same_scene_as_json(void **state)
                              .ao_distance = INFINITY};
     ok(ts_scene_builder_set_integrator(b, &in, &err), &err);
     ts_material m = {.type = TS_MATERIAL_DIFFUSE,
-                     .reflectance = ts_rgb_gray(0.5f),
-                     .transmittance = ts_rgb_gray(1),
-                     .eta = 1.5f,
-                     .roughness = 0};
+                     .reflectance = ts_material_rgb_gray(0.5f),
+                     .transmittance = ts_material_rgb_gray(1),
+                     .eta = {1.5f},
+                     .roughness = {0}};
     ts_material g = {.type = TS_MATERIAL_CONDUCTOR,
-                     .reflectance = ts_rgb_gray(1),
-                     .transmittance = ts_rgb_gray(1),
-                     .eta = 1.5f,
-                     .conductor_eta = {0.2f, 0.4f, 1.4f},
-                     .conductor_k = {3.6f, 2.4f, 1.8f},
-                     .roughness = 0.2f};
+                     .reflectance = ts_material_rgb_gray(1),
+                     .transmittance = ts_material_rgb_gray(1),
+                     .eta = {1.5f},
+                     .conductor_eta = {{0.2f, 0.4f, 1.4f}},
+                     .conductor_k = {{3.6f, 2.4f, 1.8f}},
+                     .roughness = {0.2f}};
     uint32_t mid, gid;
     ok(ts_scene_builder_add_material(b, "m", &m, &mid, &err), &err);
     ok(ts_scene_builder_add_material(b, "g", &g, &gid, &err), &err);
@@ -377,22 +377,22 @@ static void test_elements_refused(void **state)
         ts_material m;
         expect e;
     } mats[] = {
-        {{.type = TS_MATERIAL_DIFFUSE, .reflectance = {0.5f, 1.5f, 0}},
+        {{.type = TS_MATERIAL_DIFFUSE, .reflectance = {{0.5f, 1.5f, 0}}},
          {TS_ERR_INVALID, "reflectance: expected RGB in [0, 1], got (0.5, 1.5, 0)"}},
-        {{.type = TS_MATERIAL_DIFFUSE, .sigma_deg = 91},
+        {{.type = TS_MATERIAL_DIFFUSE, .sigma_deg = {91}},
          {TS_ERR_INVALID, "sigma: expected an angle in [0, 90]"}},
-        {{.type = TS_MATERIAL_MIRROR, .reflectance = {NAN, 0, 0}}, {TS_ERR_INVALID, "reflectance"}},
-        {{.type = TS_MATERIAL_DIELECTRIC, .eta = 0},
+        {{.type = TS_MATERIAL_MIRROR, .reflectance = {{NAN, 0, 0}}}, {TS_ERR_INVALID, "reflectance"}},
+        {{.type = TS_MATERIAL_DIELECTRIC, .eta = {0}},
          {TS_ERR_INVALID, "eta: expected a finite number > 0, got 0"}},
-        {{.type = TS_MATERIAL_DIELECTRIC, .eta = 1.5f, .transmittance = {2, 0, 0}},
+        {{.type = TS_MATERIAL_DIELECTRIC, .eta = {1.5f}, .transmittance = {{2, 0, 0}}},
          {TS_ERR_INVALID, "transmittance: expected RGB in [0, 1], got (2, 0, 0)"}},
-        {{.type = TS_MATERIAL_CONDUCTOR, .conductor_k = {INFINITY, 0, 0}},
+        {{.type = TS_MATERIAL_CONDUCTOR, .conductor_k = {{INFINITY, 0, 0}}},
          {TS_ERR_INVALID, "k: expected finite RGB ≥ 0, got (inf, 0, 0)"}},
         {{.type = TS_MATERIAL_CONDUCTOR, .distribution = (ts_microfacet_type)4},
          {TS_ERR_INVALID, "distribution"}},
-        {{.type = TS_MATERIAL_PLASTIC, .roughness = -0.5f},
+        {{.type = TS_MATERIAL_PLASTIC, .roughness = {-0.5f}},
          {TS_ERR_INVALID, "roughness: expected a finite number"}},
-        {{.type = TS_MATERIAL_SUBSTRATE, .specular = {0, 3, 0}},
+        {{.type = TS_MATERIAL_SUBSTRATE, .specular = {{0, 3, 0}}},
          {TS_ERR_INVALID, "specular: expected RGB in [0, 1], got (0, 3, 0)"}},
         {{.type = TS_MATERIAL_FOURIER},
          {TS_ERR_INVALID, "the Fourier table was not loaded by this scene builder"}},

@@ -44,21 +44,21 @@ void ts_effects_format(uint32_t effects, char *buf, size_t n)
     if (!used) snprintf(buf, n, "none");
 }
 
-/* The lobes a material has, found by building its BSDF at a canonical shading point, so
- * the classification follows the BSDF code (e.g. its roughness-to-specular threshold). */
-static uint32_t material_effects(const ts_material *m)
+/* The lobes of m's BSDF at a canonical shading point (m untextured), so the
+ * classification follows the BSDF code (e.g. its roughness-to-specular threshold). */
+static uint32_t constant_material_effects(const ts_material *m)
 {
     switch (m->type) {
     case TS_MATERIAL_DIFFUSE:
     case TS_MATERIAL_MIRROR:
-        if (ts_rgb_is_black(m->reflectance)) return 0;
+        if (ts_rgb_is_black(m->reflectance.value)) return 0;
         break;
     case TS_MATERIAL_DIELECTRIC:
-        if (ts_rgb_is_black(m->reflectance) && ts_rgb_is_black(m->transmittance)) return 0;
+        if (ts_rgb_is_black(m->reflectance.value) && ts_rgb_is_black(m->transmittance.value)) return 0;
         break;
     case TS_MATERIAL_PLASTIC:
     case TS_MATERIAL_SUBSTRATE:
-        if (ts_rgb_is_black(m->diffuse) && ts_rgb_is_black(m->specular)) return 0;
+        if (ts_rgb_is_black(m->diffuse.value) && ts_rgb_is_black(m->specular.value)) return 0;
         break;
     case TS_MATERIAL_CONDUCTOR: break;
     case TS_MATERIAL_FOURIER: return TS_EFFECT_FOURIER;
@@ -69,13 +69,37 @@ static uint32_t material_effects(const ts_material *m)
     si.dpdv = (ts_vec3){0, 1, 0};
     si.wo = (ts_vec3){0, 0, 1};
     ts_bsdf b;
-    ts_material_bsdf(m, &si, &b);
+    ts_material_bsdf(m, &si, NULL, &b);
     uint32_t flags = ts_bsdf_flags(&b), fx = b.n_bxdfs > 1 ? TS_EFFECT_LOBE_CHOICE : 0;
     if (flags & TS_BXDF_DIFFUSE) fx |= TS_EFFECT_DIFFUSE;
     if (flags & TS_BXDF_GLOSSY) fx |= TS_EFFECT_GLOSSY;
     if ((flags & TS_BXDF_SPECULAR) && (flags & TS_BXDF_REFLECTION)) fx |= TS_EFFECT_SPECULAR_REFLECTION;
     if ((flags & TS_BXDF_SPECULAR) && (flags & TS_BXDF_TRANSMISSION)) fx |= TS_EFFECT_SPECULAR_TRANSMISSION;
     return fx;
+}
+
+/* A textured parameter may take any value of its range at some point, so a textured
+ * material is classified as the union over stand-in constants that between them raise
+ * every lobe the range allows: colours white (a black texel only removes lobes), and a
+ * textured roughness both 0 (specular lobes) and 1 (glossy ones). σ and η change no
+ * lobe's kind. Never fewer effects than some point of the surface shows. */
+static uint32_t material_effects(const ts_material *m)
+{
+    if (!m->textured) return constant_material_effects(m);
+    ts_material c = *m;
+    c.textured = false;
+    ts_material_rgb *colours[] = {&c.reflectance, &c.transmittance, &c.conductor_eta, &c.conductor_k, &c.diffuse,
+                                  &c.specular};
+    for (size_t i = 0; i < sizeof colours / sizeof *colours; i++)
+        if (colours[i]->tex) *colours[i] = ts_material_rgb_gray(1);
+    ts_material_float *floats[] = {&c.sigma_deg, &c.eta};
+    for (size_t i = 0; i < sizeof floats / sizeof *floats; i++)
+        if (floats[i]->tex) *floats[i] = ts_material_float_const(floats[i] == &c.eta ? 1.5f : 0);
+    if (!c.roughness.tex) return constant_material_effects(&c);
+    c.roughness = ts_material_float_const(0);
+    uint32_t fx = constant_material_effects(&c);
+    c.roughness = ts_material_float_const(1);
+    return fx | constant_material_effects(&c);
 }
 
 uint32_t ts_effects_analyse(const ts_scene *s)

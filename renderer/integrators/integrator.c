@@ -6,6 +6,7 @@
 #include "materials/bsdf.h"
 #include "materials/material.h"
 #include "sampling/sampling.h"
+#include "textures/texture_mapping.h"
 
 const char *ts_integrator_name(ts_integrator_type type)
 {
@@ -70,6 +71,23 @@ static ts_rgb escaped(const ts_scene *s, const ts_ray *ray)
     for (uint32_t i = 0; i < s->n_infinite_lights; i++)
         L = ts_rgb_add(L, ts_light_le(&s->lights[s->infinite_lights[i]], ray));
     return L;
+}
+
+/* A textured material's BSDF, its parameters read at si's texture context: a call of its
+ * own, so the context's storage does not weigh on the constant path. */
+static __attribute__((noinline)) void textured_bsdf(const ts_material *m, const ts_interaction *si, ts_bsdf *bsdf)
+{
+    ts_texture_context tc;
+    ts_material_texture_context(si, &tc);
+    ts_material_bsdf(m, si, &tc, bsdf);
+}
+
+/* The BSDF at hit si. */
+static inline void material_bsdf(const ts_scene *s, const ts_interaction *si, ts_bsdf *bsdf)
+{
+    const ts_material *m = &s->materials[s->shapes[si->shape].material];
+    if (m->textured) textured_bsdf(m, si, bsdf);
+    else ts_material_bsdf(m, si, NULL, bsdf);
 }
 
 static float power_heuristic(float f_pdf, float g_pdf) { return ts_power_heuristic(1, f_pdf, 1, g_pdf); }
@@ -292,7 +310,7 @@ static ts_rgb li_path(const ts_scene *s, uint32_t fx, ts_ray ray, ts_sample_stre
         }
         if (!found || bounces >= max_depth) break;
         ts_bsdf bsdf;
-        ts_material_bsdf(&s->materials[s->shapes[si.shape].material], &si, &bsdf);
+        material_bsdf(s, &si, &bsdf);
         uint32_t flags = ts_bsdf_flags(&bsdf);
         if (flags & ~TS_BXDF_SPECULAR & (TS_BXDF_DIFFUSE | TS_BXDF_GLOSSY)) {
             ts_vec2 u_select = ts_sample_2d(st); /* x: the alias bin, y: its coin */
@@ -346,7 +364,7 @@ static ts_rgb li_direct(const ts_scene *s, uint32_t fx, ts_ray ray, ts_sample_st
     ts_rgb L = (fx & TS_EFFECT_AREA_LIGHTS) ? emitted(s, &si, si.wo) : ts_rgb_gray(0);
     if (!(fx & TS_EFFECTS_SCATTERING)) return L;
     ts_bsdf bsdf;
-    ts_material_bsdf(&s->materials[s->shapes[si.shape].material], &si, &bsdf);
+    material_bsdf(s, &si, &bsdf);
     uint32_t flags = ts_bsdf_flags(&bsdf);
     if (s->n_lights > 0 && (flags & (TS_BXDF_DIFFUSE | TS_BXDF_GLOSSY))) {
         if (s->integrator.strategy == TS_LIGHTS_ALL) L = ts_rgb_add(L, sample_all_lights(s, fx, &si, &bsdf, st, c));

@@ -33,45 +33,113 @@
  * front side's (test_material's furnace sweeps both sides of every material). */
 #include "materials/material.h"
 
+#include <float.h>
+
 #include "materials/bsdf.h"
 #include "materials/fourier_bsdf.h"
 #include "materials/microfacet.h"
+#include "textures/texture.h"
 
 static bool nonblack(ts_rgb c) { return c.r > 0 || c.g > 0 || c.b > 0; }
 
-void ts_material_bsdf(const ts_material *m, const ts_interaction *si, ts_bsdf *out)
+/* ---------------------------------------------------------------- parameters */
+
+static float clampf(float v, float lo, float hi) { return v > lo ? (v < hi ? v : hi) : lo; } /* NaN → lo */
+
+/* A caller's error (material.h): a textured parameter read without a context is read at
+ * a zero one rather than through a null pointer. */
+static const ts_texture_context *context(const ts_texture_context *c)
+{
+    static const ts_texture_context zero;
+    return c ? c : &zero;
+}
+
+ts_rgb ts_material_texture_unit_rgb(const ts_texture *t, const ts_texture_context *c)
+{
+    ts_rgb v = ts_texture_eval_rgb(t, context(c));
+    return (ts_rgb){clampf(v.r, 0, 1), clampf(v.g, 0, 1), clampf(v.b, 0, 1)};
+}
+
+ts_rgb ts_material_texture_nonneg_rgb(const ts_texture *t, const ts_texture_context *c)
+{
+    ts_rgb v = ts_texture_eval_rgb(t, context(c));
+    return (ts_rgb){clampf(v.r, 0, FLT_MAX), clampf(v.g, 0, FLT_MAX), clampf(v.b, 0, FLT_MAX)};
+}
+
+float ts_material_texture_float(const ts_texture *t, const ts_texture_context *c, float lo, float hi)
+{
+    return clampf(ts_texture_eval_float(t, context(c)), lo, hi);
+}
+
+bool ts_material_uses_textures(const ts_material *m)
+{
+    /* Every parameter, whether m's type reads it or not: a texture left in a field the type
+     * ignores only costs the context it is never read from. */
+    return m->reflectance.tex || m->transmittance.tex || m->sigma_deg.tex || m->eta.tex || m->conductor_eta.tex ||
+           m->conductor_k.tex || m->roughness.tex || m->diffuse.tex || m->specular.tex;
+}
+
+void ts_material_texture_context(const ts_interaction *si, ts_texture_context *c)
+{
+    c->p = si->p;
+    c->uv = si->uv;
+    c->dpdu = si->dpdu;
+    c->dpdv = si->dpdv;
+    ts_texture_context_clear_differentials(c);
+}
+
+/* ---------------------------------------------------------------- BSDFs */
+
+/* The BSDF, with the parameter reads of a textured material (textured) or of a constant
+ * one, whose reads the compiler reduces to the plain values: ts_material_bsdf calls it
+ * with the constant true or false, so a constant-only material runs the code it ran
+ * before parameters could be textured (docs/design.md §4d measures it). */
+#define RGB(p) (textured ? ts_material_eval_unit_rgb(&(p), tc) : (p).value)
+#define NONNEG_RGB(p) (textured ? ts_material_eval_nonneg_rgb(&(p), tc) : (p).value)
+#define FLOAT(p, lo, hi) (textured ? ts_material_eval_float(&(p), tc, lo, hi) : (p).value)
+/* The dielectric's η, evaluated once when textured; a constant one read again, as the
+ * constant path always has (no register held across calls). */
+#define ETA (textured ? eta : m->eta.value)
+static inline __attribute__((always_inline)) void bsdf(const ts_material *m, const ts_interaction *si,
+                                                       const ts_texture_context *tc, ts_bsdf *out, bool textured)
 {
     float eta = 1;
-    if (m->type == TS_MATERIAL_DIELECTRIC) eta = m->eta;
+    if (m->type == TS_MATERIAL_DIELECTRIC) eta = FLOAT(m->eta, TS_MATERIAL_ETA_MIN, FLT_MAX);
     if (m->type == TS_MATERIAL_FOURIER && m->fourier) eta = m->fourier->eta;
     ts_bsdf_init(out, si->n, si->ns, si->dpdu, eta);
 
-    float alpha = m->roughness;
+    float alpha = FLOAT(m->roughness, 0, FLT_MAX);
     bool smooth = ts_microfacet_is_specular(alpha, alpha);
     switch (m->type) {
-    case TS_MATERIAL_DIFFUSE:
-        if (!nonblack(m->reflectance)) break;
-        if (m->sigma_deg > 0) ts_bsdf_add(out, ts_bxdf_oren_nayar(m->reflectance, m->sigma_deg));
-        else ts_bsdf_add(out, ts_bxdf_lambertian(m->reflectance));
+    case TS_MATERIAL_DIFFUSE: {
+        ts_rgb r = RGB(m->reflectance);
+        if (!nonblack(r)) break;
+        float sigma = FLOAT(m->sigma_deg, 0, 90);
+        if (sigma > 0) ts_bsdf_add(out, ts_bxdf_oren_nayar(r, sigma));
+        else ts_bsdf_add(out, ts_bxdf_lambertian(r));
         break;
-    case TS_MATERIAL_MIRROR:
-        if (nonblack(m->reflectance)) ts_bsdf_add(out, ts_bxdf_specular_reflection(m->reflectance, ts_fresnel_one()));
+    }
+    case TS_MATERIAL_MIRROR: {
+        ts_rgb r = RGB(m->reflectance);
+        if (nonblack(r)) ts_bsdf_add(out, ts_bxdf_specular_reflection(r, ts_fresnel_one()));
         break;
+    }
     case TS_MATERIAL_DIELECTRIC: {
-        if (!nonblack(m->reflectance) && !nonblack(m->transmittance)) break;
+        ts_rgb r = RGB(m->reflectance);
+        ts_rgb t = RGB(m->transmittance);
+        if (!nonblack(r) && !nonblack(t)) break;
         if (smooth) {
-            ts_bsdf_add(out, ts_bxdf_fresnel_specular(m->reflectance, m->transmittance, 1, m->eta));
+            ts_bsdf_add(out, ts_bxdf_fresnel_specular(r, t, 1, ETA));
             break;
         }
         ts_microfacet d = ts_microfacet_make(TS_MICROFACET_GGX, alpha, alpha);
-        if (nonblack(m->reflectance))
-            ts_bsdf_add(out, ts_bxdf_microfacet_reflection(m->reflectance, d, ts_fresnel_make_dielectric(1, m->eta)));
-        if (nonblack(m->transmittance))
-            ts_bsdf_add(out, ts_bxdf_microfacet_transmission(m->transmittance, d, 1, m->eta));
+        if (nonblack(r)) ts_bsdf_add(out, ts_bxdf_microfacet_reflection(r, d, ts_fresnel_make_dielectric(1, ETA)));
+        if (nonblack(t)) ts_bsdf_add(out, ts_bxdf_microfacet_transmission(t, d, 1, ETA));
         break;
     }
     case TS_MATERIAL_CONDUCTOR: {
-        ts_fresnel fr = ts_fresnel_make_conductor(1, m->conductor_eta, m->conductor_k);
+        ts_fresnel fr = ts_fresnel_make_conductor(1, NONNEG_RGB(m->conductor_eta),
+                                                  NONNEG_RGB(m->conductor_k));
         if (smooth) ts_bsdf_add(out, ts_bxdf_specular_reflection(ts_rgb_gray(1), fr));
         else
             ts_bsdf_add(out, ts_bxdf_microfacet_reflection(ts_rgb_gray(1), ts_microfacet_make(m->distribution, alpha, alpha),
@@ -79,26 +147,45 @@ void ts_material_bsdf(const ts_material *m, const ts_interaction *si, ts_bsdf *o
         break;
     }
     case TS_MATERIAL_PLASTIC: {
+        ts_rgb kd = RGB(m->diffuse), ks = RGB(m->specular);
         ts_fresnel fr = ts_fresnel_make_dielectric_two_sided(1, 1.5f);
-        if (nonblack(m->diffuse)) ts_bsdf_add(out, ts_bxdf_lambertian_coupled(m->diffuse, m->specular, fr));
-        if (!nonblack(m->specular)) break;
-        if (smooth) ts_bsdf_add(out, ts_bxdf_specular_reflection(m->specular, fr));
+        if (nonblack(kd)) ts_bsdf_add(out, ts_bxdf_lambertian_coupled(kd, ks, fr));
+        if (!nonblack(ks)) break;
+        if (smooth) ts_bsdf_add(out, ts_bxdf_specular_reflection(ks, fr));
         else
-            ts_bsdf_add(out, ts_bxdf_microfacet_reflection(m->specular, ts_microfacet_make(TS_MICROFACET_GGX, alpha, alpha),
-                                                           fr));
+            ts_bsdf_add(out, ts_bxdf_microfacet_reflection(ks, ts_microfacet_make(TS_MICROFACET_GGX, alpha, alpha), fr));
         break;
     }
-    case TS_MATERIAL_SUBSTRATE:
+    case TS_MATERIAL_SUBSTRATE: {
+        ts_rgb kd = RGB(m->diffuse), ks = RGB(m->specular);
         if (smooth) {
-            ts_bsdf_add(out, ts_bxdf_fresnel_blend_diffuse(m->diffuse, m->specular));
-            ts_bsdf_add(out, ts_bxdf_specular_reflection(ts_rgb_gray(1), ts_fresnel_make_schlick(m->specular)));
+            ts_bsdf_add(out, ts_bxdf_fresnel_blend_diffuse(kd, ks));
+            ts_bsdf_add(out, ts_bxdf_specular_reflection(ts_rgb_gray(1), ts_fresnel_make_schlick(ks)));
         } else {
-            ts_bsdf_add(out, ts_bxdf_fresnel_blend(m->diffuse, m->specular,
-                                                   ts_microfacet_make(TS_MICROFACET_GGX, alpha, alpha)));
+            ts_bsdf_add(out, ts_bxdf_fresnel_blend(kd, ks, ts_microfacet_make(TS_MICROFACET_GGX, alpha, alpha)));
         }
         break;
+    }
     case TS_MATERIAL_FOURIER:
         if (m->fourier) ts_bsdf_add(out, ts_bxdf_fourier(m->fourier));
         break;
     }
+}
+#undef RGB
+#undef NONNEG_RGB
+#undef FLOAT
+#undef ETA
+
+/* The textured instance is a call of its own, so its registers and stack do not weigh on
+ * the constant path (measured: Cornell box, callgrind, docs/design.md §4d). */
+static __attribute__((noinline)) void bsdf_textured(const ts_material *m, const ts_interaction *si,
+                                                    const ts_texture_context *tc, ts_bsdf *out)
+{
+    bsdf(m, si, tc, out, true);
+}
+
+void ts_material_bsdf(const ts_material *m, const ts_interaction *si, const ts_texture_context *tc, ts_bsdf *out)
+{
+    if (m->textured) bsdf_textured(m, si, tc, out);
+    else bsdf(m, si, NULL, out, false);
 }

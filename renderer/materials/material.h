@@ -4,11 +4,24 @@
  * Design note: a material is plain data filled by the scene loader (which validates every
  * value); ts_material_bsdf builds the BSDF for one shading point into caller storage with
  * no allocation (the hot path). `roughness` is the microfacet α, no remapping (pbrt-v3
- * meaning). Materials are immutable after scene build and shared by all threads. */
+ * meaning). Materials are immutable after scene build and shared by all threads.
+ *
+ * Parameters (docs/design.md §4d). Every parameter pbrt-v3 lets be a texture is a
+ * ts_material_rgb or ts_material_float: a constant `value` and an optional texture `tex`
+ * (textures/texture.h, made in the scene's arena). With no texture the value is used as
+ * it is — the constant path costs one predictable branch per parameter read and gives the
+ * same bits as before parameters could be textured. With one, the texture is evaluated
+ * at the hit's ts_texture_context and the result clamped into the range the builder
+ * demands of the constant (ts_material_eval_*: reflectances to [0, 1], σ to [0, 90],
+ * α ≥ 0, η > 0; pbrt-v3 clamps colours only at 0 — a **Decision** so that a texture
+ * cannot break the energy rule of §8 or make a BxDF divide by zero). `value` is ignored
+ * when `tex` is set. `textured` is set by the builder (ts_material_uses_textures) and
+ * tells the integrators whether to fill a texture context at all. */
 #ifndef TS_MATERIAL_H
 #define TS_MATERIAL_H
 
 #include <stdbool.h>
+#include <stddef.h>
 
 #include "core/vecmath.h"
 #include "geometry/interaction.h"
@@ -25,23 +38,79 @@ typedef enum ts_material_type {
 } ts_material_type;
 
 struct ts_fourier_table; /* fourier_bsdf.h */
+struct ts_texture;       /* textures/texture.h */
+struct ts_texture_context; /* textures/texture_mapping.h */
+
+/* A colour parameter: value, or tex (an RGB texture, or a float one read as grey). */
+typedef struct ts_material_rgb {
+    ts_rgb value;
+    const struct ts_texture *tex; /* NULL: the constant value; else owned by the scene */
+} ts_material_rgb;
+
+/* A float parameter: value, or tex (a float texture; an RGB one gives its red channel). */
+typedef struct ts_material_float {
+    float value;
+    const struct ts_texture *tex; /* NULL: the constant value; else owned by the scene */
+} ts_material_float;
+
+static inline ts_material_rgb ts_material_rgb_const(ts_rgb v) { return (ts_material_rgb){v, NULL}; }
+static inline ts_material_rgb ts_material_rgb_gray(float v) { return (ts_material_rgb){ts_rgb_gray(v), NULL}; }
+static inline ts_material_float ts_material_float_const(float v) { return (ts_material_float){v, NULL}; }
 
 typedef struct ts_material {
     ts_material_type type;
-    ts_rgb reflectance;                  /* diffuse, mirror, dielectric */
-    ts_rgb transmittance;                /* dielectric */
-    float sigma_deg;                     /* diffuse: Oren–Nayar σ in degrees */
-    float eta;                           /* dielectric: interior / exterior index */
-    ts_rgb conductor_eta, conductor_k;   /* conductor: complex index per channel */
-    float roughness;                     /* microfacet α (dielectric, conductor, plastic, substrate) */
-    ts_microfacet_type distribution;     /* conductor (plastic/substrate/dielectric: GGX) */
-    ts_rgb diffuse, specular;            /* plastic, substrate */
-    const struct ts_fourier_table *fourier; /* fourier: owned by the scene */
+    ts_material_rgb reflectance;              /* diffuse, mirror, dielectric */
+    ts_material_rgb transmittance;            /* dielectric */
+    ts_material_float sigma_deg;              /* diffuse: Oren–Nayar σ in degrees */
+    ts_material_float eta;                    /* dielectric: interior / exterior index */
+    ts_material_rgb conductor_eta, conductor_k; /* conductor: complex index per channel */
+    ts_material_float roughness;              /* microfacet α (dielectric, conductor, plastic, substrate) */
+    ts_microfacet_type distribution;          /* conductor (plastic/substrate/dielectric: GGX) */
+    ts_material_rgb diffuse, specular;        /* plastic, substrate */
+    const struct ts_fourier_table *fourier;   /* fourier: owned by the scene */
+    bool textured; /* some parameter has a texture: set by the builder (ts_material_uses_textures) */
 } ts_material;
+
+/* Whether any parameter of m has a texture (whether or not m's type reads it). */
+bool ts_material_uses_textures(const ts_material *m);
+
+/* Textured values are clamped into these: η of a dielectric below the minimum is raised
+ * to it (a constant η must be > 0; 1e-3 keeps every Fresnel and refraction term finite). */
+#define TS_MATERIAL_ETA_MIN 1e-3f
+
+/* Out of line: a texture's value at c clamped to [0, 1] per channel; to [0, FLT_MAX]; to
+ * [lo, hi] (NaN, which textures never give, to lo). */
+ts_rgb ts_material_texture_unit_rgb(const struct ts_texture *t, const struct ts_texture_context *c);
+ts_rgb ts_material_texture_nonneg_rgb(const struct ts_texture *t, const struct ts_texture_context *c);
+float ts_material_texture_float(const struct ts_texture *t, const struct ts_texture_context *c, float lo, float hi);
+
+/* A parameter's value at texture context c (which may be NULL when p has no texture):
+ * the constant, or the texture's value clamped as the design note says. */
+static inline ts_rgb ts_material_eval_unit_rgb(const ts_material_rgb *p, const struct ts_texture_context *c)
+{
+    return p->tex ? ts_material_texture_unit_rgb(p->tex, c) : p->value;
+}
+static inline ts_rgb ts_material_eval_nonneg_rgb(const ts_material_rgb *p, const struct ts_texture_context *c)
+{
+    return p->tex ? ts_material_texture_nonneg_rgb(p->tex, c) : p->value;
+}
+static inline float ts_material_eval_float(const ts_material_float *p, const struct ts_texture_context *c, float lo,
+                                           float hi)
+{
+    return p->tex ? ts_material_texture_float(p->tex, c, lo, hi) : p->value;
+}
+
+/* The texture context of hit si with no footprint (no ray differentials): p, uv, dpdu,
+ * dpdv from si. */
+void ts_material_texture_context(const ts_interaction *si, struct ts_texture_context *c);
 
 struct ts_bsdf; /* bsdf.h */
 
-/* Builds the BSDF of material m at hit si into *out (no allocation; pbrt-v3 §9.2):
+/* Builds the BSDF of material m at hit si into *out (no allocation; pbrt-v3 §9.2), with
+ * textured parameters evaluated at tc: the hit's texture context with its footprint,
+ * which the caller fills when m->textured (ts_material_texture_context, then the ray
+ * differentials) and may pass as NULL otherwise (a textured material given NULL reads
+ * its textures at an all-zero context — a caller's error, never a crash):
  *   diffuse    Lambertian(reflectance), or Oren–Nayar(reflectance, sigma) when sigma > 0
  *   mirror     specular reflection(reflectance), Fresnel = 1
  *   dielectric smooth (roughness < TS_MICROFACET_SPECULAR_ALPHA): FresnelSpecular
@@ -57,6 +126,7 @@ struct ts_bsdf; /* bsdf.h */
  *              part + a specular reflection with Schlick's Fresnel(specular)
  *   fourier    the tabulated lobe (out->eta from the table)
  * Lobes with black scale are left out. Pure and thread-safe. */
-void ts_material_bsdf(const ts_material *m, const ts_interaction *si, struct ts_bsdf *out);
+void ts_material_bsdf(const ts_material *m, const ts_interaction *si, const struct ts_texture_context *tc,
+                      struct ts_bsdf *out);
 
 #endif

@@ -5,6 +5,7 @@
 
 #include "lights/envmap.h"
 #include "materials/fourier_bsdf.h"
+#include "textures/texture_cache.h"
 
 void ts_scene_destroy(ts_scene *s)
 {
@@ -14,6 +15,7 @@ void ts_scene_destroy(ts_scene *s)
         ts_fourier_table_destroy(s->fourier_tables[i]);
     for (uint32_t i = 0; i < s->n_envmaps; i++)
         ts_envmap_destroy(s->envmaps[i]);
+    ts_texture_cache_destroy(s->texture_cache);
     ts_arena_fini(&s->arena);
     free(s);
 }

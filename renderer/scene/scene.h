@@ -101,10 +101,12 @@ typedef struct ts_scene {
     uint32_t n_fourier_tables;
     struct ts_envmap **envmaps;
     uint32_t n_envmaps;
+    /* The image maps of the scene's textures (textures live in the arena); NULL: none. */
+    struct ts_texture_cache *texture_cache;
 } ts_scene;
 
-/* Frees the scene and everything it owns (its arena, accelerator, Fourier tables and
- * environment maps). NULL is fine. Not while any thread still reads the scene. */
+/* Frees the scene and everything it owns (its arena, accelerator, Fourier tables,
+ * environment maps and texture images). NULL is fine. Not while any thread still reads the scene. */
 void ts_scene_destroy(ts_scene *s);
 
 #endif

@@ -402,6 +402,42 @@ ts_status ts_scene_builder_load_mesh(ts_scene_builder *b, const char *rel_path, 
     return ts_mesh_file_load(b->s->base_dir, rel_path, &ml, out, err);
 }
 
+/* ---------------------------------------------------------------- textures */
+
+ts_arena *ts_scene_builder_texture_arena(ts_scene_builder *b) { return &b->s->arena; }
+
+ts_status ts_scene_builder_texture_cache(ts_scene_builder *b, ts_texture_cache **out, ts_error *err)
+{
+    *out = NULL;
+    TRY(usable(b, err));
+    if (!b->s->texture_cache && !(b->s->texture_cache = ts_texture_cache_create((size_t)b->lim.max_memory)))
+        return nomem(err, "the texture cache");
+    *out = b->s->texture_cache;
+    return TS_OK;
+}
+
+const char *ts_scene_builder_base_dir(const ts_scene_builder *b) { return b->s->base_dir; }
+
+const ts_scene_limits *ts_scene_builder_limits(const ts_scene_builder *b) { return &b->lim; }
+
+ts_status ts_scene_builder_add_texture(ts_scene_builder *b, const ts_texture *proto, const ts_texture **out,
+                                       ts_error *err)
+{
+    *out = NULL;
+    TRY(usable(b, err));
+    return ts_texture_make(&b->s->arena, proto, out, err);
+}
+
+ts_status ts_scene_builder_load_texture_image(ts_scene_builder *b, const char *rel_path,
+                                              const ts_texture_image_options *opt, const ts_mipmap **out,
+                                              ts_error *err)
+{
+    *out = NULL;
+    ts_texture_cache *cache;
+    TRY(ts_scene_builder_texture_cache(b, &cache, err));
+    return ts_texture_cache_get(cache, b->s->base_dir, rel_path, b->lim.max_file_bytes, opt, out, err);
+}
+
 /* ---------------------------------------------------------------- materials */
 
 static ts_status bad_rgb(ts_error *err, const char *what, const char *expected, ts_rgb c)
@@ -410,30 +446,49 @@ static ts_status bad_rgb(ts_error *err, const char *what, const char *expected, 
                         c.b);
 }
 
+/* A colour parameter: a texture (either kind), or a constant passing ok. */
+static ts_status check_rgb_param(const ts_material_rgb *p, const char *what, bool (*ok)(ts_rgb),
+                                 const char *expected, ts_error *err)
+{
+    if (p->tex) return TS_OK;
+    if (!ok(p->value)) return bad_rgb(err, what, expected, p->value);
+    return TS_OK;
+}
+
+/* A float parameter: a float texture, or a constant (its range checked by the caller). */
+static ts_status check_float_texture(const ts_material_float *p, const char *what, ts_error *err)
+{
+    if (p->tex && p->tex->is_rgb)
+        return ts_error_set(err, TS_ERR_INVALID, "%s: expected a float texture, got an RGB one", what);
+    return TS_OK;
+}
+
 static ts_status check_material(const ts_scene_builder *b, const ts_material *m, ts_error *err)
 {
     static const char unit[] = "RGB in [0, 1]", finite[] = "finite RGB ≥ 0";
     bool rough = false;
     switch (m->type) {
     case TS_MATERIAL_DIFFUSE:
-        if (!rgb_unit(m->reflectance)) return bad_rgb(err, "reflectance", unit, m->reflectance);
-        if (!(m->sigma_deg >= 0 && m->sigma_deg <= 90))
+        TRY(check_rgb_param(&m->reflectance, "reflectance", rgb_unit, unit, err));
+        TRY(check_float_texture(&m->sigma_deg, "sigma", err));
+        if (!m->sigma_deg.tex && !(m->sigma_deg.value >= 0 && m->sigma_deg.value <= 90))
             return ts_error_set(err, TS_ERR_INVALID, "sigma: expected an angle in [0, 90] degrees, got %g",
-                                m->sigma_deg);
+                                m->sigma_deg.value);
         break;
     case TS_MATERIAL_MIRROR:
-        if (!rgb_unit(m->reflectance)) return bad_rgb(err, "reflectance", unit, m->reflectance);
+        TRY(check_rgb_param(&m->reflectance, "reflectance", rgb_unit, unit, err));
         break;
     case TS_MATERIAL_DIELECTRIC:
-        if (!(m->eta > 0 && isfinite(m->eta)))
-            return ts_error_set(err, TS_ERR_INVALID, "eta: expected a finite number > 0, got %g", m->eta);
-        if (!rgb_unit(m->reflectance)) return bad_rgb(err, "reflectance", unit, m->reflectance);
-        if (!rgb_unit(m->transmittance)) return bad_rgb(err, "transmittance", unit, m->transmittance);
+        TRY(check_float_texture(&m->eta, "eta", err));
+        if (!m->eta.tex && !(m->eta.value > 0 && isfinite(m->eta.value)))
+            return ts_error_set(err, TS_ERR_INVALID, "eta: expected a finite number > 0, got %g", m->eta.value);
+        TRY(check_rgb_param(&m->reflectance, "reflectance", rgb_unit, unit, err));
+        TRY(check_rgb_param(&m->transmittance, "transmittance", rgb_unit, unit, err));
         rough = true;
         break;
     case TS_MATERIAL_CONDUCTOR:
-        if (!rgb_finite_nonneg(m->conductor_eta)) return bad_rgb(err, "eta", finite, m->conductor_eta);
-        if (!rgb_finite_nonneg(m->conductor_k)) return bad_rgb(err, "k", finite, m->conductor_k);
+        TRY(check_rgb_param(&m->conductor_eta, "eta", rgb_finite_nonneg, finite, err));
+        TRY(check_rgb_param(&m->conductor_k, "k", rgb_finite_nonneg, finite, err));
         if (m->distribution != TS_MICROFACET_GGX && m->distribution != TS_MICROFACET_BECKMANN)
             return ts_error_set(err, TS_ERR_INVALID, "distribution: unknown microfacet distribution %d",
                                 (int)m->distribution);
@@ -441,8 +496,8 @@ static ts_status check_material(const ts_scene_builder *b, const ts_material *m,
         break;
     case TS_MATERIAL_PLASTIC:
     case TS_MATERIAL_SUBSTRATE:
-        if (!rgb_unit(m->diffuse)) return bad_rgb(err, "diffuse", unit, m->diffuse);
-        if (!rgb_unit(m->specular)) return bad_rgb(err, "specular", unit, m->specular);
+        TRY(check_rgb_param(&m->diffuse, "diffuse", rgb_unit, unit, err));
+        TRY(check_rgb_param(&m->specular, "specular", rgb_unit, unit, err));
         rough = true;
         break;
     case TS_MATERIAL_FOURIER: {
@@ -457,9 +512,10 @@ static ts_status check_material(const ts_scene_builder *b, const ts_material *m,
     default:
         return ts_error_set(err, TS_ERR_INVALID, "type: unknown material type %d", (int)m->type);
     }
-    if (rough && !(m->roughness >= 0 && isfinite(m->roughness)))
+    if (rough) TRY(check_float_texture(&m->roughness, "roughness", err));
+    if (rough && !m->roughness.tex && !(m->roughness.value >= 0 && isfinite(m->roughness.value)))
         return ts_error_set(err, TS_ERR_INVALID, "roughness: expected a finite number ≥ 0, got %g",
-                            m->roughness);
+                            m->roughness.value);
     return TS_OK;
 }
 
@@ -487,6 +543,7 @@ ts_status ts_scene_builder_add_material(ts_scene_builder *b, const char *name, c
     const char *copy = NULL;
     if (name && !(copy = ts_arena_strdup(&b->s->arena, name))) return nomem(err, "the material names");
     b->materials[b->n_materials] = *m;
+    b->materials[b->n_materials].textured = ts_material_uses_textures(m);
     b->material_names[b->n_materials] = copy;
     if (id) *id = b->n_materials;
     b->n_materials++;

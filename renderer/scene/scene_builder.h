@@ -52,6 +52,8 @@
 #include "sampling/sampler.h"
 #include "scene/mesh_read.h"
 #include "scene/scene.h"
+#include "textures/texture.h"
+#include "textures/texture_cache.h"
 
 /* Resource limits, checked before any large allocation. */
 typedef struct ts_scene_limits {
@@ -139,13 +141,45 @@ ts_status ts_scene_builder_load_mesh(ts_scene_builder *b, const char *rel_path, 
 ts_status ts_scene_builder_loop_subdivide(ts_scene_builder *b, const ts_mesh *control, uint32_t levels,
                                           ts_mesh_data *out, ts_error *err);
 
+/* ---- textures (textures/texture.h; docs/design.md §4b, §4d). Textures live in the
+ * scene's arena and their image maps in the scene's texture cache, both freed with the
+ * scene. A front end makes them with ts_scene_builder_add_texture, or hands the arena,
+ * the cache, the base folder and the file limit to another maker (the pbrt-v3 importer:
+ * ts_texture_pbrt_build(tp, scene, ts_scene_builder_texture_arena(b), cache,
+ * ts_scene_builder_base_dir(b), ts_scene_builder_limits(b)->max_file_bytes, err)), then
+ * refers to them from material parameters (materials/material.h). */
+
+/* The scene's arena, for textures (and only for what the scene keeps). */
+ts_arena *ts_scene_builder_texture_arena(ts_scene_builder *b);
+/* The scene's texture cache, made on the first call (its maps may take
+ * limits.max_memory bytes together); TS_ERR_NOMEM. */
+ts_status ts_scene_builder_texture_cache(ts_scene_builder *b, ts_texture_cache **out, ts_error *err);
+/* The folder files are read from (NULL: none may be), and the limits in force. */
+const char *ts_scene_builder_base_dir(const ts_scene_builder *b);
+const ts_scene_limits *ts_scene_builder_limits(const ts_scene_builder *b);
+
+/* Checks proto and copies it into the scene's arena (ts_texture_make: children and image
+ * maps must be the scene's); *out the copy. Errors name the field ("tex1: …"). */
+ts_status ts_scene_builder_add_texture(ts_scene_builder *b, const ts_texture *proto, const ts_texture **out,
+                                       ts_error *err);
+/* The MIP map of an image file (relative to base_dir, confined there, at most
+ * limits.max_file_bytes) through the scene's cache: errors name the file as written
+ * ("texture image 'x.png': …"). */
+ts_status ts_scene_builder_load_texture_image(ts_scene_builder *b, const char *rel_path,
+                                              const ts_texture_image_options *opt, const ts_mipmap **out,
+                                              ts_error *err);
+
 /* ---- elements */
 
 /* Adds a material (copied) under name (copied; unique; NULL: an anonymous material no
- * name finds) and writes its id to *id (may be NULL). Checked: the type; colours in
- * [0, 1] (conductor eta and k finite ≥ 0); sigma in [0, 90] degrees; eta and roughness
+ * name finds) and writes its id to *id (may be NULL). Checked: the type; constant colours
+ * in [0, 1] (conductor eta and k finite ≥ 0); sigma in [0, 90] degrees; eta and roughness
  * finite (eta > 0, roughness ≥ 0); the distribution; a Fourier material's table loaded by
- * this builder. At most limits.max_materials. */
+ * this builder; a textured parameter's texture (made for this scene, see above) of the
+ * right kind: float parameters (sigma, eta, roughness) take float textures ("roughness:
+ * expected a float texture, got an RGB one"), colour parameters either kind. The
+ * material's `textured` flag is set here (the caller's is ignored). At most
+ * limits.max_materials. */
 ts_status ts_scene_builder_add_material(ts_scene_builder *b, const char *name, const ts_material *m,
                                         uint32_t *id, ts_error *err);
 /* The id of the material added under name, or TS_NONE (also for name NULL). */

@@ -20,6 +20,7 @@
 #include "scene/mesh_read.h"
 #include "scene/mesh_subdiv.h"
 #include "scene/scene_digest.h"
+#include "scene/scene_json_texture.h"
 #include "scene/scene_path.h"
 
 extern const char ts_builtin_cornell_box[];
@@ -30,6 +31,7 @@ typedef struct loader {
     const ts_scene_limits *lim;
     ts_error *err;
     bool named; /* the document has a "name" */
+    ts_json_textures textures; /* "textures", by name */
 } loader;
 
 #define TRY(expr)                          \
@@ -418,36 +420,39 @@ static ts_status parse_material(loader *ld, const cJSON *m, const char *path, ts
 
     *out = (ts_material){0};
     out->type = (ts_material_type)type;
-    out->reflectance = ts_rgb_gray(type == TS_MATERIAL_DIFFUSE ? 0.5f : 1.0f);
-    out->transmittance = ts_rgb_gray(1);
-    out->eta = 1.5f;
-    double rough = type == TS_MATERIAL_DIELECTRIC ? 0.0 : (type == TS_MATERIAL_CONDUCTOR ? 0.01 : 0.1);
+    out->reflectance = ts_material_rgb_gray(type == TS_MATERIAL_DIFFUSE ? 0.5f : 1.0f);
+    out->transmittance = ts_material_rgb_gray(1);
+    out->eta = ts_material_float_const(1.5f);
+    const ts_json_textures *tx = &ld->textures;
     switch (out->type) {
     case TS_MATERIAL_DIFFUSE: {
-        TRY(ts_json_rgb(m, path, "reflectance", false, TS_J_UNIT, &out->reflectance, ld->err));
-        double sigma = 0;
-        TRY(ts_json_number(m, path, "sigma", false, TS_J_NONNEG, &sigma, ld->err));
-        if (sigma > 90) {
+        TRY(ts_json_material_rgb(tx, m, path, "reflectance", TS_J_UNIT, &out->reflectance, ld->err));
+        TRY(ts_json_material_float(tx, m, path, "sigma", TS_J_NONNEG, &out->sigma_deg, ld->err));
+        if (!out->sigma_deg.tex && out->sigma_deg.value > 90) {
             ts_jpath p = ts_jpath_key(path, "sigma");
-            return ts_error_set(ld->err, TS_ERR_INVALID, "%s: expected an angle in [0, 90] degrees, got %g", p.s, sigma);
+            return ts_error_set(ld->err, TS_ERR_INVALID, "%s: expected an angle in [0, 90] degrees, got %g", p.s,
+                                cJSON_GetObjectItemCaseSensitive(m, "sigma")->valuedouble);
         }
-        out->sigma_deg = (float)sigma;
         break;
     }
     case TS_MATERIAL_MIRROR:
-        TRY(ts_json_rgb(m, path, "reflectance", false, TS_J_UNIT, &out->reflectance, ld->err));
+        TRY(ts_json_material_rgb(tx, m, path, "reflectance", TS_J_UNIT, &out->reflectance, ld->err));
         break;
     case TS_MATERIAL_DIELECTRIC: {
-        double eta = 1.5;
-        TRY(ts_json_number(m, path, "eta", false, TS_J_POSITIVE, &eta, ld->err));
-        out->eta = (float)eta;
-        TRY(ts_json_rgb(m, path, "reflectance", false, TS_J_UNIT, &out->reflectance, ld->err));
-        TRY(ts_json_rgb(m, path, "transmittance", false, TS_J_UNIT, &out->transmittance, ld->err));
+        TRY(ts_json_material_float(tx, m, path, "eta", TS_J_POSITIVE, &out->eta, ld->err));
+        TRY(ts_json_material_rgb(tx, m, path, "reflectance", TS_J_UNIT, &out->reflectance, ld->err));
+        TRY(ts_json_material_rgb(tx, m, path, "transmittance", TS_J_UNIT, &out->transmittance, ld->err));
         break;
     }
     case TS_MATERIAL_CONDUCTOR: {
-        TRY(ts_json_rgb(m, path, "eta", true, TS_J_NONNEG, &out->conductor_eta, ld->err));
-        TRY(ts_json_rgb(m, path, "k", true, TS_J_NONNEG, &out->conductor_k, ld->err));
+        /* Both required: an absent one gets ts_json_rgb's "required but missing". */
+        const char *const eta_k[] = {"eta", "k"};
+        ts_material_rgb *dst[] = {&out->conductor_eta, &out->conductor_k};
+        for (int i = 0; i < 2; i++) {
+            if (!cJSON_GetObjectItemCaseSensitive(m, eta_k[i]))
+                TRY(ts_json_rgb(m, path, eta_k[i], true, TS_J_NONNEG, &dst[i]->value, ld->err));
+            TRY(ts_json_material_rgb(tx, m, path, eta_k[i], TS_J_NONNEG, dst[i], ld->err));
+        }
         static const char *const dist[] = {"ggx", "beckmann", NULL};
         int d = 0;
         TRY(ts_json_enum(m, path, "distribution", false, dist, &d, ld->err));
@@ -457,10 +462,10 @@ static ts_status parse_material(loader *ld, const cJSON *m, const char *path, ts
     case TS_MATERIAL_PLASTIC:
     case TS_MATERIAL_SUBSTRATE: {
         float kd = type == TS_MATERIAL_PLASTIC ? 0.25f : 0.5f;
-        out->diffuse = ts_rgb_gray(kd);
-        out->specular = ts_rgb_gray(kd);
-        TRY(ts_json_rgb(m, path, "diffuse", false, TS_J_UNIT, &out->diffuse, ld->err));
-        TRY(ts_json_rgb(m, path, "specular", false, TS_J_UNIT, &out->specular, ld->err));
+        out->diffuse = ts_material_rgb_gray(kd);
+        out->specular = ts_material_rgb_gray(kd);
+        TRY(ts_json_material_rgb(tx, m, path, "diffuse", TS_J_UNIT, &out->diffuse, ld->err));
+        TRY(ts_json_material_rgb(tx, m, path, "specular", TS_J_UNIT, &out->specular, ld->err));
         break;
     }
     case TS_MATERIAL_FOURIER: {
@@ -473,8 +478,10 @@ static ts_status parse_material(loader *ld, const cJSON *m, const char *path, ts
     }
     if (type == TS_MATERIAL_DIELECTRIC || type == TS_MATERIAL_CONDUCTOR || type == TS_MATERIAL_PLASTIC ||
         type == TS_MATERIAL_SUBSTRATE) {
-        TRY(ts_json_number(m, path, "roughness", false, TS_J_NONNEG, &rough, ld->err));
-        out->roughness = (float)rough;
+        out->roughness = ts_material_float_const(type == TS_MATERIAL_DIELECTRIC  ? 0.0f
+                                                 : type == TS_MATERIAL_CONDUCTOR ? 0.01f
+                                                                                 : 0.1f);
+        TRY(ts_json_material_float(tx, m, path, "roughness", TS_J_NONNEG, &out->roughness, ld->err));
     }
     return TS_OK;
 }
@@ -499,7 +506,23 @@ static ts_status parse_materials(loader *ld, const cJSON *doc)
     return TS_OK;
 }
 
-/* ---------------------------------------------------------------- shapes */
+/* ---------------------------------------------------------------- textures */
+
+static ts_status parse_textures(loader *ld, const cJSON *doc)
+{
+    const cJSON *texs;
+    TRY(ts_json_object(doc, "", "textures", false, &texs, ld->err));
+    if (!texs) return TS_OK;
+    for (const cJSON *t = texs->child; t; t = t->next) {
+        ts_jpath p = ts_jpath_key("textures", t->string);
+        if (ts_json_textures_find(&ld->textures, t->string))
+            return ts_error_set(ld->err, TS_ERR_INVALID, "%s: texture defined twice", p.s);
+        ts_xform to_world = ts_xform_identity();
+        if (cJSON_IsObject(t)) TRY(parse_transform(ld, t, p.s, &to_world));
+        TRY(ts_json_texture_parse(&ld->textures, ld->b, t, p.s, t->string, &to_world, ld->err));
+    }
+    return TS_OK;
+}
 
 /* ---------------------------------------------------------------- shapes */
 
@@ -852,8 +875,8 @@ static ts_status parse_lights(loader *ld, const cJSON *doc)
 
 static ts_status parse_document(loader *ld, const cJSON *doc)
 {
-    static const char *const keys[] = {"tessera", "name", "camera", "film", "sampler", "integrator", "materials",
-                                       "shapes", "lights", "job", NULL};
+    static const char *const keys[] = {"tessera", "name",   "camera", "film", "sampler", "integrator", "textures",
+                                       "materials", "shapes", "lights", "job",  NULL};
     TRY(ts_json_check_object(doc, "", keys, ld->err));
     const cJSON *v = cJSON_GetObjectItemCaseSensitive(doc, "tessera");
     if (!v)
@@ -874,6 +897,7 @@ static ts_status parse_document(loader *ld, const cJSON *doc)
     TRY(parse_camera(ld, doc));
     TRY(parse_sampler(ld, doc));
     TRY(parse_integrator(ld, doc));
+    TRY(parse_textures(ld, doc));
     TRY(parse_materials(ld, doc));
     TRY(parse_shapes(ld, doc));
     TRY(parse_lights(ld, doc));
@@ -902,8 +926,10 @@ ts_status ts_scene_load_text(const char *text, size_t len, const char *base_dir,
         cJSON_Delete(doc);
         return st;
     }
-    loader ld = {b, limits, err, false};
+    loader ld = {b, limits, err, false, {0}};
+    ts_json_textures_init(&ld.textures);
     st = parse_document(&ld, doc);
+    ts_json_textures_fini(&ld.textures);
     if (!st) {
         char digest[TS_SCENE_DIGEST_HEX_LEN + 1];
         st = ts_scene_digest(doc, digest, err);
