@@ -6,10 +6,12 @@
  * Every check here is exact (values the code computes without noise), so there is no
  * false-failure rate to name: a BSDF's f for a Lambertian lobe is R/π computed in float by
  * the same expression, compared to 1e-6 relative. */
-#include <cmocka.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
+// clang-format off
+#include <cmocka.h>
+// clang-format on
 
 #include <math.h>
 #include <stdio.h>

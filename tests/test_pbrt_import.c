@@ -300,7 +300,7 @@ static void shapes_mapped(void **state)
     assert_float_equal(me->mesh.p[3], 2, 0); /* vertex 1's x, in world space */
     /* The default material is pbrt-v3's matte, Kd 0.5. */
     assert_int_equal(s->materials[sp->material].type, TS_MATERIAL_DIFFUSE);
-    assert_float_equal(s->materials[sp->material].reflectance.g, 0.5f, 0);
+    assert_float_equal(s->materials[sp->material].reflectance.value.g, 0.5f, 0);
     ts_scene_destroy(s);
 }
 
@@ -375,26 +375,26 @@ static void materials_mapped(void **state)
     for (int i = 0; i < 7; i++)
         m[i] = &s->materials[s->shapes[i].material];
     assert_int_equal(m[0]->type, TS_MATERIAL_PLASTIC);
-    assert_true(m[0]->diffuse.b == 0.3f && m[0]->specular.r == 0.25f);
+    assert_true(m[0]->diffuse.value.b == 0.3f && m[0]->specular.value.r == 0.25f);
     float x = logf(0.3f);
     float alpha =
         1.62142f + 0.819955f * x + 0.1734f * x * x + 0.0171201f * x * x * x + 0.000640711f * x * x * x * x;
-    assert_float_equal(m[0]->roughness, alpha, 1e-7);
-    assert_float_equal(m[1]->roughness, 0.3f, 0);
+    assert_float_equal(m[0]->roughness.value, alpha, 1e-7);
+    assert_float_equal(m[1]->roughness.value, 0.3f, 0);
     assert_int_equal(m[2]->type, TS_MATERIAL_CONDUCTOR);
     ts_rgb eta, k;
     ts_spectrum_copper(&eta, &k);
-    assert_true(m[2]->conductor_eta.r == eta.r && m[2]->conductor_k.b == k.b);
+    assert_true(m[2]->conductor_eta.value.r == eta.r && m[2]->conductor_k.value.b == k.b);
     /* copper: n falls and k rises toward the red */
     assert_true(eta.r < eta.b && k.r > k.b);
     assert_int_equal(m[3]->type, TS_MATERIAL_DIELECTRIC);
-    assert_float_equal(m[3]->eta, 1.33f, 0);
-    assert_float_equal(m[3]->roughness, 0, 0);
+    assert_float_equal(m[3]->eta.value, 1.33f, 0);
+    assert_float_equal(m[3]->roughness.value, 0, 0);
     assert_int_equal(m[4]->type, TS_MATERIAL_MIRROR);
-    assert_float_equal(m[4]->reflectance.r, 0.9f, 0);
+    assert_float_equal(m[4]->reflectance.value.r, 0.9f, 0);
     assert_int_equal(m[5]->type, TS_MATERIAL_SUBSTRATE);
     assert_int_equal(m[6]->type, TS_MATERIAL_DIFFUSE);
-    assert_float_equal(m[6]->sigma_deg, 20, 0);
+    assert_float_equal(m[6]->sigma_deg.value, 20, 0);
     ts_scene_destroy(s);
 }
 

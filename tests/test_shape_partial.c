@@ -466,7 +466,7 @@ static ts_scene_builder *builder(void)
     ts_scene_builder *b;
     ts_error err = {0};
     assert_int_equal(ts_scene_builder_create(NULL, NULL, &b, &err), TS_OK);
-    ts_material m = {.type = TS_MATERIAL_DIFFUSE, .reflectance = {0.5f, 0.5f, 0.5f}};
+    ts_material m = {.type = TS_MATERIAL_DIFFUSE, .reflectance = {{0.5f, 0.5f, 0.5f}}};
     assert_int_equal(ts_scene_builder_add_material(b, "m", &m, NULL, &err), TS_OK);
     return b;
 }

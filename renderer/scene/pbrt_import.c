@@ -726,14 +726,14 @@ static ts_status make_material(imp *im, int32_t mi, ts_material *m, bool *no_sur
     if (strcmp(type, "matte") == 0) {
         m->type = TS_MATERIAL_DIFFUSE;
         *json_type = "diffuse";
-        TRY(get_rgb(im, ps, "Kd", ts_rgb_gray(0.5f), &m->reflectance));
-        TRY(get_float(im, ps, "sigma", 0, &m->sigma_deg));
+        TRY(get_rgb(im, ps, "Kd", ts_rgb_gray(0.5f), &m->reflectance.value));
+        TRY(get_float(im, ps, "sigma", 0, &m->sigma_deg.value));
     } else if (strcmp(type, "plastic") == 0) {
         m->type = TS_MATERIAL_PLASTIC;
         *json_type = "plastic";
-        TRY(get_rgb(im, ps, "Kd", ts_rgb_gray(0.25f), &m->diffuse));
-        TRY(get_rgb(im, ps, "Ks", ts_rgb_gray(0.25f), &m->specular));
-        TRY(get_roughness(im, ps, loc, 0.1f, false, &m->roughness, NULL));
+        TRY(get_rgb(im, ps, "Kd", ts_rgb_gray(0.25f), &m->diffuse.value));
+        TRY(get_rgb(im, ps, "Ks", ts_rgb_gray(0.25f), &m->specular.value));
+        TRY(get_roughness(im, ps, loc, 0.1f, false, &m->roughness.value, NULL));
         /* pbrt-v3's plastic is always a microfacet lobe; tessera's takes α < 1e-4 as smooth. */
         dwarn(im, ps, loc,
               "pbrt-v3's plastic (Lambertian + microfacet, uncoupled) is not available yet: tessera's "
@@ -741,33 +741,33 @@ static ts_status make_material(imp *im, int32_t mi, ts_material *m, bool *no_sur
     } else if (strcmp(type, "mirror") == 0) {
         m->type = TS_MATERIAL_MIRROR;
         *json_type = "mirror";
-        TRY(get_rgb(im, ps, "Kr", ts_rgb_gray(0.9f), &m->reflectance));
+        TRY(get_rgb(im, ps, "Kr", ts_rgb_gray(0.9f), &m->reflectance.value));
     } else if (strcmp(type, "glass") == 0) {
         m->type = TS_MATERIAL_DIELECTRIC;
         *json_type = "dielectric";
-        TRY(get_rgb(im, ps, "Kr", ts_rgb_gray(1), &m->reflectance));
-        TRY(get_rgb(im, ps, "Kt", ts_rgb_gray(1), &m->transmittance));
+        TRY(get_rgb(im, ps, "Kr", ts_rgb_gray(1), &m->reflectance.value));
+        TRY(get_rgb(im, ps, "Kt", ts_rgb_gray(1), &m->transmittance.value));
         float eta;
         TRY(get_float(im, ps, "index", 1.5f, &eta));
-        TRY(get_float(im, ps, "eta", eta, &m->eta));
+        TRY(get_float(im, ps, "eta", eta, &m->eta.value));
         bool smooth;
-        TRY(get_roughness(im, ps, loc, 0, true, &m->roughness, &smooth));
-        if (smooth) m->roughness = 0;
+        TRY(get_roughness(im, ps, loc, 0, true, &m->roughness.value, &smooth));
+        if (smooth) m->roughness.value = 0;
     } else if (strcmp(type, "metal") == 0) {
         m->type = TS_MATERIAL_CONDUCTOR;
         *json_type = "conductor";
         ts_rgb eta, k;
         ts_spectrum_copper(&eta, &k);
-        TRY(get_rgb(im, ps, "eta", eta, &m->conductor_eta));
-        TRY(get_rgb(im, ps, "k", k, &m->conductor_k));
+        TRY(get_rgb(im, ps, "eta", eta, &m->conductor_eta.value));
+        TRY(get_rgb(im, ps, "k", k, &m->conductor_k.value));
         m->distribution = TS_MICROFACET_GGX;
-        TRY(get_roughness(im, ps, loc, 0.01f, false, &m->roughness, NULL));
+        TRY(get_roughness(im, ps, loc, 0.01f, false, &m->roughness.value, NULL));
     } else if (strcmp(type, "substrate") == 0) {
         m->type = TS_MATERIAL_SUBSTRATE;
         *json_type = "substrate";
-        TRY(get_rgb(im, ps, "Kd", ts_rgb_gray(0.5f), &m->diffuse));
-        TRY(get_rgb(im, ps, "Ks", ts_rgb_gray(0.5f), &m->specular));
-        TRY(get_roughness(im, ps, loc, 0.1f, true, &m->roughness, NULL));
+        TRY(get_rgb(im, ps, "Kd", ts_rgb_gray(0.5f), &m->diffuse.value));
+        TRY(get_rgb(im, ps, "Ks", ts_rgb_gray(0.5f), &m->specular.value));
+        TRY(get_roughness(im, ps, loc, 0.1f, true, &m->roughness.value, NULL));
     } else if (strcmp(type, "fourier") == 0) {
         m->type = TS_MATERIAL_FOURIER;
         *json_type = "fourier";
@@ -796,24 +796,24 @@ static ts_status json_material(imp *im, const char *name, const char *type, cons
     bool ok = j && jstring(j, "type", type);
     switch (m->type) {
     case TS_MATERIAL_DIFFUSE:
-        ok = ok && jrgb(j, "reflectance", m->reflectance) &&
-             (m->sigma_deg == 0 || jnumber(j, "sigma", m->sigma_deg));
+        ok = ok && jrgb(j, "reflectance", m->reflectance.value) &&
+             (m->sigma_deg.value == 0 || jnumber(j, "sigma", m->sigma_deg.value));
         break;
     case TS_MATERIAL_MIRROR:
-        ok = ok && jrgb(j, "reflectance", m->reflectance);
+        ok = ok && jrgb(j, "reflectance", m->reflectance.value);
         break;
     case TS_MATERIAL_DIELECTRIC:
-        ok = ok && jnumber(j, "eta", m->eta) && jrgb(j, "reflectance", m->reflectance) &&
-             jrgb(j, "transmittance", m->transmittance) && jnumber(j, "roughness", m->roughness);
+        ok = ok && jnumber(j, "eta", m->eta.value) && jrgb(j, "reflectance", m->reflectance.value) &&
+             jrgb(j, "transmittance", m->transmittance.value) && jnumber(j, "roughness", m->roughness.value);
         break;
     case TS_MATERIAL_CONDUCTOR:
-        ok = ok && jrgb(j, "eta", m->conductor_eta) && jrgb(j, "k", m->conductor_k) &&
-             jnumber(j, "roughness", m->roughness) && jstring(j, "distribution", "ggx");
+        ok = ok && jrgb(j, "eta", m->conductor_eta.value) && jrgb(j, "k", m->conductor_k.value) &&
+             jnumber(j, "roughness", m->roughness.value) && jstring(j, "distribution", "ggx");
         break;
     case TS_MATERIAL_PLASTIC:
     case TS_MATERIAL_SUBSTRATE:
-        ok = ok && jrgb(j, "diffuse", m->diffuse) && jrgb(j, "specular", m->specular) &&
-             jnumber(j, "roughness", m->roughness);
+        ok = ok && jrgb(j, "diffuse", m->diffuse.value) && jrgb(j, "specular", m->specular.value) &&
+             jnumber(j, "roughness", m->roughness.value);
         break;
     case TS_MATERIAL_FOURIER:
         break; /* the file is added by the caller */
