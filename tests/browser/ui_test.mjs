@@ -290,6 +290,54 @@ try {
     }
   });
 
+  await check('a bundle file and a folder upload: a scene that carries its mesh; a bad entry is named', async () => {
+    const { makeTar } = await import(path.join(TS_SOURCE_DIR, 'web/src/tar.js'));
+    const doc = JSON.parse(small({ job: { spp: 4, name: 'bundled' } }));
+    doc.shapes.push({ type: 'mesh', file: 'meshes/tri.obj', material: Object.keys(doc.materials)[0] });
+    const obj = 'v 100 100 100\nv 101 100 100\nv 100 101 100\nf 1 2 3\n';
+    const text = (s) => new TextEncoder().encode(s);
+    const waitJob = async (p, name) => {
+      const r = await p.waitForResponse((x) => x.url().endsWith('/api/v1/jobs') && x.request().method() === 'POST');
+      const body = await r.json();
+      assert(r.status() === 201 && body.id, name + ': POST answered ' + r.status() + ' ' + JSON.stringify(body));
+      assert(r.request().headers()['content-type'] === 'application/x-tar', name + ' is posted as a tar');
+      await jobRow(page, body.id).locator('.state-done').waitFor({ timeout: 30000 });
+      return body;
+    };
+    // A .tar file (made by the page's own tar writer, checked by the server's libarchive).
+    await page.setInputFiles('#f-bundle', { name: 'box.tar', mimeType: 'application/x-tar',
+      buffer: Buffer.from(makeTar([{ path: 'scene.json', data: text(JSON.stringify(doc)) }, { path: 'meshes/tri.obj', data: text(obj) }])) });
+    assert(/Posting box\.tar/.test(await page.textContent('#bundle-info')), 'the bundle is announced');
+    let resp = waitJob(page, 'the .tar');
+    await page.click('#f-submit');
+    await resp;
+    // A folder: the page makes the tar (its files relative to the folder).
+    const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'tessera-bundle-'));
+    try {
+      fs.mkdirSync(path.join(dir, 'meshes'));
+      fs.writeFileSync(path.join(dir, 'scene.json'), JSON.stringify({ ...doc, job: { spp: 4, name: 'folder' } }));
+      fs.writeFileSync(path.join(dir, 'meshes', 'tri.obj'), obj);
+      await page.setInputFiles('#f-folder', dir);
+      await page.waitForFunction(() => /Posting folder tessera-bundle-\S+ \(2 files/.test(document.getElementById('bundle-info').textContent),
+        null, { timeout: 5000 });
+      resp = waitJob(page, 'the folder');
+      await page.click('#f-submit');
+      await resp;
+      await shot('18-bundle-folder');
+    } finally {
+      fs.rmSync(dir, { recursive: true, force: true });
+    }
+    // A bad entry: the server's sentence, beside the bundle field.
+    await page.setInputFiles('#f-bundle', { name: 'bad.tar', mimeType: 'application/x-tar',
+      buffer: Buffer.from(makeTar([{ path: 'scene.json', data: text(JSON.stringify(doc)) }, { path: '../tri.obj', data: text(obj) }])) });
+    await page.click('#f-submit');
+    await page.waitForFunction(() => document.getElementById('err-bundle').textContent.includes("'../tri.obj' is refused"), null, { timeout: 10000 });
+    assert(await page.getAttribute('#f-bundle', 'aria-invalid') === 'true', 'the bundle field is marked invalid');
+    await shot('19-bundle-refused');
+    await page.click('#f-bundle-clear');
+    assert(await page.isHidden('#bundle-row'), 'back to the JSON scene');
+  });
+
   await check('cancel a job from the list, then delete it', async () => {
     const long = await submit(page, { scene: small(), spp: 65536, name: 'to-cancel' });
     assert(long.id, 'POST answered ' + JSON.stringify(long));

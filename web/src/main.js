@@ -2,6 +2,7 @@
 // Talks only to the public API v1 (docs/design.md §5, proto/openapi.yaml).
 import uPlot from 'uplot';
 import { decodeExr } from './exr.js';
+import { makeTar } from './tar.js';
 import 'uplot/dist/uPlot.min.css';
 import './style.css';
 
@@ -740,9 +741,9 @@ const FIELD_OF_PATH = [
   [/^integrator\.max_depth\b/, 'maxdepth'],
   [/^integrator(\.type)?\b/, 'integrator'],
 ];
-const FIELDS = ['scene', 'name', 'priority', 'integrator', 'maxdepth', 'spp', 'time', 'target', 'form'];
+const FIELDS = ['scene', 'name', 'priority', 'integrator', 'maxdepth', 'spp', 'time', 'target', 'form', 'bundle'];
 const inputOf = { scene: 'f-scene', name: 'f-name', priority: 'f-priority', integrator: 'f-integrator', maxdepth: 'f-maxdepth', spp: 'f-spp',
-  time: 'f-time', target: 'f-target', form: 'f-submit' };
+  time: 'f-time', target: 'f-target', form: 'f-submit', bundle: 'f-bundle' };
 function clearErrors() {
   for (const f of FIELDS) {
     $('err-' + f).textContent = '';
@@ -765,9 +766,74 @@ function numberOrNull(id) {
   return v === '' ? null : Number(v);
 }
 
+// A bundle to post instead of the JSON scene: a tar the user chose, or one made here from a
+// folder (tar.js). It is posted as it is: the form's other fields belong to the JSON scene.
+let bundle = null; // { blob, label }
+function setBundle(b) {
+  bundle = b;
+  $('bundle-row').hidden = !b;
+  $('bundle-info').textContent = b ? `Posting ${b.label} as a bundle (its scene file's own settings apply; the fields below do not).` : '';
+  $('err-bundle').textContent = '';
+  if (!b) { $('f-bundle').value = ''; $('f-folder').value = ''; }
+}
+$('f-bundle').addEventListener('change', (e) => {
+  const f = e.target.files && e.target.files[0];
+  $('f-folder').value = '';
+  setBundle(f ? { blob: f, label: `${f.name} (${fmtBytes(f.size)})` } : null);
+});
+$('f-folder').addEventListener('change', async (e) => {
+  const list = [...(e.target.files || [])];
+  $('f-bundle').value = '';
+  if (!list.length) { setBundle(null); return; }
+  // webkitRelativePath is "FOLDER/sub/file": the bundle's root is the folder itself.
+  const rel = (f) => (f.webkitRelativePath || f.name).split('/').slice(1).join('/') || f.name;
+  try {
+    if (!list.some((f) => ['scene.json', 'scene.pbrt'].includes(rel(f))))
+      throw new Error('the folder holds no scene.json or scene.pbrt at its top');
+    const files = [];
+    for (const f of list) files.push({ path: rel(f), data: new Uint8Array(await f.arrayBuffer()) });
+    const tar = makeTar(files);
+    const top = (list[0].webkitRelativePath || '').split('/')[0] || 'folder';
+    setBundle({ blob: new Blob([tar], { type: 'application/x-tar' }), label: `folder ${top} (${files.length} files, ${fmtBytes(tar.length)})` });
+  } catch (err) {
+    setBundle(null);
+    $('bundle-row').hidden = false;
+    showError('bundle', err.message);
+  }
+});
+$('f-bundle-clear').addEventListener('click', () => setBundle(null));
+function fmtBytes(n) {
+  return n >= 1 << 20 ? (n / (1 << 20)).toFixed(1) + ' MiB' : n >= 1024 ? (n / 1024).toFixed(1) + ' KiB' : n + ' B';
+}
+
+function queued(r) {
+  jobs.set(r.body.id, r.body);
+  $('err-form').className = 'ok';
+  $('err-form').textContent = 'queued as ' + r.body.id;
+  select(r.body.id);
+  poll();
+}
+
 $('submit-form').addEventListener('submit', async (e) => {
   e.preventDefault();
   clearErrors();
+  if (bundle) {
+    $('f-submit').disabled = true;
+    try {
+      const r = await api('/api/v1/jobs', { method: 'POST', headers: { 'Content-Type': 'application/x-tar' }, body: bundle.blob });
+      if (r.status === 201 && r.body) queued(r);
+      else {
+        $('err-form').className = 'err';
+        showError('bundle', (r.body && r.body.error) || 'the server answered ' + r.status);
+        $('f-bundle').focus();
+      }
+    } catch (err) {
+      showError('form', 'could not reach the server: ' + err.message);
+    } finally {
+      $('f-submit').disabled = false;
+    }
+    return;
+  }
   let doc;
   try {
     doc = JSON.parse($('f-scene').value);
@@ -793,14 +859,8 @@ $('submit-form').addEventListener('submit', async (e) => {
   $('f-submit').disabled = true;
   try {
     const r = await api('/api/v1/jobs', { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(doc) });
-    if (r.status === 201 && r.body) {
-      jobs.set(r.body.id, r.body);
-      $('err-form').textContent = '';
-      $('err-form').className = 'ok';
-      $('err-form').textContent = 'queued as ' + r.body.id;
-      select(r.body.id);
-      poll();
-    } else {
+    if (r.status === 201 && r.body) queued(r);
+    else {
       const msg = (r.body && r.body.error) || 'the server answered ' + r.status;
       const f = fieldForError(msg);
       $('err-form').className = 'err';
