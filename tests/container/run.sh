@@ -155,6 +155,24 @@ done
 curl -sSf --max-time 30 -o "$T/job.exr" "$URL/api/v1/jobs/$id/image.exr" || fail "GET image.exr failed"
 "$TS_EXR_COMPARE" "$T/cli.exr" "$T/job.exr" >"$T/cmp.txt" 2>&1 || fail "the job's EXR differs from the CLI's: $(cat "$T/cmp.txt")"
 log "serve: job $id over HTTP, its EXR equals tessera render's ($(cat "$T/cmp.txt"))"
+# A job that carries its files: the image links libarchive statically (tar + gzip), so
+# this is the check that its reader is in the binary.
+mkdir -p "$T/bundle" && cp "$T/serve.json" "$T/bundle/scene.json"
+tar -C "$T/bundle" -czf "$T/bundle.tar.gz" scene.json
+curl -sS --max-time 30 -X POST -H 'Content-Type: application/x-tar' --data-binary @"$T/bundle.tar.gz" \
+    "$URL/api/v1/jobs" >"$T/post-bundle.json" || fail "POST of a bundle failed"
+bid=$(json_field "$T/post-bundle.json" id)
+[ -n "$bid" ] || fail "the bundle job was not created: $(cat "$T/post-bundle.json")"
+for _ in $(seq 600); do
+    curl -sS --max-time 10 "$URL/api/v1/jobs/$bid" >"$T/status.json" || true
+    state=$(json_field "$T/status.json" state)
+    case $state in done | failed | cancelled) break ;; esac
+    sleep 0.2
+done
+[ "$state" = done ] || fail "bundle job $bid ended '$state': $(cat "$T/status.json")"
+curl -sSf --max-time 30 -o "$T/bundle.exr" "$URL/api/v1/jobs/$bid/image.exr" || fail "GET the bundle job's image.exr failed"
+"$TS_EXR_COMPARE" "$T/cli.exr" "$T/bundle.exr" >"$T/cmp.txt" 2>&1 || fail "the bundle job's EXR differs from the CLI's: $(cat "$T/cmp.txt")"
+log "serve: a gzip tar bundle as job $bid, its EXR equals tessera render's"
 "${engine[@]}" stop -t 10 "$srv" >/dev/null 2>&1
 code=$("${engine[@]}" inspect --format '{{.State.ExitCode}}' "$srv")
 [ "$code" = 0 ] || fail "the server exited $code on SIGTERM"
