@@ -439,33 +439,6 @@ srv_job *srv_store_submit_files(srv_store *st, const char *text, size_t len, con
     return j;
 }
 
-/* Longest string a posted document may hold: names end up in EXR attributes, file names
- * and HTTP headers, so 255 bytes; file references (keys "file" and "map") 1024. */
-#define SRV_MAX_STRING 255
-#define SRV_MAX_PATH_STRING 1024
-
-/* The first string of the document (under path) longer than its limit: false with err
- * naming its JSON path. */
-static bool strings_fit(const cJSON *o, char *path, size_t at, size_t cap, ts_error *err)
-{
-    if (cJSON_IsString(o)) {
-        size_t n = strlen(o->valuestring);
-        bool file = o->string && (!strcmp(o->string, "file") || !strcmp(o->string, "map"));
-        size_t max = file ? SRV_MAX_PATH_STRING : SRV_MAX_STRING;
-        if (n <= max) return true;
-        ts_error_set(err, TS_ERR_INVALID, "%s: a string of %zu bytes is longer than the limit of %zu", path[0] ? path : "(document)", n, max);
-        return false;
-    }
-    int i = 0;
-    for (const cJSON *c = o->child; c; c = c->next, i++) {
-        size_t n = cJSON_IsArray(o) ? (size_t)snprintf(path + at, cap - at, "[%d]", i)
-                                    : (size_t)snprintf(path + at, cap - at, "%s%s", at ? "." : "", c->string ? c->string : "");
-        if (!strings_fit(c, path, at + n < cap ? at + n : cap - 1, cap, err)) return false;
-        path[at] = '\0';
-    }
-    return true;
-}
-
 /* Moves a bundle's unpacked folder to ROOT/jobs/<id>/files: false with errno on failure. */
 static bool move_files(const srv_submit_files *files, const char *id, char **out)
 {
@@ -497,18 +470,9 @@ static srv_job *submit(srv_store *st, const char *text, size_t len, const srv_su
                        ts_error *err)
 {
     const srv_store_config *cfg = &st->cfg;
-    /* Every string has a length limit, checked before anything is loaded. A document that
-     * does not parse is left to the loader, which says where. */
-    cJSON *doc = cJSON_ParseWithLength(text, len);
-    if (doc) {
-        char path[512] = "";
-        bool fit = strings_fit(doc, path, 0, sizeof path, err);
-        cJSON_Delete(doc);
-        if (!fit) {
-            *http_status = 400;
-            return NULL;
-        }
-    }
+    /* Every string has a length limit (255 bytes, 1024 for file references: names end up
+     * in EXR attributes, file names and HTTP headers), which the loader checks right after
+     * parsing, before anything is built (400 naming the JSON path). */
     /* Resolution and spp are checked here (422) against the server's limits; the loader
      * gets the generous defaults for those and the server's for scene size (413). */
     ts_scene_limits lim = cfg->limits, def;

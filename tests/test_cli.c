@@ -100,6 +100,39 @@ static void test_bad_scene_exit_1_and_nothing_written(void **state)
     assert_false(exists(out));
 }
 
+/* A 7 MiB name (or any string past its limit) is refused with its JSON path as the scene
+ * loads, before any rendering; it used to render the whole scene and then fail to write
+ * NAME.exr (a file name of 7 MiB). */
+static void test_long_string_refused_before_rendering(void **state)
+{
+    (void)state;
+    enum { NAME = 7 << 20 };
+    char scene[512];
+    path_in_tmp(scene, sizeof scene, "long.json");
+    size_t n = strlen(small_scene) + NAME + 64;
+    char *doc = malloc(n);
+    assert_non_null(doc);
+    int at = snprintf(doc, n, "{\"name\":\"");
+    memset(doc + at, 'n', NAME);
+    snprintf(doc + at + NAME, n - (size_t)at - NAME, "\",%s", small_scene + 1);
+    write_file(scene, doc);
+    free(doc);
+    const char *args[] = {"render", scene, "--quiet", NULL};
+    assert_int_equal(run(args), 1);
+    assert_non_null(strstr(read_log(), "name: a string of 7340032 bytes is longer than the limit of 255"));
+    /* Keys too: a material named with 300 bytes. */
+    char doc2[2048], longname[301];
+    memset(longname, 'm', 300);
+    longname[300] = '\0';
+    snprintf(doc2, sizeof doc2,
+             "{\"tessera\":1,\"camera\":{\"from\":[0,0,5],\"to\":[0,0,0]},\"materials\":{\"%s\":{\"type\":"
+             "\"diffuse\"}},\"shapes\":[{\"type\":\"sphere\",\"radius\":1,\"material\":\"m\"}]}",
+             longname);
+    write_file(scene, doc2);
+    assert_int_equal(run(args), 1);
+    assert_non_null(strstr(read_log(), "materials: a key of 300 bytes is longer than the limit of 255"));
+}
+
 static void test_usage_errors_exit_2(void **state)
 {
     (void)state;
@@ -186,6 +219,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_threads_give_identical_exr),
         cmocka_unit_test(test_bad_scene_exit_1_and_nothing_written),
+        cmocka_unit_test(test_long_string_refused_before_rendering),
         cmocka_unit_test(test_usage_errors_exit_2),
         cmocka_unit_test(test_honest_command_line),
         cmocka_unit_test(test_builtin_default),

@@ -262,6 +262,39 @@ ts_status ts_json_object(const cJSON *obj, const char *path, const char *key, bo
     return TS_OK;
 }
 
+static bool strings_fit(const cJSON *o, char *path, size_t at, size_t cap, ts_error *err)
+{
+    if (cJSON_IsString(o)) {
+        size_t n = strlen(o->valuestring);
+        bool file = o->string && (!strcmp(o->string, "file") || !strcmp(o->string, "map"));
+        size_t max = file ? TS_JSON_MAX_PATH_STRING : TS_JSON_MAX_STRING;
+        if (n <= max) return true;
+        ts_error_set(err, TS_ERR_INVALID, "%s: a string of %zu bytes is longer than the limit of %zu",
+                     path[0] ? path : "(document)", n, max);
+        return false;
+    }
+    int i = 0;
+    for (const cJSON *c = o->child; c; c = c->next, i++) {
+        if (cJSON_IsObject(o) && c->string && strlen(c->string) > TS_JSON_MAX_STRING) {
+            ts_error_set(err, TS_ERR_INVALID, "%s: a key of %zu bytes is longer than the limit of %d",
+                         path[0] ? path : "(document)", strlen(c->string), TS_JSON_MAX_STRING);
+            return false;
+        }
+        int w = cJSON_IsArray(o) ? snprintf(path + at, cap - at, "[%d]", i)
+                                 : snprintf(path + at, cap - at, "%s%s", at ? "." : "", c->string ? c->string : "");
+        size_t n = w > 0 ? (size_t)w : 0;
+        if (!strings_fit(c, path, at + n < cap ? at + n : cap - 1, cap, err)) return false;
+        path[at] = '\0';
+    }
+    return true;
+}
+
+ts_status ts_json_check_strings(const cJSON *doc, ts_error *err)
+{
+    char path[TS_JPATH_MAX] = "";
+    return strings_fit(doc, path, 0, sizeof path, err) ? TS_OK : TS_ERR_INVALID;
+}
+
 /* Offset of the first byte of text that does not start a complete, shortest-form UTF-8
  * sequence of a scalar value (no surrogates, at most U+10FFFF), or len. */
 static size_t utf8_invalid_at(const unsigned char *t, size_t len)

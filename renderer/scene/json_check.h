@@ -68,6 +68,15 @@ ts_status ts_json_array(const cJSON *obj, const char *path, const char *key, boo
 ts_status ts_json_object(const cJSON *obj, const char *path, const char *key, bool required, const cJSON **out,
                          ts_error *err);
 
+/* String limits of a scene document: keys, names, types and other values at most
+ * TS_JSON_MAX_STRING bytes; file references (keys "file", "map") TS_JSON_MAX_PATH_STRING. */
+#define TS_JSON_MAX_STRING 255
+#define TS_JSON_MAX_PATH_STRING 1024
+/* TS_OK when every string in doc is within its limit; else TS_ERR_INVALID naming the first
+ * that is not by its JSON path ("name: a string of 7340032 bytes is longer than the limit
+ * of 255"). Checked before anything else is read, so an outsized name costs no work. */
+ts_status ts_json_check_strings(const cJSON *doc, ts_error *err);
+
 /* Parses text (length len, need not be NUL-terminated) into *out; on a syntax error the
  * sentence gives line and column. The caller frees *out with cJSON_Delete. */
 ts_status ts_json_parse(const char *text, size_t len, cJSON **out, ts_error *err);

@@ -919,7 +919,11 @@ ts_status ts_scene_load_text(const char *text, size_t len, const char *base_dir,
     ts_error_clear(err);
     cJSON *doc = NULL;
     ts_status st = ts_json_parse(text, len, &doc, err);
-    if (st) return st;
+    if (!st) st = ts_json_check_strings(doc, err);
+    if (st) {
+        cJSON_Delete(doc);
+        return st;
+    }
     ts_scene_builder *b = NULL;
     st = ts_scene_builder_create(limits, base_dir, &b, err);
     if (st) {
