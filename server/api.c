@@ -1,6 +1,8 @@
 /* api.c — HTTP API v1 routes; see api.h and proto/openapi.yaml. */
 #include "api.h"
 
+#include <ctype.h>
+#include <math.h>
 #include <microhttpd.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -585,17 +587,93 @@ static int post_bundle(srv_request *r)
     return srv_http_defer(r, bundle_task);
 }
 
+/* GET /api/v1/jobs is paginated (API v1.2): a page of at most `limit` jobs (default
+ * LIST_PAGE, at most LIST_PAGE_MAX), newest first, and `next`, the cursor of the page's last
+ * job, when older ones remain (null otherwise); `after=CURSOR` starts below that cursor. A
+ * cursor is "<created µs>.<id>": it places a page even when the job it names was deleted
+ * meanwhile, and jobs submitted meanwhile (newer) never shift the pages after it. */
+#define LIST_PAGE 100
+#define LIST_PAGE_MAX 1000
+
+typedef struct list_key { uint64_t created_us; const char *id; } list_key;
+
+static list_key key_of(const srv_job *j)
+{
+    return (list_key){j->created_unix > 0 ? (uint64_t)llround(j->created_unix * 1e6) : 0, j->id};
+}
+
+/* Newest first: later creation, then the larger id. */
+static int cmp_key(list_key a, list_key b)
+{
+    if (a.created_us != b.created_us) return a.created_us > b.created_us ? -1 : 1;
+    return -strcmp(a.id, b.id);
+}
+
+static int cmp_jobs(const void *a, const void *b) { return cmp_key(key_of(*(srv_job *const *)a), key_of(*(srv_job *const *)b)); }
+
+/* A canonical decimal of at most 19 digits ("0" or no leading zero). */
+static bool parse_decimal(const char *s, size_t n, uint64_t *out)
+{
+    if (n == 0 || n > 19 || (n > 1 && s[0] == '0')) return false;
+    uint64_t v = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (s[i] < '0' || s[i] > '9') return false;
+        v = v * 10 + (uint64_t)(s[i] - '0');
+    }
+    *out = v;
+    return true;
+}
+
+static bool id_chars(const char *s)
+{
+    size_t n = strlen(s);
+    if (n == 0 || n >= 24) return false;
+    for (size_t i = 0; i < n; i++)
+        if (!isalnum((unsigned char)s[i]) && s[i] != '_' && s[i] != '-') return false;
+    return true;
+}
+
 static int list_jobs(srv_request *r)
 {
+    const char *lim = MHD_lookup_connection_value(r->conn, MHD_GET_ARGUMENT_KIND, "limit");
+    const char *after = MHD_lookup_connection_value(r->conn, MHD_GET_ARGUMENT_KIND, "after");
+    uint64_t limit = LIST_PAGE;
+    if (lim && (!parse_decimal(lim, strlen(lim), &limit) || limit < 1 || limit > LIST_PAGE_MAX))
+        return srv_http_error(r, 400, "limit: expected an integer from 1 to %d (canonical decimal)", LIST_PAGE_MAX);
+    list_key cursor = {0, NULL};
+    if (after) {
+        const char *dot = strchr(after, '.');
+        if (!dot || !parse_decimal(after, (size_t)(dot - after), &cursor.created_us) || !id_chars(dot + 1))
+            return srv_http_error(r, 400, "after: expected a cursor from a previous page's \"next\"");
+        cursor.id = dot + 1;
+    }
     int n = 0;
     srv_job **jobs = srv_store_list(((srv_api *)r->app)->store, &n);
-    if (!jobs) return srv_http_error(r, 500, "out of memory");
+    if (!jobs && n) return srv_http_error(r, 500, "out of memory");
+    if (n > 1) qsort(jobs, (size_t)n, sizeof *jobs, cmp_jobs);
     cJSON *o = cJSON_CreateObject();
     cJSON *arr = cJSON_AddArrayToObject(o, "jobs");
+    int taken = 0, last = -1;
+    bool more = false;
     for (int i = 0; i < n; i++) {
-        cJSON_AddItemToArray(arr, srv_job_status_json(jobs[i]));
-        srv_job_release(jobs[i]);
+        if (!cursor.id || cmp_key(key_of(jobs[i]), cursor) > 0) {
+            if ((uint64_t)taken < limit) {
+                cJSON_AddItemToArray(arr, srv_job_status_json(jobs[i]));
+                taken++, last = i;
+            } else {
+                more = true;
+            }
+        }
     }
+    if (more && last >= 0) {
+        char next[64];
+        list_key k = key_of(jobs[last]);
+        snprintf(next, sizeof next, "%llu.%s", (unsigned long long)k.created_us, k.id);
+        cJSON_AddStringToObject(o, "next", next);
+    } else {
+        cJSON_AddNullToObject(o, "next");
+    }
+    for (int i = 0; i < n; i++) srv_job_release(jobs[i]);
     free(jobs);
     return reply_cjson(r, 200, o);
 }

@@ -745,6 +745,65 @@ static void test_cli_server_identity(void **state)
     free(doc);
 }
 
+/* GET /api/v1/jobs in pages: 105 jobs, a default page of 100 with a `next` cursor; pages
+ * of 7 followed to the end give every job once, newest first, the last page's `next` null;
+ * a cursor still places its page after its job was deleted; bad limits and cursors are 400.
+ * A list once built every job's status at once (147 MB with 20 jobs of 7 MiB names). */
+static void test_list_pages(void **state)
+{
+    (void)state;
+    enum { JOBS = 105, PAGE = 7 };
+    test_server s;
+    const char *args[] = {"--threads", "1", NULL};
+    ts_server_start(&s, args);
+    char *doc = ts_ao_scene("page", 4, 4, 1), ids[JOBS][32];
+    for (int i = 0; i < JOBS; i++) ts_submit(&s, doc, ids[i], sizeof ids[i]);
+    cJSON *o = ts_http_json(&s, "/api/v1/jobs", 200);
+    assert_int_equal(cJSON_GetArraySize(cJSON_GetObjectItem(o, "jobs")), 100);
+    assert_true(cJSON_IsString(cJSON_GetObjectItem(o, "next")));
+    cJSON_Delete(o);
+    char path[200], cursor[64] = "", third[64] = "";
+    int seen = 0, pages = 0;
+    for (;;) {
+        snprintf(path, sizeof path, "/api/v1/jobs?limit=%d%s%s", PAGE, cursor[0] ? "&after=" : "", cursor);
+        o = ts_http_json(&s, path, 200);
+        const cJSON *jobs = cJSON_GetObjectItem(o, "jobs"), *next = cJSON_GetObjectItem(o, "next");
+        int n = cJSON_GetArraySize(jobs);
+        assert_true(n >= 1 && n <= PAGE);
+        for (int k = 0; k < n; k++, seen++) /* newest first: the submission order reversed */
+            assert_string_equal(ts_json_str(cJSON_GetArrayItem(jobs, k), "id"), ids[JOBS - 1 - seen]);
+        pages++;
+        if (pages == 3) snprintf(third, sizeof third, "%s", cursor);
+        if (cJSON_IsNull(next)) {
+            cJSON_Delete(o);
+            break;
+        }
+        assert_true(cJSON_IsString(next));
+        snprintf(cursor, sizeof cursor, "%s", next->valuestring);
+        cJSON_Delete(o);
+    }
+    assert_int_equal(seen, JOBS);
+    assert_int_equal(pages, (JOBS + PAGE - 1) / PAGE);
+    /* The cursor of page 3 names the last job of page 2 (index 2·PAGE − 1 from the newest):
+     * delete that job, and page 3 is still the same. */
+    const char *named = ids[JOBS - 2 * PAGE];
+    cJSON_Delete(ts_wait_done(&s, named, 20));
+    snprintf(path, sizeof path, "/api/v1/jobs/%s", named);
+    expect(&s, "DELETE", path, NULL, 204, NULL);
+    snprintf(path, sizeof path, "/api/v1/jobs?limit=%d&after=%s", PAGE, third);
+    o = ts_http_json(&s, path, 200);
+    assert_string_equal(ts_json_str(cJSON_GetArrayItem(cJSON_GetObjectItem(o, "jobs"), 0), "id"), ids[JOBS - 1 - 2 * PAGE]);
+    cJSON_Delete(o);
+    static const char *const bad[] = {"limit=0", "limit=1001", "limit=01", "limit=+5", "limit=abc", "limit=",
+                                      "after=123", "after=x.abc", "after=1.", "after=01.abc", "after=1.a%2fb"};
+    for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
+        snprintf(path, sizeof path, "/api/v1/jobs?%s", bad[k]);
+        expect(&s, "GET", path, NULL, 400, bad[k][0] == 'l' ? "limit" : "after");
+    }
+    assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
+    free(doc);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -759,6 +818,7 @@ int main(void)
         cmocka_unit_test(test_auth),
         cmocka_unit_test(test_200_concurrent_clients),
         cmocka_unit_test(test_cli_server_identity),
+        cmocka_unit_test(test_list_pages),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

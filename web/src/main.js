@@ -141,11 +141,28 @@ function renderJobs() {
   }
 }
 
+// The job list comes in pages of 100, newest first (API v1.2): the page lists as many pages
+// as asked for (one, plus one per click on "List 100 more"), so a server holding thousands of
+// jobs costs each poll one page, not all of them.
+let listPages = 1;
+async function listJobs() {
+  let r = null, all = [], after = null;
+  for (let page = 0; page < listPages; page++) {
+    r = await api('/api/v1/jobs?limit=100' + (after ? '&after=' + encodeURIComponent(after) : ''));
+    if (!r.ok || !r.body) return r;
+    all = all.concat(r.body.jobs);
+    after = r.body.next;
+    if (!after) break;
+  }
+  $('jobs-more').hidden = !after;
+  return { ...r, body: { jobs: all, next: after } };
+}
+
 let pollTimer = null;
 async function poll() {
   clearTimeout(pollTimer);
   try {
-    const r = await api('/api/v1/jobs');
+    const r = await listJobs();
     if (r.ok && r.body) {
       $('conn').textContent = 'connected';
       $('conn').className = 'conn ok';
@@ -406,6 +423,7 @@ viewport.addEventListener('keydown', (e) => {
   k();
   if (e.key.startsWith('Arrow')) { view.mode = 'free'; applyView(); }
 });
+$('jobs-more-btn').addEventListener('click', () => { listPages++; poll(); });
 $('view-fit').addEventListener('click', fitView);
 $('view-1to1').addEventListener('click', oneToOne);
 $('zoom-in').addEventListener('click', () => zoomStep(Math.SQRT2));
