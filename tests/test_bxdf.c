@@ -416,7 +416,7 @@ static void test_scaled_and_transmission(void **state)
 
 /* pbrt-v3's RoughnessToAlpha against the same quartic evaluated in double (relative 1e-5:
  * a few float roundings of terms up to ~8 that cancel to ~0.05, at worst ~2e-6 here), and
- * the α of the roughness values docs/departures.md quotes (to its 3 decimals). Below 1e-3
+ * the α of the roughness values docs/design.md §9 quotes (to its 3 decimals). Below 1e-3
  * and for NaN it is the value at 1e-3. */
 static void test_roughness_to_alpha(void **state)
 {
