@@ -53,6 +53,7 @@
  * caches (shape.h), one per triangle, owned by the accel. */
 typedef struct mesh_geom {
     const ts_shape *shape;
+    uint32_t shape_index; /* into the scene's shapes */
     ts_tri_cache *tri;
 } mesh_geom;
 
@@ -62,6 +63,13 @@ struct ts_accel {
     const ts_shape *shapes; /* caller-owned, outlives the accel */
     uint32_t n_shapes;
     mesh_geom *meshes;      /* n_shapes entries (tri NULL for analytic shapes); immutable after create */
+    /* Object instancing (accel.h), immutable after create: instance k is top-level geometry
+     * n_shapes + k over obj_scene[instances[k].object]. */
+    const ts_object *objects;     /* caller-owned, outlive the accel */
+    uint32_t n_objects;
+    RTCScene *obj_scene;
+    const ts_instance *instances; /* caller-owned, outlive the accel */
+    uint32_t n_instances;
     ts_bounds3 bounds;
     ts_ray_log *log; /* NULL, or set by ts_accel_set_ray_log while no query runs */
     /* Written only by the Embree error callback while the creating thread builds; never
@@ -74,7 +82,33 @@ struct ts_accel {
 typedef struct query_ctx {
     struct RTCIntersectContext rtc;
     const ts_ray *ray;
+    const ts_accel *a;
 } query_ctx;
+
+/* The instance a callback runs under (Embree's context instID), or NONE at top level. */
+static inline uint32_t current_instance(const ts_accel *a, const struct RTCIntersectContext *c)
+{
+    unsigned id = c->instID[0];
+    return id == RTC_INVALID_GEOMETRY_ID || !a ? TS_NONE : (uint32_t)(id - a->n_shapes);
+}
+
+/* An analytic shape of an object as instance k places it: to_world composed in double. */
+static ts_shape placed(const ts_accel *a, uint32_t k, const ts_shape *s)
+{
+    ts_shape t = *s;
+    t.to_world = ts_xform_compose(&a->instances[k].to_world, &s->to_world);
+    return t;
+}
+
+/* The world ray in instance k's object space, in double, rounded once. */
+static ts_ray ray_to_object(const ts_accel *a, uint32_t k, const ts_ray *ray)
+{
+    const ts_xform *x = &a->instances[k].to_world;
+    ts_ray r = *ray;
+    r.o = ts_dvec3_to_vec3(ts_xform_point_inv(x, ts_dvec3_from(ray->o)));
+    r.d = ts_dvec3_to_vec3(ts_xform_vector_inv(x, ts_dvec3_from(ray->d)));
+    return r;
+}
 
 static const char *rtc_error_name(enum RTCError code)
 {
@@ -126,11 +160,20 @@ static void user_intersect(const struct RTCIntersectFunctionNArguments *args)
     const ts_shape *s = args->geometryUserPtr;
     float *rh = (float *)args->rayhit;
     unsigned N = args->N;
+    const query_ctx *q = (const query_ctx *)args->context;
+    uint32_t k = current_instance(q->a, args->context);
+    ts_shape inst_s;
+    if (k != TS_NONE) inst_s = placed(q->a, k, s);
     for (unsigned i = 0; i < N; i++) {
         if (!args->valid[i]) continue;
         ts_ray r = ray_from_packet(rh, N, i);
         float t;
-        if (!ts_shape_intersect(s, &r, r.tmax, &t)) continue;
+        if (k != TS_NONE) {
+            /* Through an instance: the world ray (same parameter t) against the placed shape. */
+            ts_ray w = *q->ray;
+            w.tmax = r.tmax;
+            if (!ts_shape_intersect(&inst_s, &w, w.tmax, &t)) continue;
+        } else if (!ts_shape_intersect(s, &r, r.tmax, &t)) continue;
         unsigned *uh = (unsigned *)rh;
         rh[8 * N + i] = t;              /* tfar */
         rh[12 * N + i] = 0;             /* Ng: unused, ts_shape_interaction recomputes */
@@ -149,11 +192,21 @@ static void user_occluded(const struct RTCOccludedFunctionNArguments *args)
     const ts_shape *s = args->geometryUserPtr;
     float *rn = (float *)args->ray;
     unsigned N = args->N;
+    const query_ctx *q = (const query_ctx *)args->context;
+    uint32_t k = current_instance(q->a, args->context);
+    ts_shape inst_s;
+    if (k != TS_NONE) inst_s = placed(q->a, k, s);
     for (unsigned i = 0; i < N; i++) {
         if (!args->valid[i]) continue;
         ts_ray r = ray_from_packet(rn, N, i);
         float t;
-        if (ts_shape_intersect(s, &r, r.tmax, &t)) rn[8 * N + i] = -INFINITY; /* Embree's "occluded" */
+        if (k != TS_NONE) {
+            ts_ray w = *q->ray;
+            w.tmax = r.tmax;
+            if (ts_shape_intersect(&inst_s, &w, w.tmax, &t)) rn[8 * N + i] = -INFINITY;
+        } else if (ts_shape_intersect(s, &r, r.tmax, &t)) {
+            rn[8 * N + i] = -INFINITY; /* Embree's "occluded" */
+        }
     }
 }
 
@@ -167,11 +220,15 @@ static void triangle_filter(const struct RTCFilterFunctionNArguments *args)
     const mesh_geom *g = args->geometryUserPtr;
     const unsigned *hit = (const unsigned *)args->hit;
     unsigned N = args->N;
+    /* Through instance k the triangle is in the object's space: so is the ray tested. */
+    uint32_t k = current_instance(q->a, args->context), inst = k == TS_NONE ? 0 : k + 1;
+    ts_ray r_obj;
+    if (k != TS_NONE) r_obj = ray_to_object(q->a, k, ray);
     for (unsigned i = 0; i < N; i++) {
         if (args->valid[i] != -1) continue;
-        unsigned prim = hit[5 * N + i], geom = hit[6 * N + i];
-        if ((geom == ray->skip_shape && prim == ray->skip_prim) ||
-            !ts_shape_triangle_ahead_cached(g->shape, &g->tri[prim], prim, ray))
+        unsigned prim = hit[5 * N + i];
+        if ((g->shape_index == ray->skip_shape && prim == ray->skip_prim && inst == ray->skip_inst) ||
+            !ts_shape_triangle_ahead_cached(g->shape, &g->tri[prim], prim, k == TS_NONE ? ray : &r_obj))
             args->valid[i] = 0;
     }
 }
@@ -184,6 +241,7 @@ static RTCGeometry make_mesh(ts_accel *a, uint32_t i)
     const ts_mesh *m = &s->mesh;
     mesh_geom *mg = &a->meshes[i];
     mg->shape = s;
+    mg->shape_index = i;
     mg->tri = malloc(sizeof *mg->tri * (size_t)m->n_triangles);
     if (!mg->tri) {
         a->build_code = RTC_ERROR_OUT_OF_MEMORY;
@@ -224,9 +282,107 @@ static void free_meshes(ts_accel *a)
 {
     for (uint32_t i = 0; i < a->n_shapes; i++) free(a->meshes[i].tri);
     free(a->meshes);
+    for (uint32_t o = 0; a->obj_scene && o < a->n_objects; o++)
+        if (a->obj_scene[o]) rtcReleaseScene(a->obj_scene[o]);
+    free(a->obj_scene);
+}
+
+/* The geometry of shape i (NULL with build_error set on failure; *none when there is nothing
+ * to attach: an empty mesh). */
+static RTCGeometry make_geometry(ts_accel *a, uint32_t i, bool *none)
+{
+    const ts_shape *s = &a->shapes[i];
+    *none = false;
+    if (s->type == TS_SHAPE_MESH) {
+        if (s->mesh.n_triangles == 0 || s->mesh.n_vertices == 0) {
+            *none = true; /* nothing to hit */
+            return NULL;
+        }
+        return make_mesh(a, i);
+    }
+    return make_user(a, s);
+}
+
+/* World bounds of b under x (its 8 corners, rounded outwards by a float ulp). */
+static ts_bounds3 xform_bounds(const ts_xform *x, ts_bounds3 b)
+{
+    ts_bounds3 w = ts_bounds3_empty();
+    if (ts_bounds3_is_empty(b)) return w;
+    for (int c = 0; c < 8; c++) {
+        ts_dvec3 q = {(c & 1) ? b.hi.x : b.lo.x, (c & 2) ? b.hi.y : b.lo.y, (c & 4) ? b.hi.z : b.lo.z};
+        ts_vec3 p = ts_dvec3_to_vec3(ts_xform_point(x, q));
+        w = ts_bounds3_extend(w, p);
+    }
+    w.lo = (ts_vec3){ts_next_float_down(w.lo.x), ts_next_float_down(w.lo.y), ts_next_float_down(w.lo.z)};
+    w.hi = (ts_vec3){ts_next_float_up(w.hi.x), ts_next_float_up(w.hi.y), ts_next_float_up(w.hi.z)};
+    return w;
+}
+
+/* One Embree scene per object, then an instance geometry per instance (top-level ID
+ * n_shapes + k); object shapes are left out of the top level. */
+static bool build_objects(ts_accel *a)
+{
+    a->obj_scene = calloc(a->n_objects ? a->n_objects : 1, sizeof *a->obj_scene);
+    ts_bounds3 *ob = calloc(a->n_objects ? a->n_objects : 1, sizeof *ob);
+    if (!a->obj_scene || !ob) {
+        free(ob);
+        a->build_code = RTC_ERROR_OUT_OF_MEMORY;
+        snprintf(a->build_error, sizeof a->build_error, "out of memory for %u objects", a->n_objects);
+        return false;
+    }
+    for (uint32_t o = 0; o < a->n_objects; o++) {
+        RTCScene sc = rtcNewScene(a->device);
+        if (!sc) goto fail;
+        a->obj_scene[o] = sc;
+        rtcSetSceneFlags(sc, RTC_SCENE_FLAG_ROBUST);
+        rtcSetSceneBuildQuality(sc, RTC_BUILD_QUALITY_HIGH);
+        ob[o] = ts_bounds3_empty();
+        const ts_object *obj = &a->objects[o];
+        for (uint32_t j = 0; j < obj->n_shapes; j++) {
+            uint32_t i = obj->first_shape + j;
+            bool none;
+            RTCGeometry g = make_geometry(a, i, &none);
+            if (none) continue;
+            if (!g) goto fail;
+            rtcCommitGeometry(g);
+            rtcAttachGeometryByID(sc, g, j);
+            rtcReleaseGeometry(g);
+            if (a->build_error[0]) goto fail;
+            ob[o] = ts_bounds3_union(ob[o], ts_shape_bounds(&a->shapes[i]));
+        }
+        rtcCommitScene(sc);
+    }
+    for (uint32_t k = 0; k < a->n_instances; k++) {
+        const ts_instance *in = &a->instances[k];
+        if (ts_bounds3_is_empty(ob[in->object])) continue; /* nothing to see */
+        RTCGeometry g = rtcNewGeometry(a->device, RTC_GEOMETRY_TYPE_INSTANCE);
+        if (!g) goto fail;
+        rtcSetGeometryInstancedScene(g, a->obj_scene[in->object]);
+        float xfm[12]; /* 3×4 column-major, for traversal only (hits are redone in double) */
+        for (int c = 0; c < 4; c++)
+            for (int r = 0; r < 3; r++) xfm[3 * c + r] = (float)in->to_world.m.m[r][c];
+        rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, xfm);
+        rtcCommitGeometry(g);
+        rtcAttachGeometryByID(a->scene, g, a->n_shapes + k);
+        rtcReleaseGeometry(g);
+        if (a->build_error[0]) goto fail;
+        a->bounds = ts_bounds3_union(a->bounds, xform_bounds(&in->to_world, ob[in->object]));
+    }
+    free(ob);
+    return true;
+fail:
+    free(ob);
+    return false;
 }
 
 ts_accel *ts_accel_create(const ts_shape *shapes, uint32_t n_shapes, ts_error *err)
+{
+    return ts_accel_create_instanced(shapes, n_shapes, NULL, 0, NULL, 0, err);
+}
+
+ts_accel *ts_accel_create_instanced(const ts_shape *shapes, uint32_t n_shapes, const ts_object *objects,
+                                    uint32_t n_objects, const ts_instance *instances, uint32_t n_instances,
+                                    ts_error *err)
 {
     ts_accel *a = calloc(1, sizeof *a);
     if (!a) {
@@ -257,15 +413,16 @@ ts_accel *ts_accel_create(const ts_shape *shapes, uint32_t n_shapes, ts_error *e
     rtcSetSceneFlags(a->scene, RTC_SCENE_FLAG_ROBUST);
     rtcSetSceneBuildQuality(a->scene, RTC_BUILD_QUALITY_HIGH);
 
+    a->objects = objects;
+    a->instances = instances;
+    a->n_objects = n_objects;
+    a->n_instances = n_instances;
     for (uint32_t i = 0; i < n_shapes; i++) {
         const ts_shape *s = &shapes[i];
-        RTCGeometry g;
-        if (s->type == TS_SHAPE_MESH) {
-            if (s->mesh.n_triangles == 0 || s->mesh.n_vertices == 0) continue; /* nothing to hit */
-            g = make_mesh(a, i);
-        } else {
-            g = make_user(a, s);
-        }
+        if (s->in_object) continue; /* seen through its instances */
+        bool none;
+        RTCGeometry g = make_geometry(a, i, &none);
+        if (none) continue;
         if (!g) goto fail_embree;
         rtcCommitGeometry(g);
         rtcAttachGeometryByID(a->scene, g, i);
@@ -273,6 +430,7 @@ ts_accel *ts_accel_create(const ts_shape *shapes, uint32_t n_shapes, ts_error *e
         if (a->build_error[0]) goto fail_embree;
         a->bounds = ts_bounds3_union(a->bounds, ts_shape_bounds(s));
     }
+    if (n_objects && !build_objects(a)) goto fail_embree;
     rtcCommitScene(a->scene);
     if (a->build_error[0] || rtcGetDeviceError(a->device) != RTC_ERROR_NONE) goto fail_embree;
     rtcSetDeviceErrorFunction(a->device, NULL, NULL); /* nothing writes to a after this */
@@ -286,6 +444,10 @@ fail_embree:
     ts_error_set(err, a->build_code == RTC_ERROR_OUT_OF_MEMORY ? TS_ERR_NOMEM : TS_ERR_INTERNAL,
                  "Embree failed to build the scene's ray-intersection structure: %s", a->build_error);
     if (a->scene) rtcReleaseScene(a->scene);
+    for (uint32_t o = 0; a->obj_scene && o < a->n_objects; o++)
+        if (a->obj_scene[o]) rtcReleaseScene(a->obj_scene[o]);
+    free(a->obj_scene);
+    a->obj_scene = NULL;
     rtcReleaseDevice(a->device);
 fail_device:
     free_meshes(a);
@@ -297,6 +459,9 @@ void ts_accel_destroy(ts_accel *a)
 {
     if (!a) return;
     rtcReleaseScene(a->scene);
+    for (uint32_t o = 0; o < a->n_objects; o++) rtcReleaseScene(a->obj_scene[o]);
+    free(a->obj_scene);
+    a->obj_scene = NULL;
     rtcReleaseDevice(a->device);
     free_meshes(a);
     free(a);
@@ -338,6 +503,57 @@ static inline bool ray_valid(const ts_ray *r)
            (r->d.x != 0 || r->d.y != 0 || r->d.z != 0) && !isnan(r->tmax);
 }
 
+/* A hit on shape `local` of instance k's object (accel.h): analytic shapes solved in world
+ * space under the composed transform; triangles in object space from the ray taken there,
+ * then mapped to world space. */
+static void instanced_interaction(const ts_accel *a, uint32_t k, uint32_t local, uint32_t prim, const ts_ray *ray,
+                                  float t, ts_interaction *si)
+{
+    const ts_instance *in = &a->instances[k];
+    uint32_t index = a->objects[in->object].first_shape + local;
+    const ts_shape *s = &a->shapes[index];
+    if (s->type != TS_SHAPE_MESH) {
+        ts_shape p = placed(a, k, s);
+        ts_shape_interaction(&p, index, 0, ray, t, si);
+        si->inst = k + 1;
+        return;
+    }
+    ts_ray r = ray_to_object(a, k, ray);
+    ts_interaction o;
+    ts_shape_triangle_interaction_cached(s, &a->meshes[index].tri[prim], index, prim, &r, t, &o);
+    const ts_xform *x = &in->to_world;
+    const double(*m)[4] = x->m.m;
+    /* p and its bound (pbrt-v3's transformed pError): |M|·e plus the double sum's and the
+     * final float rounding's share, four half-ulps of the result as in shape.c. */
+    double pv[3] = {o.p.x, o.p.y, o.p.z}, ev[3] = {o.p_error.x, o.p_error.y, o.p_error.z}, pw[3], ew[3];
+    for (int i = 0; i < 3; i++) {
+        double acc = m[i][3], mag = fabs(m[i][3]), e = 0;
+        for (int j = 0; j < 3; j++) {
+            acc += m[i][j] * pv[j];
+            mag += fabs(m[i][j] * pv[j]);
+            e += fabs(m[i][j]) * ev[j];
+        }
+        pw[i] = acc;
+        ew[i] = e * (1 + 0x1p-50) + 0x1p-40 * mag + 0x1p-22 * fabs(acc);
+    }
+    *si = o;
+    si->p = (ts_vec3){(float)pw[0], (float)pw[1], (float)pw[2]};
+    ts_vec3 e = {(float)ew[0], (float)ew[1], (float)ew[2]};
+    si->p_error = (ts_vec3){ts_next_float_up(e.x), ts_next_float_up(e.y), ts_next_float_up(e.z)};
+    /* Normals by the inverse transpose: the same side of the surface as in object space. */
+    ts_dvec3 n = ts_dvec3_normalize(ts_xform_normal(x, ts_dvec3_from(o.n)));
+    ts_dvec3 ns = ts_dvec3_normalize(ts_xform_normal(x, ts_dvec3_from(o.ns)));
+    if (ts_dvec3_dot(ns, n) < 0) ns = ts_dvec3_scale(ns, -1);
+    si->n = ts_dvec3_to_vec3(n);
+    si->ns = ts_dvec3_to_vec3(ns);
+    si->dpdu = ts_dvec3_to_vec3(ts_xform_vector(x, ts_dvec3_from(o.dpdu)));
+    si->dpdv = ts_dvec3_to_vec3(ts_xform_vector(x, ts_dvec3_from(o.dpdv)));
+    ts_dvec3 wo = ts_dvec3_scale(ts_dvec3_from(ray->d), -1);
+    double len = ts_dvec3_length(wo);
+    si->wo = ts_dvec3_to_vec3(len > 0 ? ts_dvec3_scale(wo, 1 / len) : wo);
+    si->inst = k + 1;
+}
+
 bool ts_accel_intersect(const ts_accel *a, const ts_ray *ray, ts_interaction *si)
 {
     if (!(ray->tmax > 0) || !ray_valid(ray)) return false;
@@ -345,13 +561,19 @@ bool ts_accel_intersect(const ts_accel *a, const ts_ray *ray, ts_interaction *si
     query_ctx q;
     rtcInitIntersectContext(&q.rtc);
     q.ray = ray;
+    q.a = a;
     struct RTCRayHit rh;
     ray_to_rtc(ray, &rh.ray);
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(a->scene, &q.rtc, &rh);
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID || rh.hit.geomID >= a->n_shapes) return false;
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+    if (rh.hit.instID[0] != RTC_INVALID_GEOMETRY_ID) {
+        instanced_interaction(a, rh.hit.instID[0] - a->n_shapes, rh.hit.geomID, rh.hit.primID, ray, rh.ray.tfar, si);
+        return true;
+    }
+    if (rh.hit.geomID >= a->n_shapes) return false;
     const ts_shape *s = &a->shapes[rh.hit.geomID];
     if (s->type == TS_SHAPE_MESH) {
         const mesh_geom *g = &a->meshes[rh.hit.geomID];
@@ -371,6 +593,7 @@ bool ts_accel_occluded(const ts_accel *a, const ts_ray *ray)
     query_ctx q;
     rtcInitIntersectContext(&q.rtc);
     q.ray = ray;
+    q.a = a;
     struct RTCRay r;
     ray_to_rtc(ray, &r);
     rtcOccluded1(a->scene, &q.rtc, &r);

@@ -19,9 +19,35 @@
 
 typedef struct ts_accel ts_accel;
 
+/* Object instancing (pbrt-v3's ObjectBegin/End and ObjectInstance). An object is the
+ * shapes [first_shape, first_shape + n_shapes) of the scene's array, all with in_object
+ * set and in the object's own space; it becomes one Embree scene, built once, and every
+ * instance is an Embree instance of it under its to_world, so its geometry exists once
+ * however many instances there are. A hit through instance k is resolved (instID) to the
+ * object's shape: its interaction is that shape's, computed in the object's space from the
+ * ray taken there in double, then mapped to world space — p by to_world with its error
+ * bound carried through (pbrt-v3's transformed pError), n and ns by the inverse transpose,
+ * ∂p/∂u, ∂p/∂v by to_world, uv as they are — with shape the object's shape index and inst
+ * k + 1. Analytic shapes are solved directly in world space under the composed transform
+ * (bit for bit what the same shape placed directly with that transform gives). Instances
+ * do not nest (Embree here is built with one instance level; pbrt-v3 refuses it too). */
+typedef struct ts_object {
+    uint32_t first_shape, n_shapes;
+} ts_object;
+
+typedef struct ts_instance {
+    uint32_t object;   /* index into the objects */
+    ts_xform to_world; /* object space → world, invertible */
+} ts_instance;
+
 /* Builds over shapes[0..n) (the array must outlive the accel). NULL and err filled on
  * failure (Embree error text included). */
 ts_accel *ts_accel_create(const ts_shape *shapes, uint32_t n_shapes, ts_error *err);
+/* The same with object instances (the arrays, like shapes, must outlive the accel; shapes
+ * in objects are attached only through instances). */
+ts_accel *ts_accel_create_instanced(const ts_shape *shapes, uint32_t n_shapes, const ts_object *objects,
+                                    uint32_t n_objects, const ts_instance *instances, uint32_t n_instances,
+                                    ts_error *err);
 void ts_accel_destroy(ts_accel *a);
 
 /* Nearest hit in (0, ray.tmax): fills si fully and returns true; false on a miss. */

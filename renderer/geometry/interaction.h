@@ -21,6 +21,8 @@ typedef struct ts_ray {
     float tmax;          /* hits with t in (0, tmax) count */
     uint32_t skip_shape; /* TS_NONE, or the triangle this ray leaves (shape index) */
     uint32_t skip_prim;
+    uint32_t skip_inst;  /* with skip_shape: 0 for a triangle of the scene itself, k + 1 for
+                            one seen through object instance k (accel.h) */
 } ts_ray;
 
 typedef struct ts_interaction {
@@ -34,13 +36,15 @@ typedef struct ts_interaction {
     float t;           /* ray parameter of the hit */
     uint32_t shape;    /* index into the scene's shapes */
     uint32_t prim;     /* triangle index for meshes, 0 otherwise */
+    uint32_t inst;     /* 0, or k + 1 when the hit is on a shape of object instance k (accel.h):
+                          everything above is then in world space all the same */
 } ts_interaction;
 
 static inline ts_vec3 ts_ray_at(const ts_ray *r, float t) { return ts_vec3_add(r->o, ts_vec3_scale(r->d, t)); }
 
 static inline ts_ray ts_ray_make(ts_vec3 o, ts_vec3 d, float tmax)
 {
-    ts_ray r = {o, d, tmax, TS_NONE, TS_NONE};
+    ts_ray r = {o, d, tmax, TS_NONE, TS_NONE, 0};
     return r;
 }
 
@@ -63,9 +67,9 @@ static inline ts_vec3 ts_offset_ray_origin(ts_vec3 p, ts_vec3 p_error, ts_vec3 n
 
 /* Set by the accelerator for shapes that are triangle meshes (see accel.h). */
 static inline ts_ray ts_spawn_ray_ex(ts_vec3 p, ts_vec3 p_error, ts_vec3 n, ts_vec3 d, uint32_t skip_shape,
-                                     uint32_t skip_prim)
+                                     uint32_t skip_prim, uint32_t skip_inst)
 {
-    ts_ray r = {ts_offset_ray_origin(p, p_error, n, d), d, INFINITY, skip_shape, skip_prim};
+    ts_ray r = {ts_offset_ray_origin(p, p_error, n, d), d, INFINITY, skip_shape, skip_prim, skip_inst};
     return r;
 }
 

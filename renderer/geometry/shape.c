@@ -623,6 +623,7 @@ void ts_shape_interaction(const ts_shape *s, uint32_t shape_index, uint32_t prim
                           ts_interaction *si)
 {
     si->shape = shape_index;
+    si->inst = 0;
     if (s->type == TS_SHAPE_MESH) {
         ts_tri_cache c;
         ts_shape_triangle_cache_init(s, prim, &c);
@@ -656,6 +657,7 @@ void ts_shape_triangle_interaction_cached(const ts_shape *s, const ts_tri_cache 
                                           uint32_t prim, const ts_ray *ray, float t, ts_interaction *si)
 {
     si->shape = shape_index;
+    si->inst = 0;
     triangle_interaction(s, c, prim, ray, t, si);
 }
 
@@ -886,7 +888,8 @@ double ts_shape_area(const ts_shape *s, uint32_t prim)
 ts_ray ts_spawn_ray(const ts_interaction *si, const ts_shape *shapes, ts_vec3 d)
 {
     bool mesh = shapes && shapes[si->shape].type == TS_SHAPE_MESH;
-    return ts_spawn_ray_ex(si->p, si->p_error, si->n, d, mesh ? si->shape : TS_NONE, mesh ? si->prim : TS_NONE);
+    return ts_spawn_ray_ex(si->p, si->p_error, si->n, d, mesh ? si->shape : TS_NONE, mesh ? si->prim : TS_NONE,
+                           mesh ? si->inst : 0);
 }
 
 ts_ray ts_spawn_ray_to(const ts_interaction *si, const ts_shape *shapes, ts_vec3 p_to, ts_vec3 p_to_error,
@@ -895,6 +898,7 @@ ts_ray ts_spawn_ray_to(const ts_interaction *si, const ts_shape *shapes, ts_vec3
     bool mesh = shapes && shapes[si->shape].type == TS_SHAPE_MESH;
     ts_vec3 o = ts_offset_ray_origin(si->p, si->p_error, si->n, ts_vec3_sub(p_to, si->p));
     ts_vec3 pt = ts_offset_ray_origin(p_to, p_to_error, n_to, ts_vec3_sub(o, p_to));
-    ts_ray r = {o, ts_vec3_sub(pt, o), 1 - TS_SHADOW_EPSILON, mesh ? si->shape : TS_NONE, mesh ? si->prim : TS_NONE};
+    ts_ray r = {o, ts_vec3_sub(pt, o), 1 - TS_SHADOW_EPSILON, mesh ? si->shape : TS_NONE, mesh ? si->prim : TS_NONE,
+                mesh ? si->inst : 0};
     return r;
 }

@@ -71,6 +71,10 @@ typedef struct ts_shape {
     bool reverse_orientation; /* analytic shapes: the front side is the inside (disk: −z) */
     bool partial;         /* analytic shapes: cut by phi_max (and a sphere by z_min, z_max) */
     double phi_max;       /* partial: radians in (0, 2π] */
+    /* Part of object definition `object` (accel.h): in that object's space (a mesh's vertices
+     * too), seen only through its instances; otherwise (false, the zero value) in the scene. */
+    bool in_object;
+    uint32_t object;
     union {
         /* z_min < z_max within [−radius, radius], theta_min = acos(z_min/radius) >
          * theta_max = acos(z_max/radius): read only when partial */

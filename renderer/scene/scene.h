@@ -85,6 +85,12 @@ typedef struct ts_scene {
     uint32_t n_lights;
     uint64_t n_triangles;
 
+    /* Object instancing (geometry/accel.h): objects are ranges of shapes (in_object set). */
+    ts_object *objects;
+    uint32_t n_objects;
+    ts_instance *instances;
+    uint32_t n_instances;
+
     ts_accel *accel;
     ts_bounds3 bounds;
     /* What the scene calls for (effects.h), less what the job switched off; the

@@ -40,6 +40,16 @@ struct ts_scene_builder {
     uint32_t n_lights;
     size_t cap_lights;
     uint64_t n_triangles, n_area_lights;
+    /* Object instancing: the objects' names (arena) and shape ranges, the instances; the
+     * object being defined (TS_NONE outside ObjectBegin/End). */
+    ts_object *objects;
+    const char **object_names;
+    uint32_t n_objects;
+    size_t cap_objects, cap_object_names;
+    ts_instance *instances;
+    uint32_t n_instances;
+    size_t cap_instances;
+    uint32_t open_object;
 
     /* Owned until finish moves them into the scene. */
     struct ts_fourier_table **fourier_tables;
@@ -123,6 +133,7 @@ ts_status ts_scene_builder_create(const ts_scene_limits *limits, const char *bas
     else
         ts_scene_limits_default(&b->lim);
     b->s = s;
+    b->open_object = TS_NONE;
     ts_arena_init(&s->arena, b->lim.max_memory);
     if (base_dir && !(s->base_dir = ts_arena_strdup(&s->arena, base_dir))) {
         ts_scene_builder_destroy(b);
@@ -145,6 +156,9 @@ void ts_scene_builder_destroy(ts_scene_builder *b)
     free(b->material_names);
     free(b->shapes);
     free(b->lights);
+    free(b->objects);
+    free(b->object_names);
+    free(b->instances);
     ts_scene_destroy(b->s);
     free(b);
 }
@@ -760,9 +774,18 @@ ts_status ts_scene_builder_add_shape(ts_scene_builder *b, const ts_shape_desc *d
 {
     TRY(usable(b, err));
     TRY(check_shape(b, d, err));
+    if (b->open_object != TS_NONE && !ts_rgb_is_black(d->emission))
+        return ts_error_set(err, TS_ERR_UNSUPPORTED,
+                            "a shape of an object cannot emit (pbrt-v3 drops area lights inside ObjectBegin/End); "
+                            "add it without emission");
     if (!grow((void **)&b->shapes, &b->cap_shapes, (size_t)b->n_shapes + 1, sizeof *b->shapes))
         return nomem(err, "the shapes");
     ts_shape sh = {0};
+    if (b->open_object != TS_NONE) {
+        sh.in_object = true;
+        sh.object = b->open_object;
+        b->objects[b->open_object].n_shapes++;
+    }
     sh.type = d->type;
     sh.material = d->material;
     sh.emission = d->emission;
@@ -795,6 +818,70 @@ ts_status ts_scene_builder_loop_subdivide(ts_scene_builder *b, const ts_mesh *co
         return ts_error_set(err, TS_ERR_LIMIT, "%u levels of subdivision exceed the scene's limit of %llu triangles",
                             levels, (unsigned long long)b->lim.max_triangles);
     return st;
+}
+
+/* ---------------------------------------------------------------- objects */
+
+ts_status ts_scene_builder_begin_object(ts_scene_builder *b, const char *name, uint32_t *id, ts_error *err)
+{
+    TRY(usable(b, err));
+    if (b->open_object != TS_NONE)
+        return ts_error_set(err, TS_ERR_UNSUPPORTED,
+                            "object \"%s\" begins inside object \"%s\": objects do not nest (nor do they in pbrt-v3)",
+                            name ? name : "", b->object_names[b->open_object]);
+    if (!name || !name[0]) return ts_error_set(err, TS_ERR_INVALID, "an object needs a name");
+    if (ts_scene_builder_find_object(b, name) != TS_NONE)
+        return ts_error_set(err, TS_ERR_INVALID, "object \"%s\" is defined twice", name);
+    if (!grow((void **)&b->objects, &b->cap_objects, (size_t)b->n_objects + 1, sizeof *b->objects) ||
+        !grow((void **)&b->object_names, &b->cap_object_names, (size_t)b->n_objects + 1, sizeof *b->object_names))
+        return nomem(err, "the objects");
+    const char *copy = ts_arena_strdup(&b->s->arena, name);
+    if (!copy) return nomem(err, "the objects");
+    b->objects[b->n_objects] = (ts_object){b->n_shapes, 0};
+    b->object_names[b->n_objects] = copy;
+    if (id) *id = b->n_objects;
+    b->open_object = b->n_objects++;
+    return TS_OK;
+}
+
+ts_status ts_scene_builder_end_object(ts_scene_builder *b, ts_error *err)
+{
+    TRY(usable(b, err));
+    if (b->open_object == TS_NONE) return ts_error_set(err, TS_ERR_INVALID, "no object is being defined");
+    b->open_object = TS_NONE;
+    return TS_OK;
+}
+
+uint32_t ts_scene_builder_find_object(const ts_scene_builder *b, const char *name)
+{
+    for (uint32_t i = 0; name && i < b->n_objects; i++)
+        if (strcmp(b->object_names[i], name) == 0) return i;
+    return TS_NONE;
+}
+
+ts_status ts_scene_builder_add_instance(ts_scene_builder *b, uint32_t object, const ts_xform *to_world, ts_error *err)
+{
+    TRY(usable(b, err));
+    if (b->open_object != TS_NONE)
+        return ts_error_set(err, TS_ERR_UNSUPPORTED,
+                            "an instance inside object \"%s\": instances do not nest (nor do they in pbrt-v3)",
+                            b->object_names[b->open_object]);
+    if (object >= b->n_objects)
+        return ts_error_set(err, TS_ERR_INVALID, "object: no object of id %u (%u were defined)", object, b->n_objects);
+    const double(*m)[4] = to_world->m.m;
+    double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                 m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+    bool finite = isfinite(det);
+    for (int i = 0; i < 4; i++)
+        for (int j = 0; j < 4; j++) finite = finite && isfinite(m[i][j]) && isfinite(to_world->m_inv.m[i][j]);
+    if (!finite || det == 0)
+        return ts_error_set(err, TS_ERR_INVALID, "transform: expected a finite, invertible transform");
+    if ((uint64_t)b->n_instances + b->n_shapes >= b->lim.max_shapes)
+        return ts_error_set(err, TS_ERR_LIMIT, "more than the limit of %u shapes and instances", b->lim.max_shapes);
+    if (!grow((void **)&b->instances, &b->cap_instances, (size_t)b->n_instances + 1, sizeof *b->instances))
+        return nomem(err, "the instances");
+    b->instances[b->n_instances++] = (ts_instance){object, *to_world};
+    return TS_OK;
 }
 
 /* ---------------------------------------------------------------- lights */
@@ -861,7 +948,8 @@ ts_status ts_scene_builder_add_light(ts_scene_builder *b, const ts_light_desc *d
 
 void ts_scene_builder_counts(const ts_scene_builder *b, ts_scene_counts *out)
 {
-    *out = (ts_scene_counts){b->n_materials, b->n_shapes, b->n_lights, b->n_triangles, b->n_area_lights};
+    *out = (ts_scene_counts){b->n_materials, b->n_shapes, b->n_lights, b->n_triangles, b->n_area_lights,
+                             b->n_objects, b->n_instances};
 }
 
 /* ---------------------------------------------------------------- finish */
@@ -879,6 +967,13 @@ static ts_status lay_out(ts_scene_builder *b, ts_error *err)
     s->shapes = ts_arena_calloc(a, (size_t)b->n_shapes + 1, sizeof *s->shapes);
     s->lights = ts_arena_calloc(a, (size_t)n_lights + 1, sizeof *s->lights);
     s->fourier_tables = ts_arena_calloc(a, (size_t)b->n_fourier_tables + 1, sizeof *s->fourier_tables);
+    s->objects = ts_arena_calloc(a, (size_t)b->n_objects + 1, sizeof *s->objects);
+    s->instances = ts_arena_calloc(a, (size_t)b->n_instances + 1, sizeof *s->instances);
+    if (!s->objects || !s->instances) return nomem(err, "the scene");
+    if (b->n_objects) memcpy(s->objects, b->objects, b->n_objects * sizeof *b->objects);
+    if (b->n_instances) memcpy(s->instances, b->instances, b->n_instances * sizeof *b->instances);
+    s->n_objects = b->n_objects;
+    s->n_instances = b->n_instances;
     s->envmaps = ts_arena_calloc(a, (size_t)b->n_envmaps + 1, sizeof *s->envmaps);
     if (!s->materials || !s->material_names || !s->shapes || !s->lights || !s->fourier_tables || !s->envmaps)
         return nomem(err, "the scene");
@@ -921,7 +1016,8 @@ static ts_status lay_out(ts_scene_builder *b, ts_error *err)
 static ts_status build(ts_scene_builder *b, ts_error *err)
 {
     ts_scene *s = b->s;
-    s->accel = ts_accel_create(s->shapes, s->n_shapes, err);
+    s->accel = ts_accel_create_instanced(s->shapes, s->n_shapes, s->objects, s->n_objects, s->instances,
+                                         s->n_instances, err);
     if (!s->accel) return err->status ? err->status : TS_ERR_INTERNAL;
     s->bounds = ts_accel_bounds(s->accel);
     /* Rays carry float coordinates and Embree refuses components beyond ~1.8e18; far before
@@ -974,6 +1070,8 @@ ts_status ts_scene_builder_finish(ts_scene_builder *b, ts_scene **out, ts_error 
                                                : NULL;
     if (missing)
         return ts_error_set(err, TS_ERR_INVALID, "%s: not set (the scene builder needs it)", missing);
+    if (b->open_object != TS_NONE)
+        return ts_error_set(err, TS_ERR_INVALID, "object \"%s\" is not ended", b->object_names[b->open_object]);
     if ((uint64_t)b->n_lights + b->n_area_lights > b->lim.max_lights)
         return ts_error_set(err, TS_ERR_LIMIT,
                             "lights: %llu lights (with emitting triangles) is more than the limit of %u",

@@ -242,6 +242,27 @@ typedef struct ts_shape_desc {
 ts_status ts_scene_builder_add_shape(ts_scene_builder *b, const ts_shape_desc *shape, uint32_t *id,
                                      ts_error *err);
 
+/* ---- object instancing (pbrt-v3's ObjectBegin/End, ObjectInstance; geometry/accel.h)
+ *
+ * begin_object opens the definition of a named object (names unique; *id may be NULL):
+ * until end_object every ts_scene_builder_add_shape adds to it, the shape's to_world
+ * placing it in the object's own space (pbrt-v3: the CTM at the Shape inside
+ * ObjectBegin/End); add_instance's to_world is pbrt-v3's CTM at ObjectInstance, so a point
+ * of the shape lands at to_world(shape to_world(p)), as in pbrt-v3. add_instance places
+ * the object in the world by to_world (finite and invertible); any number of instances
+ * share the object's geometry. Refused: a definition or an instance inside a definition
+ * (TS_ERR_UNSUPPORTED: no nesting, as in pbrt-v3), an emitting shape inside a definition
+ * (TS_ERR_UNSUPPORTED; pbrt-v3 warns "area lights not supported with object instancing"
+ * and keeps the shape without its emission — the pbrt-v3 front end does that, with the
+ * warning), finish with a definition open. Instances count against limits.max_shapes with
+ * the shapes; an object's triangles count once. */
+ts_status ts_scene_builder_begin_object(ts_scene_builder *b, const char *name, uint32_t *id, ts_error *err);
+ts_status ts_scene_builder_end_object(ts_scene_builder *b, ts_error *err);
+/* The id of the object named name, or TS_NONE. */
+uint32_t ts_scene_builder_find_object(const ts_scene_builder *b, const char *name);
+ts_status ts_scene_builder_add_instance(ts_scene_builder *b, uint32_t object, const ts_xform *to_world,
+                                        ts_error *err);
+
 typedef struct ts_light_desc {
     ts_light_type type;          /* point, spot, distant or infinite (area lights come from shapes) */
     ts_rgb color;                /* point/spot intensity, distant irradiance, infinite radiance (or
@@ -263,6 +284,7 @@ typedef struct ts_scene_counts {
     uint32_t materials, shapes, lights; /* lights: added with add_light */
     uint64_t triangles;                 /* of every mesh */
     uint64_t area_lights;               /* emitting analytic shapes + emitting triangles */
+    uint32_t objects, instances;
 } ts_scene_counts;
 void ts_scene_builder_counts(const ts_scene_builder *b, ts_scene_counts *out);
 

@@ -772,6 +772,59 @@ static ts_status parse_shapes(loader *ld, const cJSON *doc)
     return TS_OK;
 }
 
+/* "objects": name → {"shapes": [shape, …]} (docs/design.md §4): each an object definition
+ * whose shapes are in its own space. */
+static ts_status parse_objects(loader *ld, const cJSON *doc)
+{
+    const cJSON *objs;
+    TRY(ts_json_object(doc, "", "objects", false, &objs, ld->err));
+    if (!objs) return TS_OK;
+    for (const cJSON *o = objs->child; o; o = o->next) {
+        ts_jpath p = ts_jpath_key("objects", o->string);
+        static const char *const keys[] = {"shapes", NULL};
+        TRY(ts_json_check_object(o, p.s, keys, ld->err));
+        const cJSON *shapes;
+        TRY(ts_json_array(o, p.s, "shapes", true, &shapes, ld->err));
+        TRY(at(ts_scene_builder_begin_object(ld->b, o->string, NULL, ld->err), p.s, ld->err));
+        int i = 0;
+        for (const cJSON *sh = shapes->child; sh; sh = sh->next, i++) {
+            ts_jpath sp = ts_jpath_index(ts_jpath_key(p.s, "shapes").s, i);
+            ts_shape_desc d;
+            ts_mesh_data arrays = {0};
+            ts_status st = parse_shape(ld, sh, sp.s, &d, &arrays);
+            if (!st) st = at(ts_scene_builder_add_shape(ld->b, &d, NULL, ld->err), sp.s, ld->err);
+            ts_mesh_data_free(&arrays);
+            if (st) return st;
+        }
+        TRY(at(ts_scene_builder_end_object(ld->b, ld->err), p.s, ld->err));
+    }
+    return TS_OK;
+}
+
+/* "instances": [{"object": name, "transform": […]}]: an object placed in the world. */
+static ts_status parse_instances(loader *ld, const cJSON *doc)
+{
+    const cJSON *list;
+    TRY(ts_json_array(doc, "", "instances", false, &list, ld->err));
+    int i = 0;
+    for (const cJSON *in = list ? list->child : NULL; in; in = in->next, i++) {
+        ts_jpath p = ts_jpath_index("instances", i);
+        static const char *const keys[] = {"object", "transform", NULL};
+        TRY(ts_json_check_object(in, p.s, keys, ld->err));
+        const char *name;
+        TRY(ts_json_string(in, p.s, "object", true, &name, ld->err));
+        uint32_t id = ts_scene_builder_find_object(ld->b, name);
+        if (id == TS_NONE) {
+            ts_jpath op = ts_jpath_key(p.s, "object");
+            return ts_error_set(ld->err, TS_ERR_INVALID, "%s: no object named \"%s\" in 'objects'", op.s, name);
+        }
+        ts_xform x;
+        TRY(parse_transform(ld, in, p.s, &x));
+        TRY(at(ts_scene_builder_add_instance(ld->b, id, &x, ld->err), p.s, ld->err));
+    }
+    return TS_OK;
+}
+
 static ts_status parse_light(loader *ld, const cJSON *l, const char *path, ts_light_desc *out)
 {
     static const char *const types[] = {"point", "spot", "distant", "infinite", NULL};
@@ -875,8 +928,8 @@ static ts_status parse_lights(loader *ld, const cJSON *doc)
 
 static ts_status parse_document(loader *ld, const cJSON *doc)
 {
-    static const char *const keys[] = {"tessera", "name",   "camera", "film", "sampler", "integrator", "textures",
-                                       "materials", "shapes", "lights", "job",  NULL};
+    static const char *const keys[] = {"tessera",   "name",   "camera",  "film",      "sampler", "integrator", "textures",
+                                       "materials", "shapes", "objects", "instances", "lights",  "job",        NULL};
     TRY(ts_json_check_object(doc, "", keys, ld->err));
     const cJSON *v = cJSON_GetObjectItemCaseSensitive(doc, "tessera");
     if (!v)
@@ -900,6 +953,8 @@ static ts_status parse_document(loader *ld, const cJSON *doc)
     TRY(parse_textures(ld, doc));
     TRY(parse_materials(ld, doc));
     TRY(parse_shapes(ld, doc));
+    TRY(parse_objects(ld, doc));
+    TRY(parse_instances(ld, doc));
     TRY(parse_lights(ld, doc));
     TRY(parse_job(ld, doc));
     return TS_OK;
