@@ -246,7 +246,7 @@ static size_t scene_bytes(uint32_t n_instances)
     ts_camera_desc cam = {.type = TS_CAMERA_PERSPECTIVE, .from = {0, 0, 50}, .to = {0, 0, 0}, .up = {0, 1, 0}, .fov_deg = 40, .focus_distance = 1};
     ts_sampler smp = {.type = TS_SAMPLER_SOBOL};
     ts_integrator_desc in = {.type = TS_INTEGRATOR_NORMALS};
-    ts_material m = {.type = TS_MATERIAL_DIFFUSE, .reflectance = {0.5f, 0.5f, 0.5f}};
+    ts_material m = {.type = TS_MATERIAL_DIFFUSE, .reflectance = {{0.5f, 0.5f, 0.5f}}};
     assert_int_equal(ts_scene_builder_add_material(b, "m", &m, NULL, &err), TS_OK);
     assert_int_equal(ts_scene_builder_set_film(b, &film, &err), TS_OK);
     assert_int_equal(ts_scene_builder_set_camera(b, &cam, &err), TS_OK);
@@ -294,7 +294,7 @@ static void test_refusals(void **state)
     ts_scene_builder *b;
     ts_error err = {0};
     assert_int_equal(ts_scene_builder_create(NULL, NULL, &b, &err), TS_OK);
-    ts_material m = {.type = TS_MATERIAL_DIFFUSE, .reflectance = {0.5f, 0.5f, 0.5f}};
+    ts_material m = {.type = TS_MATERIAL_DIFFUSE, .reflectance = {{0.5f, 0.5f, 0.5f}}};
     assert_int_equal(ts_scene_builder_add_material(b, "m", &m, NULL, &err), TS_OK);
     assert_int_not_equal(ts_scene_builder_end_object(b, &err), TS_OK);
     assert_string_equal(err.message, "no object is being defined");
