@@ -533,17 +533,22 @@ static void bundle_task(void *arg)
                                    "queued");
         goto done;
     }
+    const char *root = srv_bundle_root_get(a->files_root);
+    if (!root) {
+        srv_http_set_error(r, 500, "cannot make a temporary folder for bundles: %s", strerror(errno));
+        goto done;
+    }
     if (getrandom(rnd, sizeof rnd, 0) != (ssize_t)sizeof rnd) {
         srv_http_set_error(r, 500, "no random bytes for a folder name: %s", strerror(errno));
         goto done;
     }
-    snprintf(staging, sizeof staging, "%s/incoming", a->files_root);
+    snprintf(staging, sizeof staging, "%s/incoming", root);
     if (mkdir(staging, 0700) != 0 && errno != EEXIST) {
         srv_http_set_error(r, 500, "cannot make the folder for bundles: %s", strerror(errno));
         staging[0] = '\0';
         goto done;
     }
-    snprintf(staging, sizeof staging, "%s/incoming/%02x%02x%02x%02x%02x%02x%02x%02x", a->files_root, rnd[0], rnd[1],
+    snprintf(staging, sizeof staging, "%s/incoming/%02x%02x%02x%02x%02x%02x%02x%02x", root, rnd[0], rnd[1],
              rnd[2], rnd[3], rnd[4], rnd[5], rnd[6], rnd[7]);
     srv_bundle_info info;
     if (srv_bundle_unpack(r->body, r->body_len, staging, a->bundle, &info, &status, &err)) {
@@ -559,7 +564,7 @@ static void bundle_task(void *arg)
         srv_http_set_error(r, 500, "the bundle's %s cannot be read back: %s", info.scene_file, strerror(errno));
         goto done;
     }
-    srv_submit_files files = {!strcmp(info.scene_file, "scene.pbrt"), staging, a->files_root};
+    srv_submit_files files = {!strcmp(info.scene_file, "scene.pbrt"), staging, root};
     srv_job *j = srv_store_submit_files(a->store, text, len, &files, &status, &err);
     free(text);
     if (!j) {
@@ -838,7 +843,8 @@ static int handle(srv_request *r)
             if (removed && cfg->data_dir) srv_persist_remove(cfg->data_dir, j); /* the bundle's folder with it */
             else if (removed && j->files_dir) {
                 char folder[4096];
-                snprintf(folder, sizeof folder, "%s/jobs/%s", cfg->files_root, j->id);
+                const char *root = srv_bundle_root_get(cfg->files_root);
+                snprintf(folder, sizeof folder, "%s/jobs/%s", root ? root : "", j->id);
                 if (srv_bundle_remove_tree(folder) != 0)
                     fprintf(stderr, "tessera: removing %s: %s\n", folder, strerror(errno));
             }

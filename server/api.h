@@ -32,7 +32,7 @@ typedef struct srv_api {
      * files go (incoming/ while unpacking, jobs/<id>/files after): --data, or the server's
      * temporary folder. NULL: bundles are refused (415). */
     const struct srv_bundle_limits *bundle;
-    const char *files_root;
+    struct srv_bundle_root *files_root;
 } srv_api;
 
 /* The handler table of API v1 over api (srv_http_start takes it). */

@@ -182,6 +182,35 @@ int srv_bundle_remove_tree(const char *dir)
     return lstat(dir, &sb) == 0 ? (errno = ENOTEMPTY, -1) : 0;
 }
 
+void srv_bundle_root_init(srv_bundle_root *r, const char *fixed)
+{
+    pthread_mutex_init(&r->mu, NULL);
+    r->fixed = fixed;
+    r->tmp[0] = '\0';
+}
+
+const char *srv_bundle_root_get(srv_bundle_root *r)
+{
+    if (r->fixed) return r->fixed;
+    pthread_mutex_lock(&r->mu);
+    if (!r->tmp[0]) {
+        const char *t = getenv("TMPDIR");
+        snprintf(r->tmp, sizeof r->tmp, "%s/tessera-serve-XXXXXX", t && t[0] && strlen(t) < 4000 ? t : "/tmp");
+        if (!mkdtemp(r->tmp)) r->tmp[0] = '\0';
+    }
+    const char *out = r->tmp[0] ? r->tmp : NULL;
+    pthread_mutex_unlock(&r->mu);
+    return out;
+}
+
+int srv_bundle_root_fini(srv_bundle_root *r)
+{
+    int rc = r->tmp[0] ? srv_bundle_remove_tree(r->tmp) : 0;
+    r->tmp[0] = '\0';
+    pthread_mutex_destroy(&r->mu);
+    return rc;
+}
+
 ts_status srv_bundle_unpack(const void *buf, size_t len, const char *dir, const srv_bundle_limits *lim,
                             srv_bundle_info *info, int *http_status, ts_error *err)
 {

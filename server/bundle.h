@@ -15,6 +15,7 @@
 #ifndef SRV_BUNDLE_H
 #define SRV_BUNDLE_H
 
+#include <pthread.h>
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -50,6 +51,21 @@ ts_status srv_bundle_unpack(const void *buf, size_t len, const char *dir, const 
 /* Removes dir and everything below it, following no link; 0, or -1 with errno when
  * something could not be removed (what could, is). A missing dir is 0. */
 int srv_bundle_remove_tree(const char *dir);
+
+/* The folder bundles go under (incoming/ while unpacking, jobs/<id>/files after): --data,
+ * or without it a temporary folder of the run, $TMPDIR/tessera-serve-XXXXXX, made at the
+ * first bundle (so a server that takes none, or is killed, leaves none behind) and removed
+ * by srv_bundle_root_fini. */
+typedef struct srv_bundle_root {
+    pthread_mutex_t mu;
+    const char *fixed;  /* --data, or NULL */
+    char tmp[4200];     /* the temporary folder once made, else "" (guarded by mu) */
+} srv_bundle_root;
+void srv_bundle_root_init(srv_bundle_root *r, const char *fixed);
+/* The folder, made if needed; NULL with errno when it cannot be. Thread-safe. */
+const char *srv_bundle_root_get(srv_bundle_root *r);
+/* Removes the temporary folder if one was made (after the server stopped); 0 or -1 with errno. */
+int srv_bundle_root_fini(srv_bundle_root *r);
 
 /* True when the media type (a Content-Type value, parameters allowed) is one a bundle is
  * posted as: application/x-tar, application/tar, application/gzip, application/x-gzip,

@@ -231,23 +231,14 @@ bool srv_server_start(srv_server *srv, int *port_out, char *err, size_t err_len)
         if (n) fprintf(stderr, "tessera serve: %d job(s) restored from %s\n", n, cfg->data_dir);
     }
     /* Where bundles' files go: under --data (a crashed run's half-unpacked bundles are
-     * swept), else a temporary folder of this run, removed at shutdown. */
+     * swept), else a temporary folder made at the first bundle, removed at shutdown. */
+    srv_bundle_root_init(&srv->files_root, cfg->data_dir);
+    srv->files_root_made = true;
     if (cfg->data_dir) {
         char incoming[4096];
         snprintf(incoming, sizeof incoming, "%s/incoming", cfg->data_dir);
         if (srv_bundle_remove_tree(incoming) != 0)
             fprintf(stderr, "tessera serve: --data: cannot sweep %s: %s\n", incoming, strerror(errno));
-        srv->files_root = cfg->data_dir;
-    } else {
-        const char *tmp = getenv("TMPDIR");
-        snprintf(srv->files_tmp, sizeof srv->files_tmp, "%s/tessera-serve-XXXXXX", tmp && tmp[0] ? tmp : "/tmp");
-        if (!mkdtemp(srv->files_tmp)) {
-            snprintf(err, err_len, "cannot make a temporary folder for posted bundles (%s): %s", srv->files_tmp,
-                     strerror(errno));
-            srv->files_tmp[0] = '\0';
-            goto fail;
-        }
-        srv->files_root = srv->files_tmp;
     }
     if (cfg->assets_dir)
         fprintf(stderr, "tessera serve: posted scenes may read files under %s (each at most %llu bytes)\n",
@@ -271,7 +262,7 @@ bool srv_server_start(srv_server *srv, int *port_out, char *err, size_t err_len)
     atomic_init(&srv->sse_limits.total, 0);
     atomic_init(&srv->sse_limits.dropped, 0);
     srv->api = (srv_api){cfg->token, cfg->data_dir, cfg->cors_origin, cfg->bind, cfg->allowed_hosts, srv->store, srv->sched, srv->metrics,
-                         &srv->sse_limits, &srv->persist, &cfg->bundle, srv->files_root};
+                         &srv->sse_limits, &srv->persist, &cfg->bundle, &srv->files_root};
     srv_http_config hc = {cfg->bind,       cfg->port,        cfg->http_threads, cfg->client_timeout_s,
                           cfg->request_timeout_s, cfg->max_client_conns, cfg->max_body, cfg->cors_origin, srv->metrics,
                           srv->offload, &srv->log, (size_t)cfg->bundle.max_bytes};
@@ -309,9 +300,13 @@ void srv_server_stop(srv_server *srv, bool checkpoint)
     ts_scheduler_destroy(srv->sched);
     srv_metrics_destroy(srv->metrics);
     srv->http = NULL, srv->offload = NULL, srv->store = NULL, srv->sched = NULL, srv->metrics = NULL;
-    if (srv->files_tmp[0] && srv_bundle_remove_tree(srv->files_tmp) != 0)
-        fprintf(stderr, "tessera serve: removing %s: %s\n", srv->files_tmp, strerror(errno));
-    srv->files_tmp[0] = '\0';
+    if (srv->files_root_made) {
+        char made[sizeof srv->files_root.tmp];
+        snprintf(made, sizeof made, "%s", srv->files_root.tmp);
+        if (srv_bundle_root_fini(&srv->files_root) != 0)
+            fprintf(stderr, "tessera serve: removing %s: %s\n", made, strerror(errno));
+        srv->files_root_made = false;
+    }
     srv_log_fini(&srv->log);
     pthread_cond_destroy(&srv->cv);
     pthread_mutex_destroy(&srv->mu);

@@ -65,8 +65,8 @@ typedef struct srv_server {
     char builtin_job[24];           /* the id of the queued built-in scene (--queue-builtin), or "" */
     srv_events_limits sse_limits;   /* caps from cfg; its count is atomic */
     srv_persist_stats persist;      /* checkpoint and restore counters (atomics) */
-    const char *files_root;         /* bundles' files: --data, or files_tmp */
-    char files_tmp[4200];           /* without --data: this run's temporary folder, removed at stop; or "" */
+    srv_bundle_root files_root;     /* where bundles' files go (bundle.h); thread-safe itself */
+    bool files_root_made;           /* files_root initialised (start) */
     /* maintenance thread */
     pthread_t maint;
     bool maint_started;
