@@ -398,6 +398,29 @@ static void materials_mapped(void **state)
     ts_scene_destroy(s);
 }
 
+/* A material parameter naming a texture takes the scene's texture (texture_pbrt.h); a
+ * constant texture is its value; a textured roughness is refused for now. */
+static void textured_parameters(void **state)
+{
+    (void)state;
+    warnings w = {0};
+    ts_scene *s = load("WorldBegin\n"
+                       "Texture \"checks\" \"color\" \"checkerboard\" \"float uscale\" 4\n"
+                       "Texture \"grey\" \"float\" \"constant\" \"float value\" 0.25\n"
+                       "Material \"matte\" \"texture Kd\" \"checks\" \"texture sigma\" \"grey\"\n"
+                       "Shape \"sphere\"\nWorldEnd\n",
+                       &w);
+    const ts_material *m = &s->materials[s->shapes[0].material];
+    assert_non_null(m->reflectance.tex);
+    assert_null(m->sigma_deg.tex);
+    assert_float_equal(m->sigma_deg.value, 0.25f, 0);
+    ts_scene_destroy(s);
+    expect_error("WorldBegin\nTexture \"r\" \"float\" \"fbm\"\n"
+                 "Material \"metal\" \"texture roughness\" \"r\"\nShape \"sphere\"\nWorldEnd\n",
+                 "t.pbrt:3:18: Material \"metal\": \"texture roughness\" names the \"fbm\" texture \"r\": a "
+                 "textured roughness is not supported yet");
+}
+
 /* Every parameter nothing reads is warned about, once per message. */
 static void unused_parameters_warned(void **state)
 {
@@ -586,6 +609,7 @@ int main(void)
         cmocka_unit_test(shapes_mapped),
         cmocka_unit_test(mesh_orientation),
         cmocka_unit_test(materials_mapped),
+        cmocka_unit_test(textured_parameters),
         cmocka_unit_test(unused_parameters_warned),
         cmocka_unit_test(convert_round_trip),
         cmocka_unit_test(cli_convert_and_render),

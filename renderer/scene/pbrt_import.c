@@ -19,6 +19,7 @@
 #include "scene/mesh_read.h"
 #include "scene/mesh_subdiv.h"
 #include "scene/spectrum.h"
+#include "textures/texture_pbrt.h"
 
 #define TRY(expr)                                                                                            \
     do {                                                                                                     \
@@ -39,7 +40,9 @@ typedef struct imp {
     size_t seen_cap, seen_n, repeats;
     uint32_t *mat_id; /* per material, the last for pbrt-v3's default matte */
     uint8_t *mat_state;
-    bool direct_all; /* the integrator takes several samples per light (nsamples matters) */
+    bool direct_all;    /* the integrator takes several samples per light (nsamples matters) */
+    ts_texture_pbrt tp; /* the scene's textures (textures/texture_pbrt.h), when it has any */
+    bool has_textures;
 } imp;
 
 /* ---------------------------------------------------------------- messages */
@@ -220,6 +223,36 @@ static ts_status get_float(imp *im, ts_pbrt_params *ps, const char *name, float 
     if (!p) return TS_OK;
     if (p->type == TS_PBRT_PARAM_TEXTURE) return constant_texture(im, ps, p, true, out, NULL);
     return ts_pbrt_find_float(ps, name, def, out, im->err);
+}
+
+/* A material's colour parameter: a constant as get_rgb reads it, or a texture parameter
+ * naming a texture of the scene (colour, or float read as grey), made by
+ * ts_texture_pbrt_build. */
+static ts_status get_mrgb(imp *im, ts_pbrt_params *ps, const char *name, ts_rgb def, ts_material_rgb *out)
+{
+    ts_pbrt_param *p = ts_pbrt_params_get(ps, name);
+    *out = ts_material_rgb_const(def);
+    if (p && p->type == TS_PBRT_PARAM_TEXTURE && im->has_textures) {
+        int32_t ti = p->texture_spectrum >= 0 ? p->texture_spectrum : p->texture_float;
+        if (ti >= 0 && strcmp(im->s->textures[ti].class_name, "constant") != 0) {
+            out->tex = im->tp.textures[ti];
+            return TS_OK;
+        }
+    }
+    return get_rgb(im, ps, name, def, &out->value);
+}
+
+/* A material's float parameter: a constant, or a texture parameter naming a float texture. */
+static ts_status get_mfloat(imp *im, ts_pbrt_params *ps, const char *name, float def, ts_material_float *out)
+{
+    ts_pbrt_param *p = ts_pbrt_params_get(ps, name);
+    *out = ts_material_float_const(def);
+    if (p && p->type == TS_PBRT_PARAM_TEXTURE && im->has_textures && p->texture_float >= 0 &&
+        strcmp(im->s->textures[p->texture_float].class_name, "constant") != 0) {
+        out->tex = im->tp.textures[p->texture_float];
+        return TS_OK;
+    }
+    return get_float(im, ps, name, def, &out->value);
 }
 
 static ts_status constant_texture(imp *im, ts_pbrt_params *ps, ts_pbrt_param *p, bool want_float, float *f,
@@ -691,6 +724,16 @@ static ts_status get_roughness(imp *im, ts_pbrt_params *ps, ts_pbrt_loc loc, flo
                                float *alpha, bool *smooth)
 {
     float r = def, u, v;
+    static const char *const names[] = {"roughness", "uroughness", "vroughness"};
+    for (int k = uv_only ? 1 : 0; k < 3; k++) {
+        ts_pbrt_param *p = ts_pbrt_params_get(ps, names[k]);
+        if (p && p->type == TS_PBRT_PARAM_TEXTURE && p->texture_float >= 0 &&
+            strcmp(im->s->textures[p->texture_float].class_name, "constant") != 0)
+            return ts_pbrt_param_error(
+                ps, p, im->err, TS_ERR_UNSUPPORTED,
+                "names the \"%s\" texture \"%s\": a textured roughness is not supported yet",
+                im->s->textures[p->texture_float].class_name, p->strings[0]);
+    }
     if (!uv_only) TRY(get_float(im, ps, "roughness", def, &r));
     TRY(get_float(im, ps, "uroughness", r, &u));
     TRY(get_float(im, ps, "vroughness", r, &v));
@@ -726,13 +769,13 @@ static ts_status make_material(imp *im, int32_t mi, ts_material *m, bool *no_sur
     if (strcmp(type, "matte") == 0) {
         m->type = TS_MATERIAL_DIFFUSE;
         *json_type = "diffuse";
-        TRY(get_rgb(im, ps, "Kd", ts_rgb_gray(0.5f), &m->reflectance.value));
-        TRY(get_float(im, ps, "sigma", 0, &m->sigma_deg.value));
+        TRY(get_mrgb(im, ps, "Kd", ts_rgb_gray(0.5f), &m->reflectance));
+        TRY(get_mfloat(im, ps, "sigma", 0, &m->sigma_deg));
     } else if (strcmp(type, "plastic") == 0) {
         m->type = TS_MATERIAL_PLASTIC;
         *json_type = "plastic";
-        TRY(get_rgb(im, ps, "Kd", ts_rgb_gray(0.25f), &m->diffuse.value));
-        TRY(get_rgb(im, ps, "Ks", ts_rgb_gray(0.25f), &m->specular.value));
+        TRY(get_mrgb(im, ps, "Kd", ts_rgb_gray(0.25f), &m->diffuse));
+        TRY(get_mrgb(im, ps, "Ks", ts_rgb_gray(0.25f), &m->specular));
         TRY(get_roughness(im, ps, loc, 0.1f, false, &m->roughness.value, NULL));
         /* pbrt-v3's plastic is always a microfacet lobe; tessera's takes α < 1e-4 as smooth. */
         dwarn(im, ps, loc,
@@ -741,15 +784,15 @@ static ts_status make_material(imp *im, int32_t mi, ts_material *m, bool *no_sur
     } else if (strcmp(type, "mirror") == 0) {
         m->type = TS_MATERIAL_MIRROR;
         *json_type = "mirror";
-        TRY(get_rgb(im, ps, "Kr", ts_rgb_gray(0.9f), &m->reflectance.value));
+        TRY(get_mrgb(im, ps, "Kr", ts_rgb_gray(0.9f), &m->reflectance));
     } else if (strcmp(type, "glass") == 0) {
         m->type = TS_MATERIAL_DIELECTRIC;
         *json_type = "dielectric";
-        TRY(get_rgb(im, ps, "Kr", ts_rgb_gray(1), &m->reflectance.value));
-        TRY(get_rgb(im, ps, "Kt", ts_rgb_gray(1), &m->transmittance.value));
+        TRY(get_mrgb(im, ps, "Kr", ts_rgb_gray(1), &m->reflectance));
+        TRY(get_mrgb(im, ps, "Kt", ts_rgb_gray(1), &m->transmittance));
         float eta;
         TRY(get_float(im, ps, "index", 1.5f, &eta));
-        TRY(get_float(im, ps, "eta", eta, &m->eta.value));
+        TRY(get_mfloat(im, ps, "eta", eta, &m->eta));
         bool smooth;
         TRY(get_roughness(im, ps, loc, 0, true, &m->roughness.value, &smooth));
         if (smooth) m->roughness.value = 0;
@@ -758,15 +801,15 @@ static ts_status make_material(imp *im, int32_t mi, ts_material *m, bool *no_sur
         *json_type = "conductor";
         ts_rgb eta, k;
         ts_spectrum_copper(&eta, &k);
-        TRY(get_rgb(im, ps, "eta", eta, &m->conductor_eta.value));
-        TRY(get_rgb(im, ps, "k", k, &m->conductor_k.value));
+        TRY(get_mrgb(im, ps, "eta", eta, &m->conductor_eta));
+        TRY(get_mrgb(im, ps, "k", k, &m->conductor_k));
         m->distribution = TS_MICROFACET_GGX;
         TRY(get_roughness(im, ps, loc, 0.01f, false, &m->roughness.value, NULL));
     } else if (strcmp(type, "substrate") == 0) {
         m->type = TS_MATERIAL_SUBSTRATE;
         *json_type = "substrate";
-        TRY(get_rgb(im, ps, "Kd", ts_rgb_gray(0.5f), &m->diffuse.value));
-        TRY(get_rgb(im, ps, "Ks", ts_rgb_gray(0.5f), &m->specular.value));
+        TRY(get_mrgb(im, ps, "Kd", ts_rgb_gray(0.5f), &m->diffuse));
+        TRY(get_mrgb(im, ps, "Ks", ts_rgb_gray(0.5f), &m->specular));
         TRY(get_roughness(im, ps, loc, 0.1f, true, &m->roughness.value, NULL));
     } else if (strcmp(type, "fourier") == 0) {
         m->type = TS_MATERIAL_FOURIER;
@@ -792,6 +835,15 @@ static ts_status make_material(imp *im, int32_t mi, ts_material *m, bool *no_sur
 
 static ts_status json_material(imp *im, const char *name, const char *type, const ts_material *m)
 {
+    const struct ts_texture *tex[] = {m->reflectance.tex, m->transmittance.tex, m->sigma_deg.tex,
+                                      m->eta.tex,         m->conductor_eta.tex, m->conductor_k.tex,
+                                      m->roughness.tex,   m->diffuse.tex,       m->specular.tex};
+    for (size_t i = 0; i < sizeof tex / sizeof tex[0]; i++)
+        if (tex[i])
+            return ts_error_set(im->err, TS_ERR_UNSUPPORTED,
+                                "material \"%s\": textured material parameters are not converted to JSON yet "
+                                "(the scene renders from its .pbrt)",
+                                name);
     cJSON *j = cJSON_CreateObject();
     bool ok = j && jstring(j, "type", type);
     switch (m->type) {
@@ -1427,6 +1479,17 @@ static ts_status run(imp *im)
     TRY(map_camera(im, w, h));
     TRY(map_sampler(im));
     TRY(map_integrator(im));
+    if (s->texture_count > 0) {
+        /* Every Texture directive, as pbrt-v3 makes them all (textures/texture_pbrt.h). */
+        ts_texture_cache *cache;
+        TRY(ts_scene_builder_texture_cache(im->b, &cache, im->err));
+        TRY(ts_texture_pbrt_build(&im->tp, s, ts_scene_builder_texture_arena(im->b), cache,
+                                  ts_scene_builder_base_dir(im->b),
+                                  ts_scene_builder_limits(im->b)->max_file_bytes, im->err));
+        im->has_textures = true;
+        for (size_t i = 0; i < s->texture_count; i++)
+            warn_unused(im, &s->textures[i].params);
+    }
     for (size_t i = 0; i < s->shape_count; i++) {
         if (s->shapes[i].object >= 0) continue; /* an object nothing instances */
         TRY(map_shape(im, i));

@@ -72,9 +72,9 @@ static const corpus_scene scenes[] = {
     {"veach-mis", 32, "pbrt-v3's uncoupled plastic: tessera's Fresnel-coupled plastic is darker"},
     {"f7-19a", 64, "the uber material is not mapped yet"},
     {"teapot-area-light", 32, "pbrt-v3's uncoupled plastic: tessera's Fresnel-coupled plastic is darker"},
-    {"f10-1ac", 16, "textured material parameters (imagemap) are not mapped yet"},
-    {"checkerboard", 32, "textured material parameters (checkerboard) are not mapped yet"},
-    {"spheres-texfilt", 32, "textured material parameters (imagemap) are not mapped yet"},
+    {"f10-1ac", 16, "pbrt-v3's uncoupled plastic (the ground): tessera's Fresnel-coupled plastic is darker"},
+    {"checkerboard", 32, "pbrt-v3's uncoupled plastic: tessera's Fresnel-coupled plastic is darker"},
+    {"spheres-texfilt", 32, NULL},
 };
 
 typedef struct result {
