@@ -117,7 +117,7 @@ static void test_json_checkerboard_reflectance(void **state)
 /* Through the renderer: an orthographic view of a checkerboard plane lit head-on by a
  * distant light of irradiance π, so each pixel is the reflectance of its check (L = R/π·E,
  * no noise: one unoccluded delta light, R constant over every pixel, as each check covers
- * 2 × 2 pixels), to float rounding (1e-5). */
+ * 2 × 2 pixels, and aamode none point-samples it), to float rounding (1e-5). */
 static void test_render_checkerboard(void **state)
 {
     (void)state;
@@ -126,7 +126,7 @@ static void test_render_checkerboard(void **state)
         "\"film\":{\"width\":8,\"height\":8,\"filter\":{\"type\":\"box\"}},\"sampler\":{\"spp\":4},"
         "\"integrator\":{\"type\":\"direct\"},"
         "\"lights\":[{\"type\":\"distant\",\"from\":[0,0,1],\"to\":[0,0,0],\"irradiance\":3.14159265358979}],"
-        "\"textures\":{\"checks\":{\"type\":\"checkerboard\",\"mapping\":{\"uscale\":4,\"vscale\":4},"
+        "\"textures\":{\"checks\":{\"type\":\"checkerboard\",\"aamode\":\"none\",\"mapping\":{\"uscale\":4,\"vscale\":4},"
         "\"tex1\":[0.8,0.5,0.2],\"tex2\":0.1}},"
         "\"materials\":{\"m\":{\"type\":\"diffuse\",\"reflectance\":\"checks\"}}," PLANE;
     ts_scene *s = load(doc, NULL);

@@ -73,20 +73,23 @@ static ts_rgb escaped(const ts_scene *s, const ts_ray *ray)
     return L;
 }
 
-/* A textured material's BSDF, its parameters read at si's texture context: a call of its
- * own, so the context's storage does not weigh on the constant path. */
-static __attribute__((noinline)) void textured_bsdf(const ts_material *m, const ts_interaction *si, ts_bsdf *bsdf)
+/* A textured material's BSDF, its parameters read at si's texture context with rd's
+ * footprint: a call of its own, so the context's storage does not weigh on the constant
+ * path. */
+static __attribute__((noinline)) void textured_bsdf(const ts_material *m, const ts_interaction *si,
+                                                    const ts_ray_differential *rd, ts_bsdf *bsdf)
 {
     ts_texture_context tc;
-    ts_material_texture_context(si, &tc);
+    ts_ray_differential_context(si, rd, &tc);
     ts_material_bsdf(m, si, &tc, bsdf);
 }
 
-/* The BSDF at hit si. */
-static inline void material_bsdf(const ts_scene *s, const ts_interaction *si, ts_bsdf *bsdf)
+/* The BSDF at hit si, reached by a ray with differential rd (or NULL). */
+static inline void material_bsdf(const ts_scene *s, const ts_interaction *si, const ts_ray_differential *rd,
+                                 ts_bsdf *bsdf)
 {
     const ts_material *m = &s->materials[s->shapes[si->shape].material];
-    if (m->textured) textured_bsdf(m, si, bsdf);
+    if (m->textured) textured_bsdf(m, si, rd, bsdf);
     else ts_material_bsdf(m, si, NULL, bsdf);
 }
 
@@ -277,7 +280,8 @@ static ts_rgb path_emission(const ts_scene *s, uint32_t fx, const ts_ray *ray, b
  * rays a vertex, not pbrt-v3's three), Russian roulette after rr_depth on β·η-scale.
  * max_depth counts scattering events as pbrt: the emission found by the BSDF ray leaving
  * the last vertex is light after max_depth bounces and counts. */
-static ts_rgb li_path(const ts_scene *s, uint32_t fx, ts_ray ray, ts_sample_stream *st, ts_counters *c)
+static ts_rgb li_path(const ts_scene *s, uint32_t fx, ts_ray ray, const ts_ray_differential *rd,
+                      ts_sample_stream *st, ts_counters *c)
 {
     ts_rgb L = ts_rgb_gray(0), beta = ts_rgb_gray(1);
     bool specular_bounce = false;
@@ -310,7 +314,8 @@ static ts_rgb li_path(const ts_scene *s, uint32_t fx, ts_ray ray, ts_sample_stre
         }
         if (!found || bounces >= max_depth) break;
         ts_bsdf bsdf;
-        material_bsdf(s, &si, &bsdf);
+        /* The camera ray's differentials only, as pbrt-v3's PathIntegrator (differential.h). */
+        material_bsdf(s, &si, bounces == 0 ? rd : NULL, &bsdf);
         uint32_t flags = ts_bsdf_flags(&bsdf);
         if (flags & ~TS_BXDF_SPECULAR & (TS_BXDF_DIFFUSE | TS_BXDF_GLOSSY)) {
             ts_vec2 u_select = ts_sample_2d(st); /* x: the alias bin, y: its coin */
@@ -354,7 +359,8 @@ static ts_rgb li_path(const ts_scene *s, uint32_t fx, ts_ray ray, ts_sample_stre
 
 /* pbrt-v3's DirectLightingIntegrator: emission at the hit, direct light from all lights
  * or one, and specular reflection/transmission followed up to max_depth. */
-static ts_rgb li_direct(const ts_scene *s, uint32_t fx, ts_ray ray, ts_sample_stream *st, ts_counters *c, int depth)
+static ts_rgb li_direct(const ts_scene *s, uint32_t fx, ts_ray ray, const ts_ray_differential *rd,
+                        ts_sample_stream *st, ts_counters *c, int depth)
 {
     ts_interaction si;
     if (!(fx & TS_EFFECTS_LIGHTS) || stopped(c)) return ts_rgb_gray(0); /* nothing emits: nothing to see */
@@ -364,7 +370,15 @@ static ts_rgb li_direct(const ts_scene *s, uint32_t fx, ts_ray ray, ts_sample_st
     ts_rgb L = (fx & TS_EFFECT_AREA_LIGHTS) ? emitted(s, &si, si.wo) : ts_rgb_gray(0);
     if (!(fx & TS_EFFECTS_SCATTERING)) return L;
     ts_bsdf bsdf;
-    material_bsdf(s, &si, &bsdf);
+    /* With differentials, the footprint is needed for the specular rules too. */
+    ts_texture_context tc;
+    const bool diff = rd && rd->has;
+    if (diff) {
+        ts_ray_differential_context(&si, rd, &tc);
+        ts_material_bsdf(&s->materials[s->shapes[si.shape].material], &si, &tc, &bsdf);
+    } else {
+        material_bsdf(s, &si, NULL, &bsdf);
+    }
     uint32_t flags = ts_bsdf_flags(&bsdf);
     if (s->n_lights > 0 && (flags & (TS_BXDF_DIFFUSE | TS_BXDF_GLOSSY))) {
         if (s->integrator.strategy == TS_LIGHTS_ALL) L = ts_rgb_add(L, sample_all_lights(s, fx, &si, &bsdf, st, c));
@@ -377,7 +391,10 @@ static ts_rgb li_direct(const ts_scene *s, uint32_t fx, ts_ray ray, ts_sample_st
         if (ts_bsdf_sample_f(&bsdf, si.wo, u_lobe, u, &bs) && (bs.flags & TS_BXDF_SPECULAR) && bs.pdf > 0 &&
             !ts_rgb_is_black(bs.f)) {
             float cos = ts_vec3_absdot(bs.wi, si.ns);
-            ts_rgb Li = li_direct(s, fx, ts_spawn_ray(&si, s->shapes, bs.wi), st, c, depth + 1);
+            ts_ray_differential next = {.has = false};
+            if (diff && (bs.flags & TS_BXDF_REFLECTION)) ts_ray_differential_reflect(rd, &si, &tc, bs.wi, &next);
+            else if (diff) ts_ray_differential_transmit(rd, &si, &tc, bs.wi, bsdf.eta, &next);
+            ts_rgb Li = li_direct(s, fx, ts_spawn_ray(&si, s->shapes, bs.wi), diff ? &next : NULL, st, c, depth + 1);
             L = ts_rgb_add(L, ts_rgb_scale(ts_rgb_mul(bs.f, Li), cos / bs.pdf));
         }
     }
@@ -411,14 +428,14 @@ double ts_integrator_rays_per_sample(const ts_scene *s, ts_integrator_type type,
 }
 
 ts_rgb ts_integrator_li(const ts_scene *s, ts_integrator_type type, uint32_t fx, const ts_ray *ray,
-                        ts_sample_stream *st, ts_counters *c)
+                        const ts_ray_differential *rd, ts_sample_stream *st, ts_counters *c)
 {
     c->camera_rays++;
     switch (type) {
     case TS_INTEGRATOR_AO: return li_ao(s, ray, st, c);
     case TS_INTEGRATOR_NORMALS: return li_normals(s, ray);
-    case TS_INTEGRATOR_PATH: return li_path(s, fx, *ray, st, c);
-    case TS_INTEGRATOR_DIRECT: return li_direct(s, fx, *ray, st, c, 0);
+    case TS_INTEGRATOR_PATH: return li_path(s, fx, *ray, rd, st, c);
+    case TS_INTEGRATOR_DIRECT: return li_direct(s, fx, *ray, rd, st, c, 0);
     }
     return ts_rgb_gray(0);
 }

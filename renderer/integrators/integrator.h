@@ -31,6 +31,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "integrators/differential.h"
 #include "sampling/sampler.h"
 #include "scene/scene.h"
 
@@ -60,8 +61,9 @@ bool ts_integrator_available(ts_integrator_type type);
 double ts_integrator_rays_per_sample(const ts_scene *s, ts_integrator_type type, uint32_t effects);
 
 /* Radiance arriving along ray (from the camera), simulating the effects in `effects`
- * (effects.h: the scene's own set, or all of them; never more than the scene has). */
+ * (effects.h: the scene's own set, or all of them; never more than the scene has). rd:
+ * the camera ray's differential (differential.h), or NULL for none. */
 ts_rgb ts_integrator_li(const ts_scene *s, ts_integrator_type type, uint32_t effects, const ts_ray *ray,
-                        ts_sample_stream *st, ts_counters *c);
+                        const ts_ray_differential *rd, ts_sample_stream *st, ts_counters *c);
 
 #endif

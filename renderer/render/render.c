@@ -1,6 +1,8 @@
 /* render.c — the tile loop and its thread pool; see render.h. */
 #include "render/render.h"
 
+#include <math.h>
+
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
@@ -75,6 +77,7 @@ bool ts_render_tile(const ts_render_request *req, int x0, int y0, int w, int h, 
     uint32_t fx = req->generic ? TS_EFFECTS_ALL & ~s->job.effects_off : s->effects;
     ts_camera cam = s->camera;
     if (!(fx & TS_EFFECT_DEPTH_OF_FIELD)) cam.lens_radius = 0; /* the lens sample is still drawn */
+    const float diff_scale = 1 / sqrtf((float)s->spp); /* pbrt-v3's ScaleDifferentials(1/√spp) */
     for (int y = y0; y < y0 + h; y++)
         for (int x = x0; x < x0 + w; x++) {
             ts_sampler_pixel pixel; /* the pixel's scramble seeds, shared by its samples */
@@ -93,7 +96,10 @@ bool ts_render_tile(const ts_render_request *req, int x0, int y0, int w, int h, 
                 ts_vec2 off = ts_filter_sample(&s->filter, u_film, &weight);
                 ts_vec2 p_raster = {(float)x + 0.5f + off.x, (float)y + 0.5f + off.y};
                 ts_ray ray = ts_camera_ray(&cam, p_raster, u_lens);
-                ts_rgb L = ts_integrator_li(s, req->integrator, fx, &ray, &st, c);
+                /* Differentials only where a texture reads them (differential.h). */
+                ts_ray_differential rd;
+                if (s->textured) ts_ray_differential_camera(&cam, p_raster, u_lens, &ray, diff_scale, &rd);
+                ts_rgb L = ts_integrator_li(s, req->integrator, fx, &ray, s->textured ? &rd : NULL, &st, c);
                 c->samples++;
                 if (!ts_rgb_is_finite(L) || L.r < 0 || L.g < 0 || L.b < 0 || L.r > TS_FILM_SAMPLE_MAX ||
                     L.g > TS_FILM_SAMPLE_MAX || L.b > TS_FILM_SAMPLE_MAX) {

@@ -96,6 +96,9 @@ typedef struct ts_scene {
     /* What the scene calls for (effects.h), less what the job switched off; the
      * integrators simulate only these. */
     uint32_t effects;
+    /* Some material has a texture (or bump map): camera rays carry ray differentials
+     * (integrators/differential.h); else none are made. */
+    bool textured;
     /* Light selection for next-event estimation: integrator.light_sampling for `path`,
      * power for `direct`. */
     ts_light_distribution light_distribution;

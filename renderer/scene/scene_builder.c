@@ -1053,6 +1053,8 @@ static ts_status build(ts_scene_builder *b, ts_error *err)
     if (!s->infinite_lights) return nomem(err, "the lights");
     for (uint32_t i = 0; i < s->n_lights; i++)
         if (s->lights[i].type == TS_LIGHT_INFINITE) s->infinite_lights[s->n_infinite_lights++] = i;
+    for (uint32_t i = 0; i < s->n_materials; i++)
+        if (s->materials[i].textured) s->textured = true;
     s->effects = ts_effects_analyse(s) & ~s->job.effects_off;
     return TS_OK;
 }
