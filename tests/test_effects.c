@@ -79,6 +79,26 @@ static const struct {
      "\"material\":\"black\",\"emission\":20}],"
      "\"lights\":[{\"type\":\"point\",\"position\":[1,3,1],\"intensity\":10}]}",
      TS_EFFECT_DELTA_LIGHTS | TS_EFFECT_AREA_LIGHTS | TS_EFFECT_DIFFUSE | TS_EFFECT_GLOSSY | TS_EFFECT_LOBE_CHOICE},
+    {"translucent leaf under a point light, path: diffuse and glossy transmission",
+     "{\"tessera\":1," CAMERA "," FILM ",\"integrator\":{\"type\":\"path\",\"max_depth\":3},"
+     "\"materials\":{\"floor\":{\"type\":\"translucent\",\"reflectance\":0}},\"shapes\":[" FLOOR "],"
+     "\"lights\":[{\"type\":\"point\",\"position\":[0,-3,0],\"intensity\":30}]}",
+     TS_EFFECT_DELTA_LIGHTS | TS_EFFECT_DIFFUSE | TS_EFFECT_GLOSSY | TS_EFFECT_INDIRECT | TS_EFFECT_LOBE_CHOICE},
+    {"uber with opacity (a pass-through lobe), direct",
+     "{\"tessera\":1," CAMERA "," FILM ",\"integrator\":{\"type\":\"direct\",\"max_depth\":3},"
+     "\"materials\":{\"floor\":{\"type\":\"diffuse\"},\"u\":{\"type\":\"uber\",\"specular\":0,"
+     "\"opacity\":0.5}},\"shapes\":[" FLOOR
+     ",{\"type\":\"sphere\",\"center\":[0,0.5,0],\"radius\":0.5,\"material\":\"u\"}],"
+     "\"lights\":[{\"type\":\"point\",\"position\":[1,3,1],\"intensity\":10}]}",
+     TS_EFFECT_DELTA_LIGHTS | TS_EFFECT_DIFFUSE | TS_EFFECT_SPECULAR_TRANSMISSION | TS_EFFECT_INDIRECT |
+         TS_EFFECT_LOBE_CHOICE},
+    {"mix of a mirror and pbrt-v3's plastic (amount 1: the mirror's lobes only), path",
+     "{\"tessera\":1," CAMERA "," FILM ",\"integrator\":{\"type\":\"path\",\"max_depth\":3},"
+     "\"materials\":{\"m\":{\"type\":\"mirror\"},\"p\":{\"type\":\"plastic_pbrt3\"},"
+     "\"floor\":{\"type\":\"mix\",\"materials\":[\"m\",\"p\"],\"amount\":1}},\"shapes\":[" FLOOR "],"
+     "\"lights\":[{\"type\":\"point\",\"position\":[1,3,1],\"intensity\":10}]}",
+     TS_EFFECT_DELTA_LIGHTS | TS_EFFECT_DIFFUSE | TS_EFFECT_GLOSSY | TS_EFFECT_SPECULAR_REFLECTION |
+         TS_EFFECT_INDIRECT | TS_EFFECT_LOBE_CHOICE},
     {"nothing emits",
      "{\"tessera\":1," CAMERA "," FILM ",\"integrator\":{\"type\":\"path\"},"
      "\"materials\":{\"floor\":{\"type\":\"diffuse\"}},\"shapes\":[" FLOOR "]}",

@@ -250,6 +250,10 @@ static double closed_albedo(const ts_material *m, double cos_o, int c)
         return ks + (1 - ks) * m5 + kd * (1 - ks) * (28.0 / 23.0) * (1 - d5) * g;
     }
     case TS_MATERIAL_FOURIER: return NAN;
+    case TS_MATERIAL_PLASTIC_PBRT3:
+    case TS_MATERIAL_UBER:
+    case TS_MATERIAL_TRANSLUCENT:
+    case TS_MATERIAL_MIX: return NAN; /* tests/test_material_pbrt3.c */
     }
     return NAN;
 }

@@ -44,6 +44,19 @@ void ts_effects_format(uint32_t effects, char *buf, size_t n)
     if (!used) snprintf(buf, n, "none");
 }
 
+static uint32_t material_effects(const ts_material *m);
+
+/* A mix has every lobe of both its materials (an amount of 0 or 1 only removes some):
+ * the union of theirs, each classified as a material of its own (textured or not), and a
+ * lobe choice when it can have more than one lobe. */
+static uint32_t mix_effects(const ts_material *m)
+{
+    if (!m->mix[0] || !m->mix[1]) return 0;
+    uint32_t fx = material_effects(m->mix[0]) | material_effects(m->mix[1]);
+    if (fx && ts_material_max_lobes(m) > 1) fx |= TS_EFFECT_LOBE_CHOICE;
+    return fx;
+}
+
 /* The lobes of m's BSDF at a canonical shading point (m untextured), so the
  * classification follows the BSDF code (e.g. its roughness-to-specular threshold). */
 static uint32_t constant_material_effects(const ts_material *m)
@@ -62,6 +75,13 @@ static uint32_t constant_material_effects(const ts_material *m)
         break;
     case TS_MATERIAL_CONDUCTOR: break;
     case TS_MATERIAL_FOURIER: return TS_EFFECT_FOURIER;
+    /* pbrt-v3's materials: their BSDF says (translucent's diffuse and glossy
+     * transmission are diffuse and glossy; uber's pass-through and Kt lobes specular
+     * transmission). */
+    case TS_MATERIAL_PLASTIC_PBRT3:
+    case TS_MATERIAL_UBER:
+    case TS_MATERIAL_TRANSLUCENT: break;
+    case TS_MATERIAL_MIX: return mix_effects(m);
     }
     ts_interaction si = {0};
     si.n = si.ns = (ts_vec3){0, 0, 1};
@@ -73,8 +93,13 @@ static uint32_t constant_material_effects(const ts_material *m)
     uint32_t flags = ts_bsdf_flags(&b), fx = b.n_bxdfs > 1 ? TS_EFFECT_LOBE_CHOICE : 0;
     if (flags & TS_BXDF_DIFFUSE) fx |= TS_EFFECT_DIFFUSE;
     if (flags & TS_BXDF_GLOSSY) fx |= TS_EFFECT_GLOSSY;
-    if ((flags & TS_BXDF_SPECULAR) && (flags & TS_BXDF_REFLECTION)) fx |= TS_EFFECT_SPECULAR_REFLECTION;
-    if ((flags & TS_BXDF_SPECULAR) && (flags & TS_BXDF_TRANSMISSION)) fx |= TS_EFFECT_SPECULAR_TRANSMISSION;
+    /* Lobe by lobe: uber's pass-through lobe beside its Lambertian is specular
+     * transmission, not specular reflection. */
+    for (int i = 0; i < b.n_bxdfs; i++) {
+        uint32_t lf = b.bxdfs[i].flags;
+        if ((lf & TS_BXDF_SPECULAR) && (lf & TS_BXDF_REFLECTION)) fx |= TS_EFFECT_SPECULAR_REFLECTION;
+        if ((lf & TS_BXDF_SPECULAR) && (lf & TS_BXDF_TRANSMISSION)) fx |= TS_EFFECT_SPECULAR_TRANSMISSION;
+    }
     return fx;
 }
 
@@ -85,13 +110,19 @@ static uint32_t constant_material_effects(const ts_material *m)
  * lobe's kind. Never fewer effects than some point of the surface shows. */
 static uint32_t material_effects(const ts_material *m)
 {
-    if (!m->textured) return constant_material_effects(m);
+    if (!m->textured || m->type == TS_MATERIAL_MIX) return constant_material_effects(m);
     ts_material c = *m;
     c.textured = false;
     ts_material_rgb *colours[] = {&c.reflectance, &c.transmittance, &c.conductor_eta, &c.conductor_k, &c.diffuse,
                                   &c.specular};
     for (size_t i = 0; i < sizeof colours / sizeof *colours; i++)
         if (colours[i]->tex) *colours[i] = ts_material_rgb_gray(1);
+    /* Uber's opacity: half raises the pass-through lobe and keeps every other. */
+    if (c.opacity.tex) c.opacity = ts_material_rgb_gray(0.5f);
+    if (c.has_vroughness && c.vroughness.tex) { /* the roughness stand-ins below, on both axes */
+        c.has_vroughness = false;
+        if (!c.roughness.tex) c.roughness.tex = c.vroughness.tex;
+    }
     ts_material_float *floats[] = {&c.sigma_deg, &c.eta};
     for (size_t i = 0; i < sizeof floats / sizeof *floats; i++)
         if (floats[i]->tex) *floats[i] = ts_material_float_const(floats[i] == &c.eta ? 1.5f : 0);

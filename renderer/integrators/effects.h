@@ -24,7 +24,7 @@
     X(TS_EFFECT_DELTA_LIGHTS, 0, "delta_lights", "point, spot or distant lights") \
     X(TS_EFFECT_AREA_LIGHTS, 1, "area_lights", "emitting shapes")                 \
     X(TS_EFFECT_ENVIRONMENT, 2, "environment", "an infinite light")               \
-    X(TS_EFFECT_DIFFUSE, 3, "diffuse", "diffuse reflection")                      \
+    X(TS_EFFECT_DIFFUSE, 3, "diffuse", "diffuse reflection or transmission")                 \
     X(TS_EFFECT_GLOSSY, 4, "glossy", "glossy reflection or transmission")         \
     X(TS_EFFECT_SPECULAR_REFLECTION, 5, "specular_reflection", "mirror-like reflection") \
     X(TS_EFFECT_SPECULAR_TRANSMISSION, 6, "specular_transmission", "refraction through smooth dielectrics") \

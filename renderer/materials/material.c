@@ -30,7 +30,14 @@
  * A one-sided dielectric Fresnel swapped the indices below the normal and totally
  * reflected beyond 41.8° while the diffuse lobe still took (1 − F(|cos|)), so kd = ks = 1
  * reflected 1.86 at cosθo = −0.7 (smooth) and 1.66 (α = 0.1); now every albedo is the
- * front side's (test_material's furnace sweeps both sides of every material). */
+ * front side's (test_material's furnace sweeps both sides of every material).
+ *
+ * pbrt-v3's own materials (plastic_pbrt3, uber, translucent, mix) are pbrt-v3's exactly,
+ * including what the coupled plastic departs from: plastic_pbrt3's Fresnel is pbrt-v3's
+ * code's FresnelDielectric(1.5, 1), whose swapped indices reflect totally from the front
+ * beyond 41.8° (docs/design.md §9, #1), and nothing couples its lobes, so unit parameters
+ * reflect up to 2 (translucent and uber up to 3); test_material_pbrt3 measures it and
+ * holds them to the energy rule where their parameters sum to at most 1. */
 #include "materials/material.h"
 
 #include <float.h>
@@ -76,7 +83,8 @@ bool ts_material_uses_textures(const ts_material *m)
     /* Every parameter, whether m's type reads it or not: a texture left in a field the type
      * ignores only costs the context it is never read from. */
     return m->reflectance.tex || m->transmittance.tex || m->sigma_deg.tex || m->eta.tex || m->conductor_eta.tex ||
-           m->conductor_k.tex || m->roughness.tex || m->diffuse.tex || m->specular.tex;
+           m->conductor_k.tex || m->roughness.tex || m->diffuse.tex || m->specular.tex ||
+           (m->has_vroughness && m->vroughness.tex) || m->opacity.tex || m->amount.tex;
 }
 
 void ts_material_texture_context(const ts_interaction *si, ts_texture_context *c)
@@ -89,6 +97,74 @@ void ts_material_texture_context(const ts_interaction *si, ts_texture_context *c
 }
 
 /* ---------------------------------------------------------------- BSDFs */
+
+int ts_material_max_lobes(const ts_material *m)
+{
+    switch (m->type) {
+    case TS_MATERIAL_DIFFUSE:
+    case TS_MATERIAL_MIRROR:
+    case TS_MATERIAL_CONDUCTOR:
+    case TS_MATERIAL_FOURIER: return 1;
+    case TS_MATERIAL_DIELECTRIC:
+    case TS_MATERIAL_PLASTIC:
+    case TS_MATERIAL_SUBSTRATE:
+    case TS_MATERIAL_PLASTIC_PBRT3: return 2;
+    case TS_MATERIAL_TRANSLUCENT: return 4;
+    case TS_MATERIAL_UBER: return 5;
+    case TS_MATERIAL_MIX:
+        return (m->mix[0] ? ts_material_max_lobes(m->mix[0]) : 0) + (m->mix[1] ? ts_material_max_lobes(m->mix[1]) : 0);
+    }
+    return TS_BSDF_MAX_BXDFS;
+}
+
+/* α along u and v after vroughness and pbrt-v3's remapping (u_raw, v_raw as given), and
+ * whether the lobe is specular: both α below TS_MICROFACET_SPECULAR_ALPHA, or a
+ * dielectric whose roughnesses are exactly 0 before remapping (pbrt-v3's glass); a rough
+ * lobe has each α raised to at least that threshold. Isotropic and unremapped this is the
+ * rule every material had before (both α the same). */
+static void roughness_uv(const ts_material *m, float u_raw, float v_raw, float *au, float *av, bool *smooth)
+{
+    float u = u_raw, v = v_raw;
+    if (m->remap_roughness) {
+        u = ts_microfacet_roughness_to_alpha(u_raw);
+        v = m->has_vroughness ? ts_microfacet_roughness_to_alpha(v_raw) : u;
+    }
+    *smooth = (!(u >= TS_MICROFACET_SPECULAR_ALPHA) && !(v >= TS_MICROFACET_SPECULAR_ALPHA)) ||
+              (m->type == TS_MATERIAL_DIELECTRIC && u_raw == 0 && v_raw == 0);
+    if (!*smooth) {
+        if (!(u >= TS_MICROFACET_SPECULAR_ALPHA)) u = TS_MICROFACET_SPECULAR_ALPHA;
+        if (!(v >= TS_MICROFACET_SPECULAR_ALPHA)) v = TS_MICROFACET_SPECULAR_ALPHA;
+    }
+    *au = u;
+    *av = v;
+}
+
+/* Appends b's lobes to out, each scaled by s (pbrt-v3's ScaledBxDF); lobes the scale makes
+ * black are left out (they would add nothing to f, only take samples). */
+static void add_scaled(ts_bsdf *out, const ts_bsdf *b, ts_rgb s)
+{
+    if (!nonblack(s)) return;
+    for (int i = 0; i < b->n_bxdfs; i++) ts_bsdf_add(out, ts_bxdf_scaled(b->bxdfs[i], s));
+}
+
+/* pbrt-v3's MixMaterial: mix[0]'s BSDF (its frame and η) with its lobes scaled by amount,
+ * then mix[1]'s lobes scaled by 1 − amount. The builder has bounded the lobe count. */
+static void mix_bsdf(const ts_material *m, const ts_interaction *si, const ts_texture_context *tc, ts_rgb amount,
+                     ts_bsdf *out)
+{
+    ts_bsdf b0, b1;
+    ts_rgb rest = {clampf(1 - amount.r, 0, 1), clampf(1 - amount.g, 0, 1), clampf(1 - amount.b, 0, 1)};
+    if (!m->mix[0] || !m->mix[1]) return;
+    ts_material_bsdf(m->mix[0], si, tc, &b0);
+    ts_material_bsdf(m->mix[1], si, tc, &b1);
+    out->eta = b0.eta;
+    out->ng = b0.ng;
+    out->ns = b0.ns;
+    out->ss = b0.ss;
+    out->ts = b0.ts;
+    add_scaled(out, &b0, amount);
+    add_scaled(out, &b1, rest);
+}
 
 /* The BSDF, with the parameter reads of a textured material (textured) or of a constant
  * one, whose reads the compiler reduces to the plain values: ts_material_bsdf calls it
@@ -108,8 +184,10 @@ static inline __attribute__((always_inline)) void bsdf(const ts_material *m, con
     if (m->type == TS_MATERIAL_FOURIER && m->fourier) eta = m->fourier->eta;
     ts_bsdf_init(out, si->n, si->ns, si->dpdu, eta);
 
-    float alpha = FLOAT(m->roughness, 0, FLT_MAX);
+    float alpha = FLOAT(m->roughness, 0, FLT_MAX), alpha_v = alpha;
     bool smooth = ts_microfacet_is_specular(alpha, alpha);
+    if (m->has_vroughness | m->remap_roughness)
+        roughness_uv(m, alpha, m->has_vroughness ? FLOAT(m->vroughness, 0, FLT_MAX) : alpha, &alpha, &alpha_v, &smooth);
     switch (m->type) {
     case TS_MATERIAL_DIFFUSE: {
         ts_rgb r = RGB(m->reflectance);
@@ -132,7 +210,7 @@ static inline __attribute__((always_inline)) void bsdf(const ts_material *m, con
             ts_bsdf_add(out, ts_bxdf_fresnel_specular(r, t, 1, ETA));
             break;
         }
-        ts_microfacet d = ts_microfacet_make(TS_MICROFACET_GGX, alpha, alpha);
+        ts_microfacet d = ts_microfacet_make(TS_MICROFACET_GGX, alpha, alpha_v);
         if (nonblack(r)) ts_bsdf_add(out, ts_bxdf_microfacet_reflection(r, d, ts_fresnel_make_dielectric(1, ETA)));
         if (nonblack(t)) ts_bsdf_add(out, ts_bxdf_microfacet_transmission(t, d, 1, ETA));
         break;
@@ -142,7 +220,7 @@ static inline __attribute__((always_inline)) void bsdf(const ts_material *m, con
                                                   NONNEG_RGB(m->conductor_k));
         if (smooth) ts_bsdf_add(out, ts_bxdf_specular_reflection(ts_rgb_gray(1), fr));
         else
-            ts_bsdf_add(out, ts_bxdf_microfacet_reflection(ts_rgb_gray(1), ts_microfacet_make(m->distribution, alpha, alpha),
+            ts_bsdf_add(out, ts_bxdf_microfacet_reflection(ts_rgb_gray(1), ts_microfacet_make(m->distribution, alpha, alpha_v),
                                                            fr));
         break;
     }
@@ -153,7 +231,7 @@ static inline __attribute__((always_inline)) void bsdf(const ts_material *m, con
         if (!nonblack(ks)) break;
         if (smooth) ts_bsdf_add(out, ts_bxdf_specular_reflection(ks, fr));
         else
-            ts_bsdf_add(out, ts_bxdf_microfacet_reflection(ks, ts_microfacet_make(TS_MICROFACET_GGX, alpha, alpha), fr));
+            ts_bsdf_add(out, ts_bxdf_microfacet_reflection(ks, ts_microfacet_make(TS_MICROFACET_GGX, alpha, alpha_v), fr));
         break;
     }
     case TS_MATERIAL_SUBSTRATE: {
@@ -162,13 +240,66 @@ static inline __attribute__((always_inline)) void bsdf(const ts_material *m, con
             ts_bsdf_add(out, ts_bxdf_fresnel_blend_diffuse(kd, ks));
             ts_bsdf_add(out, ts_bxdf_specular_reflection(ts_rgb_gray(1), ts_fresnel_make_schlick(ks)));
         } else {
-            ts_bsdf_add(out, ts_bxdf_fresnel_blend(kd, ks, ts_microfacet_make(TS_MICROFACET_GGX, alpha, alpha)));
+            ts_bsdf_add(out, ts_bxdf_fresnel_blend(kd, ks, ts_microfacet_make(TS_MICROFACET_GGX, alpha, alpha_v)));
         }
         break;
     }
     case TS_MATERIAL_FOURIER:
         if (m->fourier) ts_bsdf_add(out, ts_bxdf_fourier(m->fourier));
         break;
+    case TS_MATERIAL_PLASTIC_PBRT3: {
+        ts_rgb kd = RGB(m->diffuse), ks = RGB(m->specular);
+        if (nonblack(kd)) ts_bsdf_add(out, ts_bxdf_lambertian(kd));
+        if (!nonblack(ks)) break;
+        ts_fresnel fr = ts_fresnel_make_dielectric(1.5f, 1); /* pbrt-v3's indices, material.c's note */
+        if (smooth) ts_bsdf_add(out, ts_bxdf_specular_reflection(ks, fr));
+        else ts_bsdf_add(out, ts_bxdf_microfacet_reflection(ks, ts_microfacet_make(TS_MICROFACET_GGX, alpha, alpha_v), fr));
+        break;
+    }
+    case TS_MATERIAL_UBER: {
+        float e = FLOAT(m->eta, TS_MATERIAL_ETA_MIN, FLT_MAX);
+        ts_rgb op = RGB(m->opacity), pass = {1 - op.r, 1 - op.g, 1 - op.b};
+        out->eta = e;
+        if (nonblack(pass)) {
+            ts_bsdf_add(out, ts_bxdf_specular_transmission(pass, 1, 1));
+            out->eta = 1;
+        }
+        ts_rgb kd = ts_rgb_mul(op, RGB(m->diffuse)), ks = ts_rgb_mul(op, RGB(m->specular));
+        ts_rgb kr = ts_rgb_mul(op, RGB(m->reflectance)), kt = ts_rgb_mul(op, RGB(m->transmittance));
+        ts_fresnel fr = ts_fresnel_make_dielectric(1, e);
+        if (nonblack(kd)) ts_bsdf_add(out, ts_bxdf_lambertian(kd));
+        if (nonblack(ks)) {
+            if (smooth) ts_bsdf_add(out, ts_bxdf_specular_reflection(ks, fr));
+            else ts_bsdf_add(out, ts_bxdf_microfacet_reflection(ks, ts_microfacet_make(TS_MICROFACET_GGX, alpha, alpha_v), fr));
+        }
+        if (nonblack(kr)) ts_bsdf_add(out, ts_bxdf_specular_reflection(kr, fr));
+        if (nonblack(kt)) ts_bsdf_add(out, ts_bxdf_specular_transmission(kt, 1, e));
+        break;
+    }
+    case TS_MATERIAL_TRANSLUCENT: {
+        ts_rgb r = RGB(m->reflectance), t = RGB(m->transmittance);
+        out->eta = 1.5f;
+        if (!nonblack(r) && !nonblack(t)) break;
+        ts_rgb kd = RGB(m->diffuse), ks = RGB(m->specular);
+        if (nonblack(kd)) {
+            if (nonblack(r)) ts_bsdf_add(out, ts_bxdf_lambertian(ts_rgb_mul(r, kd)));
+            if (nonblack(t)) ts_bsdf_add(out, ts_bxdf_lambertian_transmission(ts_rgb_mul(t, kd)));
+        }
+        if (!nonblack(ks)) break;
+        ts_microfacet d = ts_microfacet_make(TS_MICROFACET_GGX, alpha, alpha_v);
+        ts_fresnel fr = ts_fresnel_make_dielectric(1, 1.5f);
+        if (nonblack(r)) {
+            ts_rgb rs = ts_rgb_mul(r, ks);
+            ts_bsdf_add(out, smooth ? ts_bxdf_specular_reflection(rs, fr) : ts_bxdf_microfacet_reflection(rs, d, fr));
+        }
+        if (nonblack(t)) {
+            ts_rgb ts = ts_rgb_mul(t, ks);
+            ts_bsdf_add(out, smooth ? ts_bxdf_specular_transmission(ts, 1, 1.5f)
+                                    : ts_bxdf_microfacet_transmission(ts, d, 1, 1.5f));
+        }
+        break;
+    }
+    case TS_MATERIAL_MIX: mix_bsdf(m, si, tc, RGB(m->amount), out); break;
     }
 }
 #undef RGB

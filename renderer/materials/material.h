@@ -35,6 +35,20 @@ typedef enum ts_material_type {
     TS_MATERIAL_PLASTIC,    /* diffuse, specular, roughness */
     TS_MATERIAL_SUBSTRATE,  /* diffuse, specular, roughness (FresnelBlend) */
     TS_MATERIAL_FOURIER,    /* file: pbrt-v3 .bsdf */
+    /* pbrt-v3's own materials, its parameters under tessera's field names (pbrt-v3's name
+     * and default in brackets; the builder takes the values as given, the defaults are for
+     * the front ends): */
+    TS_MATERIAL_PLASTIC_PBRT3, /* PlasticMaterial: diffuse [Kd 0.25], specular [Ks 0.25],
+                                * roughness [0.1], remap_roughness [true] */
+    TS_MATERIAL_UBER,          /* UberMaterial: diffuse [Kd 0.25], specular [Ks 0.25],
+                                * reflectance [Kr 0], transmittance [Kt 0], roughness [0.1]
+                                * (vroughness [uroughness]), eta [index 1.5], opacity [1],
+                                * remap_roughness [true] */
+    TS_MATERIAL_TRANSLUCENT,   /* TranslucentMaterial: diffuse [Kd 0.25], specular [Ks 0.25],
+                                * reflectance [reflect 0.5], transmittance [transmit 0.5],
+                                * roughness [0.1], remap_roughness [true]; η = 1.5 */
+    TS_MATERIAL_MIX,           /* MixMaterial: mix[0] [namedmaterial1] weighted by amount
+                                * [0.5], mix[1] [namedmaterial2] by 1 − amount */
 } ts_material_type;
 
 struct ts_fourier_table; /* fourier_bsdf.h */
@@ -68,11 +82,30 @@ typedef struct ts_material {
     ts_microfacet_type distribution;          /* conductor (plastic/substrate/dielectric: GGX) */
     ts_material_rgb diffuse, specular;        /* plastic, substrate */
     const struct ts_fourier_table *fourier;   /* fourier: owned by the scene */
+    /* Anisotropic roughness (pbrt-v3's uroughness / vroughness): roughness is along dpdu
+     * (the shading frame's s axis), vroughness along the other when has_vroughness (else
+     * it is roughness). Conductor, dielectric, uber. */
+    bool has_vroughness;
+    ts_material_float vroughness;
+    /* pbrt-v3's remaproughness: roughness and vroughness pass through
+     * ts_microfacet_roughness_to_alpha before use (conductor, dielectric, plastic,
+     * substrate, and pbrt-v3's plastic, uber, translucent). false: they are α. pbrt-v3's
+     * default is true (the pbrt-v3 importer's); scene format v1's is false (§4). */
+    bool remap_roughness;
+    ts_material_rgb opacity;               /* uber: [0, 1]; below 1 adds a pass-through lobe */
+    ts_material_rgb amount;                /* mix: mix[0]'s weight per channel, [0, 1] */
+    uint32_t mix_id[2];                    /* mix: builder ids of earlier materials */
+    const struct ts_material *mix[2];      /* mix: set by the builder from mix_id (the scene's) */
     bool textured; /* some parameter has a texture: set by the builder (ts_material_uses_textures) */
 } ts_material;
 
 /* Whether any parameter of m has a texture (whether or not m's type reads it). */
 bool ts_material_uses_textures(const ts_material *m);
+
+/* The most lobes m's BSDF can have whatever its parameters' values (a mix: the sum of
+ * its two materials'; needs mix[] set). pbrt-v3's BSDF holds 8 and aborts beyond; the
+ * builder refuses a mix above TS_BSDF_MAX_BXDFS (materials/bsdf.h) instead. */
+int ts_material_max_lobes(const ts_material *m);
 
 /* Textured values are clamped into these: η of a dielectric below the minimum is raised
  * to it (a constant η must be > 0; 1e-3 keeps every Fresnel and refraction term finite). */
@@ -125,7 +158,25 @@ struct ts_bsdf; /* bsdf.h */
  *   substrate  FresnelBlend(diffuse, specular, GGX roughness); when smooth, its diffuse
  *              part + a specular reflection with Schlick's Fresnel(specular)
  *   fourier    the tabulated lobe (out->eta from the table)
- * Lobes with black scale are left out. Pure and thread-safe. */
+ *   plastic_pbrt3  pbrt-v3's PlasticMaterial: Lambertian(diffuse) + microfacet (GGX)
+ *              reflection(specular) with pbrt-v3's FresnelDielectric(1.5, 1) — its
+ *              indices as its code has them (docs/design.md §9, #1), uncoupled, so it
+ *              reflects more than 1 where pbrt-v3's does (material.c quantifies it)
+ *   uber       pbrt-v3's UberMaterial: with op = opacity, a pass-through specular
+ *              transmission(1 − op) (then the BSDF's η is 1, else eta), Lambertian
+ *              (op·diffuse), microfacet reflection(op·specular, Fresnel 1 → eta), specular
+ *              reflection(op·reflectance, Fresnel 1 → eta), specular transmission
+ *              (op·transmittance, 1 → eta): up to 5 lobes
+ *   translucent pbrt-v3's TranslucentMaterial: Lambertian reflection(reflectance·diffuse)
+ *              and transmission(transmittance·diffuse), microfacet reflection
+ *              (reflectance·specular, Fresnel 1 → 1.5) and transmission(transmittance·
+ *              specular, 1 → 1.5); η 1.5
+ *   mix        mix[0]'s lobes each scaled by amount and mix[1]'s by 1 − amount
+ *              (pbrt-v3's ScaledBxDF; in mix[0]'s shading frame, with its η)
+ * A microfacet lobe whose α (after remapping) is below TS_MICROFACET_SPECULAR_ALPHA on
+ * both axes is a specular lobe instead; below it on one axis only, that α is raised to it.
+ * A dielectric with both roughnesses exactly 0 is smooth before remapping (pbrt-v3's
+ * glass). Lobes with black scale are left out. Pure and thread-safe. */
 void ts_material_bsdf(const ts_material *m, const ts_interaction *si, const struct ts_texture_context *tc,
                       struct ts_bsdf *out);
 

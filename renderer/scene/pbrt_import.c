@@ -869,6 +869,11 @@ static ts_status json_material(imp *im, const char *name, const char *type, cons
         break;
     case TS_MATERIAL_FOURIER:
         break; /* the file is added by the caller */
+    case TS_MATERIAL_PLASTIC_PBRT3:
+    case TS_MATERIAL_UBER:
+    case TS_MATERIAL_TRANSLUCENT:
+    case TS_MATERIAL_MIX:
+        break; /* not made by this importer yet */
     }
     if (!ok || !jadd(im->jmaterials, name, j)) {
         if (!ok) cJSON_Delete(j);

@@ -16,6 +16,7 @@
 #include "image/image.h"
 #include "integrators/effects.h"
 #include "lights/envmap.h"
+#include "materials/bsdf.h"
 #include "materials/fourier_bsdf.h"
 #include "scene/mesh_file.h"
 #include "scene/mesh_subdiv.h"
@@ -514,6 +515,30 @@ static ts_status check_material(const ts_scene_builder *b, const ts_material *m,
         TRY(check_rgb_param(&m->specular, "specular", rgb_unit, unit, err));
         rough = true;
         break;
+    case TS_MATERIAL_PLASTIC_PBRT3:
+    case TS_MATERIAL_TRANSLUCENT:
+    case TS_MATERIAL_UBER:
+        TRY(check_rgb_param(&m->diffuse, "diffuse", rgb_unit, unit, err));
+        TRY(check_rgb_param(&m->specular, "specular", rgb_unit, unit, err));
+        if (m->type != TS_MATERIAL_PLASTIC_PBRT3) {
+            TRY(check_rgb_param(&m->reflectance, "reflectance", rgb_unit, unit, err));
+            TRY(check_rgb_param(&m->transmittance, "transmittance", rgb_unit, unit, err));
+        }
+        if (m->type == TS_MATERIAL_UBER) {
+            TRY(check_rgb_param(&m->opacity, "opacity", rgb_unit, unit, err));
+            TRY(check_float_texture(&m->eta, "eta", err));
+            if (!m->eta.tex && !(m->eta.value > 0 && isfinite(m->eta.value)))
+                return ts_error_set(err, TS_ERR_INVALID, "eta: expected a finite number > 0, got %g", m->eta.value);
+        }
+        rough = true;
+        break;
+    case TS_MATERIAL_MIX:
+        TRY(check_rgb_param(&m->amount, "amount", rgb_unit, unit, err));
+        for (int k = 0; k < 2; k++)
+            if (m->mix_id[k] >= b->n_materials)
+                return ts_error_set(err, TS_ERR_INVALID, "materials[%d]: no material of id %u (%u were added)", k,
+                                    m->mix_id[k], b->n_materials);
+        break;
     case TS_MATERIAL_FOURIER: {
         uint32_t i = 0;
         while (i < b->n_fourier_tables && b->fourier_tables[i] != m->fourier)
@@ -530,6 +555,25 @@ static ts_status check_material(const ts_scene_builder *b, const ts_material *m,
     if (rough && !m->roughness.tex && !(m->roughness.value >= 0 && isfinite(m->roughness.value)))
         return ts_error_set(err, TS_ERR_INVALID, "roughness: expected a finite number ≥ 0, got %g",
                             m->roughness.value);
+    bool aniso = m->type == TS_MATERIAL_CONDUCTOR || m->type == TS_MATERIAL_DIELECTRIC || m->type == TS_MATERIAL_UBER;
+    if (m->has_vroughness && !aniso)
+        return ts_error_set(err, TS_ERR_INVALID, "vroughness: only conductor, dielectric and uber materials are anisotropic");
+    if (m->has_vroughness) TRY(check_float_texture(&m->vroughness, "vroughness", err));
+    if (m->has_vroughness && !m->vroughness.tex && !(m->vroughness.value >= 0 && isfinite(m->vroughness.value)))
+        return ts_error_set(err, TS_ERR_INVALID, "vroughness: expected a finite number ≥ 0, got %g",
+                            m->vroughness.value);
+    if (m->type == TS_MATERIAL_MIX) {
+        /* pbrt-v3's BSDF holds 8 lobes and aborts beyond; refuse such a mix up front. */
+        ts_material c = *m;
+        c.mix[0] = &b->materials[m->mix_id[0]];
+        c.mix[1] = &b->materials[m->mix_id[1]];
+        int lobes = ts_material_max_lobes(&c);
+        if (lobes > TS_BSDF_MAX_BXDFS)
+            return ts_error_set(err, TS_ERR_LIMIT,
+                                "materials: the two materials mixed have up to %d lobes together, more than a "
+                                "BSDF's %d",
+                                lobes, TS_BSDF_MAX_BXDFS);
+    }
     return TS_OK;
 }
 
@@ -557,7 +601,12 @@ ts_status ts_scene_builder_add_material(ts_scene_builder *b, const char *name, c
     const char *copy = NULL;
     if (name && !(copy = ts_arena_strdup(&b->s->arena, name))) return nomem(err, "the material names");
     b->materials[b->n_materials] = *m;
-    b->materials[b->n_materials].textured = ts_material_uses_textures(m);
+    ts_material *added = &b->materials[b->n_materials];
+    added->textured = ts_material_uses_textures(m);
+    if (m->type == TS_MATERIAL_MIX) { /* textured if either material mixed is; mix[] is set by finish */
+        added->textured = added->textured || b->materials[m->mix_id[0]].textured || b->materials[m->mix_id[1]].textured;
+        added->mix[0] = added->mix[1] = NULL;
+    }
     b->material_names[b->n_materials] = copy;
     if (id) *id = b->n_materials;
     b->n_materials++;
@@ -987,6 +1036,9 @@ static ts_status lay_out(ts_scene_builder *b, ts_error *err)
     if (b->n_materials) {
         memcpy(s->materials, b->materials, b->n_materials * sizeof *b->materials);
         memcpy(s->material_names, b->material_names, b->n_materials * sizeof *b->material_names);
+        for (uint32_t k = 0; k < b->n_materials; k++)
+            if (s->materials[k].type == TS_MATERIAL_MIX)
+                for (int j = 0; j < 2; j++) s->materials[k].mix[j] = &s->materials[s->materials[k].mix_id[j]];
     }
     s->n_materials = b->n_materials;
     if (b->n_shapes) memcpy(s->shapes, b->shapes, b->n_shapes * sizeof *b->shapes);

@@ -178,8 +178,12 @@ ts_status ts_scene_builder_load_texture_image(ts_scene_builder *b, const char *r
  * this builder; a textured parameter's texture (made for this scene, see above) of the
  * right kind: float parameters (sigma, eta, roughness) take float textures ("roughness:
  * expected a float texture, got an RGB one"), colour parameters either kind. The
- * material's `textured` flag is set here (the caller's is ignored). At most
- * limits.max_materials. */
+ * material's `textured` flag is set here (the caller's is ignored). pbrt-v3's materials
+ * (material.h lists their parameters and pbrt-v3's defaults, which the caller fills): a
+ * mix names two materials added before by id (mix_id; mix[] is set by the builder) and
+ * may have at most TS_BSDF_MAX_BXDFS lobes with them ("materials: the two materials mixed
+ * have up to 9 lobes together, more than a BSDF's 8"); vroughness (has_vroughness) only
+ * on conductor, dielectric and uber. At most limits.max_materials. */
 ts_status ts_scene_builder_add_material(ts_scene_builder *b, const char *name, const ts_material *m,
                                         uint32_t *id, ts_error *err);
 /* The id of the material added under name, or TS_NONE (also for name NULL). */

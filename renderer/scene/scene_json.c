@@ -404,18 +404,32 @@ static ts_status parse_job(loader *ld, const cJSON *doc)
 
 static ts_status parse_material(loader *ld, const cJSON *m, const char *path, ts_material *out)
 {
-    static const char *const types[] = {"diffuse", "mirror", "dielectric", "conductor", "plastic", "substrate",
-                                        "fourier", NULL};
+    /* In ts_material_type's order. */
+    static const char *const types[] = {"diffuse", "mirror",        "dielectric", "conductor", "plastic", "substrate",
+                                        "fourier", "plastic_pbrt3", "uber",       "translucent", "mix",   NULL};
     int type = 0;
     if (!cJSON_IsObject(m)) return ts_json_check_object(m, path, types, ld->err);
+    const cJSON *tv = cJSON_GetObjectItemCaseSensitive(m, "type");
+    if (cJSON_IsString(tv) && strcmp(tv->valuestring, "disney") == 0) {
+        ts_jpath p = ts_jpath_key(path, "type");
+        return ts_error_set(ld->err, TS_ERR_UNSUPPORTED, "%s: material 'disney' is not supported", p.s);
+    }
     TRY(ts_json_enum(m, path, "type", true, types, &type, ld->err));
     static const char *const k_diffuse[] = {"type", "reflectance", "sigma", NULL};
     static const char *const k_mirror[] = {"type", "reflectance", NULL};
-    static const char *const k_dielectric[] = {"type", "eta", "reflectance", "transmittance", "roughness", NULL};
-    static const char *const k_conductor[] = {"type", "eta", "k", "roughness", "distribution", NULL};
-    static const char *const k_plastic[] = {"type", "diffuse", "specular", "roughness", NULL};
+    static const char *const k_dielectric[] = {"type",       "eta",        "reflectance",     "transmittance",
+                                               "roughness",  "uroughness", "vroughness",      "remap_roughness", NULL};
+    static const char *const k_conductor[] = {"type",       "eta",        "k",               "roughness", "distribution",
+                                              "uroughness", "vroughness", "remap_roughness", NULL};
+    static const char *const k_plastic[] = {"type", "diffuse", "specular", "roughness", "remap_roughness", NULL};
     static const char *const k_fourier[] = {"type", "file", NULL};
-    const char *const *keys[] = {k_diffuse, k_mirror, k_dielectric, k_conductor, k_plastic, k_plastic, k_fourier};
+    static const char *const k_uber[] = {"type",      "diffuse",    "specular",   "reflectance", "transmittance", "eta",
+                                         "roughness", "uroughness", "vroughness", "opacity",     "remap_roughness", NULL};
+    static const char *const k_translucent[] = {"type",          "diffuse",   "specular",        "reflectance",
+                                                "transmittance", "roughness", "remap_roughness", NULL};
+    static const char *const k_mix[] = {"type", "materials", "amount", NULL};
+    const char *const *keys[] = {k_diffuse, k_mirror,  k_dielectric, k_conductor,   k_plastic, k_plastic,
+                                 k_fourier, k_plastic, k_uber,       k_translucent, k_mix};
     TRY(ts_json_check_object(m, path, keys[type], ld->err));
 
     *out = (ts_material){0};
@@ -475,13 +489,68 @@ static ts_status parse_material(loader *ld, const cJSON *m, const char *path, ts
         TRY(at(ts_scene_builder_load_fourier(ld->b, file, &out->fourier, ld->err), fp.s, ld->err));
         break;
     }
+    case TS_MATERIAL_PLASTIC_PBRT3:
+    case TS_MATERIAL_UBER:
+    case TS_MATERIAL_TRANSLUCENT:
+        /* pbrt-v3's defaults (material.h), but for remap_roughness (false: §4). */
+        out->diffuse = ts_material_rgb_gray(0.25f);
+        out->specular = ts_material_rgb_gray(0.25f);
+        out->reflectance = ts_material_rgb_gray(type == TS_MATERIAL_UBER ? 0.0f : 0.5f);
+        out->transmittance = ts_material_rgb_gray(type == TS_MATERIAL_UBER ? 0.0f : 0.5f);
+        out->opacity = ts_material_rgb_gray(1);
+        TRY(ts_json_material_rgb(tx, m, path, "diffuse", TS_J_UNIT, &out->diffuse, ld->err));
+        TRY(ts_json_material_rgb(tx, m, path, "specular", TS_J_UNIT, &out->specular, ld->err));
+        if (type == TS_MATERIAL_PLASTIC_PBRT3) break;
+        TRY(ts_json_material_rgb(tx, m, path, "reflectance", TS_J_UNIT, &out->reflectance, ld->err));
+        TRY(ts_json_material_rgb(tx, m, path, "transmittance", TS_J_UNIT, &out->transmittance, ld->err));
+        if (type == TS_MATERIAL_TRANSLUCENT) break;
+        TRY(ts_json_material_rgb(tx, m, path, "opacity", TS_J_UNIT, &out->opacity, ld->err));
+        TRY(ts_json_material_float(tx, m, path, "eta", TS_J_POSITIVE, &out->eta, ld->err));
+        break;
+    case TS_MATERIAL_MIX: {
+        const cJSON *list;
+        TRY(ts_json_array(m, path, "materials", true, &list, ld->err));
+        ts_jpath lp = ts_jpath_key(path, "materials");
+        if (cJSON_GetArraySize(list) != 2)
+            return ts_error_set(ld->err, TS_ERR_INVALID, "%s: expected the names of two materials, got %d values", lp.s,
+                                cJSON_GetArraySize(list));
+        for (int k = 0; k < 2; k++) {
+            const cJSON *e = cJSON_GetArrayItem(list, k);
+            ts_jpath ep = ts_jpath_index(lp.s, k);
+            if (!cJSON_IsString(e)) {
+                char d[64];
+                ts_json_describe(e, d, sizeof d);
+                return ts_error_set(ld->err, TS_ERR_INVALID, "%s: expected a material name, got %s", ep.s, d);
+            }
+            out->mix_id[k] = ts_scene_builder_find_material(ld->b, e->valuestring);
+            if (out->mix_id[k] == TS_NONE)
+                return ts_error_set(ld->err, TS_ERR_INVALID,
+                                    "%s: no material named \"%s\" before this one in 'materials'", ep.s, e->valuestring);
+        }
+        out->amount = ts_material_rgb_gray(0.5f);
+        TRY(ts_json_material_rgb(tx, m, path, "amount", TS_J_UNIT, &out->amount, ld->err));
+        break;
+    }
     }
     if (type == TS_MATERIAL_DIELECTRIC || type == TS_MATERIAL_CONDUCTOR || type == TS_MATERIAL_PLASTIC ||
-        type == TS_MATERIAL_SUBSTRATE) {
+        type == TS_MATERIAL_SUBSTRATE || type == TS_MATERIAL_PLASTIC_PBRT3 || type == TS_MATERIAL_UBER ||
+        type == TS_MATERIAL_TRANSLUCENT) {
         out->roughness = ts_material_float_const(type == TS_MATERIAL_DIELECTRIC  ? 0.0f
                                                  : type == TS_MATERIAL_CONDUCTOR ? 0.01f
                                                                                  : 0.1f);
         TRY(ts_json_material_float(tx, m, path, "roughness", TS_J_NONNEG, &out->roughness, ld->err));
+        TRY(ts_json_bool(m, path, "remap_roughness", false, &out->remap_roughness, ld->err));
+    }
+    if (type == TS_MATERIAL_DIELECTRIC || type == TS_MATERIAL_CONDUCTOR || type == TS_MATERIAL_UBER) {
+        /* uroughness and vroughness each default to roughness (read only when present: an
+         * absent key would reset a texture reference). */
+        ts_material_float r = out->roughness;
+        if (cJSON_GetObjectItemCaseSensitive(m, "uroughness"))
+            TRY(ts_json_material_float(tx, m, path, "uroughness", TS_J_NONNEG, &out->roughness, ld->err));
+        out->vroughness = r;
+        if (cJSON_GetObjectItemCaseSensitive(m, "vroughness"))
+            TRY(ts_json_material_float(tx, m, path, "vroughness", TS_J_NONNEG, &out->vroughness, ld->err));
+        out->has_vroughness = out->vroughness.tex != out->roughness.tex || out->vroughness.value != out->roughness.value;
     }
     return TS_OK;
 }
