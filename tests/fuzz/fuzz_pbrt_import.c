@@ -6,8 +6,8 @@
  * of limits. A refused input must leave no scene and one UTF-8 sentence; every warning
  * must be a UTF-8 sentence too. A scene that loads is rendered (two samples of the four
  * pixels at the centre of its crop window), and converted to JSON v1
- * (ts_scene_convert_pbrt_path on the same bytes), which must load as a JSON scene with
- * the same film, shape and light counts. */
+ * (ts_scene_convert_pbrt_path on the same bytes; textured materials are refused there for
+ * now), which must load as a JSON scene with the same film, shape and light counts. */
 #include "fuzz_common.h"
 
 #include <unistd.h>
@@ -149,6 +149,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     st = ts_scene_convert_pbrt_path(path, &lim, NULL, NULL, &json, &len, &err);
     /* gone before the next input, which could otherwise Include it */
     unlink(path);
+    /* The one refusal a loading scene may meet: textured materials are not written yet. */
+    if (st == TS_ERR_UNSUPPORTED && strstr(err.message, "not converted to JSON yet")) {
+        ts_scene_destroy(s);
+        return 0;
+    }
     if (st) fprintf(stderr, "fuzz_pbrt_import: the file does not convert: %s\n", err.message);
     FUZZ_CHECK(st == TS_OK && json);
     ts_scene *j = NULL;
