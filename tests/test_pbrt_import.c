@@ -421,6 +421,37 @@ static void textured_parameters(void **state)
                  "textured roughness is not supported yet");
 }
 
+/* ObjectInstance places an object's shapes by the CTM at the instance: under a white sky
+ * the pixel looking at where an instance put a sphere is darker than the sky. */
+static void instances_placed(void **state)
+{
+    (void)state;
+    const char *fmt = "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 10\n"
+                      "Film \"image\" \"integer xresolution\" 4 \"integer yresolution\" 4\n"
+                      "Integrator \"path\" \"integer maxdepth\" 1\nWorldBegin\n"
+                      "LightSource \"infinite\" \"rgb L\" [1 1 1]\n"
+                      "ObjectBegin \"ball\" Shape \"sphere\" \"float radius\" 0.3 ObjectEnd\n"
+                      "Translate %s ObjectInstance \"ball\"\nWorldEnd\n";
+    const char *where[] = {"0 0 0", "3 0 0"};
+    float v[2];
+    for (int i = 0; i < 2; i++) {
+        char text[1024];
+        snprintf(text, sizeof text, fmt, where[i]);
+        warnings w = {0};
+        ts_scene *s = load(text, &w);
+        ts_error err = {0};
+        ts_film *f = ts_film_create(4, 4, 0, 0, 4, 4, &err);
+        ts_render_stats st = {0};
+        ts_render_request req = {s, s->integrator.type, f, 0, 16, 1, NULL, NULL, NULL};
+        assert_int_equal(ts_render(&req, &st, &err), TS_OK);
+        v[i] = ts_film_pixel_rgb(f, 2, 2).g;
+        ts_film_destroy(f);
+        ts_scene_destroy(s);
+    }
+    assert_true(v[0] < 0.9f);          /* the matte ball, lit by the sky: at most 0.5 */
+    assert_float_equal(v[1], 1, 1e-6); /* moved out of view: the sky */
+}
+
 /* Every parameter nothing reads is warned about, once per message. */
 static void unused_parameters_warned(void **state)
 {
@@ -499,6 +530,11 @@ static const char every_mapping[] =
     "AttributeBegin Translate 2 1 -1 Scale 0.5 0.5 0.5 Material \"mirror\"\n"
     "  Shape \"loopsubdiv\" \"integer nlevels\" 2 \"point P\" [1 1 1 -1 -1 1 -1 1 -1 1 -1 -1]"
     " \"integer indices\" [0 1 2 0 3 1 0 2 3 1 3 2] AttributeEnd\n"
+    "ObjectBegin \"pair\" Material \"matte\" \"rgb Kd\" [0.2 0.6 0.2] Translate 0 0.15 0\n"
+    "  Shape \"sphere\" \"float radius\" 0.15 Translate 0.4 0 0 Shape \"sphere\" \"float radius\" 0.1 "
+    "ObjectEnd\n"
+    "AttributeBegin Translate -2 0 1 ObjectInstance \"pair\" AttributeEnd\n"
+    "AttributeBegin Translate 1.5 0 1.5 Rotate 30 0 1 0 ObjectInstance \"pair\" AttributeEnd\n"
     "AttributeBegin Translate 1 0.5 0 Rotate 90 1 0 0 Material \"metal\" \"float roughness\" 0.1\n"
     "  Shape \"cylinder\" \"float radius\" 0.3 \"float zmin\" -0.5 \"float zmax\" 0.5 AttributeEnd\n"
     "AttributeBegin Translate 0 0.3 1 Scale 0.3 0.3 0.3 ReverseOrientation Material \"substrate\"\n"
@@ -610,6 +646,7 @@ int main(void)
         cmocka_unit_test(mesh_orientation),
         cmocka_unit_test(materials_mapped),
         cmocka_unit_test(textured_parameters),
+        cmocka_unit_test(instances_placed),
         cmocka_unit_test(unused_parameters_warned),
         cmocka_unit_test(convert_round_trip),
         cmocka_unit_test(cli_convert_and_render),

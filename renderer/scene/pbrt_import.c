@@ -33,6 +33,8 @@ typedef struct imp {
     ts_pbrt_scene *s;
     ts_scene_builder *b;
     cJSON *doc, *jmaterials, *jshapes, *jlights; /* NULL unless converting */
+    cJSON *jobjects, *jinstances;
+    cJSON *jtarget; /* where map_shape puts a shape: jshapes, or an object's "shapes" */
     ts_warning_fn warn;
     void *warn_ctx;
     ts_error *err;
@@ -1309,7 +1311,7 @@ static ts_status map_shape(imp *im, size_t si)
         jok = jok && jstring(j, "material", mname) && jadd(j, "transform", jtransform(sh->object_to_world));
         if (jok && emits)
             jok = jrgb(j, "emission", d.emission) && (!d.two_sided || jbool(j, "two_sided", true));
-        if (!jok || !cJSON_AddItemToArray(im->jshapes, j))
+        if (!jok || !cJSON_AddItemToArray(im->jtarget, j))
             st = nomem(im);
         else
             j = NULL;
@@ -1451,6 +1453,70 @@ static ts_status map_light(imp *im, size_t li)
 
 /* ---------------------------------------------------------------- the scene */
 
+/* pbrt-v3's ObjectBegin/End + ObjectInstance onto the builder's objects and instances
+ * (scene_builder.h), in the JSON front end's order (objects after the shapes, then the
+ * instances): each object some ObjectInstance names is defined once with its shapes in
+ * its own space; an object nothing instances is not made, as pbrt-v3 makes nothing of it.
+ * Area lights inside a definition were dropped by the parser with pbrt-v3's warning. */
+static ts_status map_objects(imp *im)
+{
+    ts_pbrt_scene *s = im->s;
+    if (s->instance_count == 0) return TS_OK;
+    uint32_t *ids = malloc(s->object_count * sizeof *ids);
+    if (!ids) return nomem(im);
+    for (size_t o = 0; o < s->object_count; o++)
+        ids[o] = TS_NONE;
+    ts_status st = TS_OK;
+    for (size_t o = 0; o < s->object_count && !st; o++) {
+        ts_pbrt_object *ob = &s->objects[o];
+        if (ob->instance_count == 0) continue;
+        char name[300];
+        snprintf(name, sizeof name, "%.200s#%zu", ob->name, o);
+        ts_pbrt_params ps = {.directive = "ObjectBegin", .directive_arg = ob->name};
+        st = at(im, ts_scene_builder_begin_object(im->b, name, &ids[o], im->err), &ps, ob->loc);
+        if (!st && im->doc) {
+            cJSON *jo = cJSON_CreateObject(), *jsh = cJSON_CreateArray();
+            if (!jo || !jsh || !cJSON_AddItemToObject(jo, "shapes", jsh)) {
+                cJSON_Delete(jsh);
+                cJSON_Delete(jo);
+                st = nomem(im);
+            } else if (!cJSON_AddItemToObject(im->jobjects, name, jo)) {
+                cJSON_Delete(jo);
+                st = nomem(im);
+            } else {
+                im->jtarget = jsh;
+            }
+        }
+        for (size_t k = 0; k < ob->shape_count && !st; k++)
+            st = map_shape(im, ob->first_shape + k);
+        im->jtarget = im->jshapes;
+        if (!st) st = at(im, ts_scene_builder_end_object(im->b, im->err), &ps, ob->loc);
+    }
+    for (size_t i = 0; i < s->instance_count && !st; i++) {
+        ts_pbrt_instance *in = &s->instances[i];
+        ts_pbrt_params ps = {.directive = "ObjectInstance", .directive_arg = s->objects[in->object].name};
+        ts_xform x;
+        if (!user_xform(in->instance_to_world, &x)) {
+            st = derr(im, &ps, in->loc, TS_ERR_INVALID, "the transformation matrix is singular");
+            break;
+        }
+        st = at(im, ts_scene_builder_add_instance(im->b, ids[in->object], &x, im->err), &ps, in->loc);
+        if (!st && im->doc) {
+            char name[300];
+            snprintf(name, sizeof name, "%.200s#%d", s->objects[in->object].name, (int)in->object);
+            cJSON *j = cJSON_CreateObject();
+            if (!j || !jstring(j, "object", name) ||
+                !jadd(j, "transform", jtransform(in->instance_to_world)) ||
+                !cJSON_AddItemToArray(im->jinstances, j)) {
+                cJSON_Delete(j);
+                st = nomem(im);
+            }
+        }
+    }
+    free(ids);
+    return st;
+}
+
 /* Options the scene did not give have empty parameter lists without a directive name. */
 static void name_option(ts_pbrt_option *o, const char *directive)
 {
@@ -1471,11 +1537,6 @@ static ts_status run(imp *im)
         emit(im, s->warnings[i].loc, s->warnings[i].message);
     if (s->warnings_dropped)
         warnf(im, (ts_pbrt_loc){0}, "%zu more warnings of the parser were not kept", s->warnings_dropped);
-    if (s->instance_count > 0) {
-        ts_pbrt_instance *in = &s->instances[0];
-        ts_pbrt_params ps = {.directive = "ObjectInstance", .directive_arg = s->objects[in->object].name};
-        return derr(im, &ps, in->loc, TS_ERR_UNSUPPORTED, "object instancing is not supported yet");
-    }
     if (s->accelerator.loc.file && s->accelerator.params.count)
         dwarn(im, &s->accelerator.params, s->accelerator.loc,
               "is not used: tessera builds Embree's BVH whatever the accelerator");
@@ -1499,6 +1560,7 @@ static ts_status run(imp *im)
         if (s->shapes[i].object >= 0) continue; /* an object nothing instances */
         TRY(map_shape(im, i));
     }
+    TRY(map_objects(im));
     for (size_t i = 0; i < s->light_count; i++)
         TRY(map_light(im, i));
     for (size_t i = 0; i < s->area_light_count; i++)
@@ -1527,13 +1589,18 @@ ts_status ts_pbrt_import(ts_pbrt_scene *scene, ts_scene_builder *b, cJSON *doc, 
     if (!st && doc) {
         im.jmaterials = cJSON_CreateObject();
         im.jshapes = cJSON_CreateArray();
+        im.jtarget = im.jshapes;
+        im.jobjects = cJSON_CreateObject();
+        im.jinstances = cJSON_CreateArray();
         im.jlights = cJSON_CreateArray();
         bool ok = jnumber(doc, "tessera", 1);
         /* film, camera, sampler and integrator are added by their mappings, then these. */
-        if (!ok || !im.jmaterials || !im.jshapes || !im.jlights) st = nomem(&im);
+        if (!ok || !im.jmaterials || !im.jshapes || !im.jlights || !im.jobjects || !im.jinstances)
+            st = nomem(&im);
     }
     if (!st) st = run(&im);
     if (doc) {
+        bool objects = !st && im.jobjects && im.jobjects->child;
         if (!st && !(jadd(doc, "materials", im.jmaterials) && jadd(doc, "shapes", im.jshapes) &&
                      jadd(doc, "lights", im.jlights)))
             st = nomem(&im);
@@ -1541,6 +1608,13 @@ ts_status ts_pbrt_import(ts_pbrt_scene *scene, ts_scene_builder *b, cJSON *doc, 
             cJSON_Delete(im.jmaterials);
             cJSON_Delete(im.jshapes);
             cJSON_Delete(im.jlights);
+        }
+        if (objects) {
+            if (!(jadd(doc, "objects", im.jobjects) && jadd(doc, "instances", im.jinstances)))
+                st = nomem(&im);
+        } else {
+            cJSON_Delete(im.jobjects);
+            cJSON_Delete(im.jinstances);
         }
     }
     for (size_t i = 0; i < im.seen_cap; i++)
