@@ -150,6 +150,69 @@ static void test_render_checkerboard(void **state)
     ts_scene_destroy(s);
 }
 
+/* Bump mapping (pbrt-v3's Material::Bump) with a displacement linear in u, d = a·s with
+ * s = u (a float bilerp 0 → a): on a plane with ∂p/∂u = (2, 0, 0), ∂p/∂v = (0, 2, 0) and
+ * normal +z, the displaced tangent is ∂p'/∂u = (2, 0, a) (the difference quotient of a
+ * linear d is a for any du), ∂p'/∂v = (0, 2, 0), so the shading normal is
+ * (∂p'/∂u × ∂p'/∂v)/|…| = (−a, 0, 2)/√(4 + a²): tilted by atan(a/|∂p/∂u|) against u.
+ * Likewise in v. Exact but for rounding, which the difference quotient amplifies: d is
+ * rounded to ≈ 6e-8·a, divided by du = 0.0005 (no footprint) that is ≈ 1e-4·a in the slope
+ * (measured 3e-6 in the normal); the bound is 1e-4. Rendered head-on under a distant light
+ * of irradiance π (as test_render_checkerboard), a diffuse R reflects R·cosθ' =
+ * R·2/√(4 + a²) (1e-4, the same rounding). */
+static void test_bump_linear(void **state)
+{
+    (void)state;
+    const float a = 0.5f;
+    ts_scene *s = load(HEAD "\"textures\":{\"du\":{\"type\":\"bilerp\",\"kind\":\"float\",\"v00\":0,\"v01\":0,"
+                            "\"v10\":0.5,\"v11\":0.5},\"dv\":{\"type\":\"bilerp\",\"kind\":\"float\",\"v00\":0,"
+                            "\"v01\":0.5,\"v10\":0,\"v11\":0.5}},"
+                            "\"materials\":{\"m\":{\"type\":\"diffuse\",\"bumpmap\":\"du\"},"
+                            "\"n\":{\"type\":\"mirror\",\"bumpmap\":\"dv\"}}," PLANE,
+                       NULL);
+    const ts_material *m = material(s, "m"), *n = material(s, "n");
+    assert_true(m->textured && n->textured);
+    float k = 1 / sqrtf(4 + a * a);
+    for (int with_footprint = 0; with_footprint < 2; with_footprint++) {
+        ts_texture_context c;
+        ts_interaction si = hit(0.3f, 0.6f, &c);
+        if (with_footprint) c.dudx = 0.01f, c.dvdy = 0.02f, c.dudy = -0.003f;
+        ts_interaction sj = si;
+        ts_material_bump(m, &si, &c);
+        ts_material_bump(n, &sj, &c);
+        ts_vec3 wu = {-a * k, 0, 2 * k}, wv = {0, -a * k, 2 * k};
+        if (ts_vec3_length(ts_vec3_sub(si.ns, wu)) > 1e-4f || ts_vec3_length(ts_vec3_sub(sj.ns, wv)) > 1e-4f)
+            fail_msg("bumped normals (%g, %g, %g) and (%g, %g, %g)", si.ns.x, si.ns.y, si.ns.z, sj.ns.x, sj.ns.y,
+                     sj.ns.z);
+        assert_true(si.n.z == 1); /* the geometric normal stays */
+    }
+    ts_scene_destroy(s);
+
+    char doc[1500];
+    snprintf(doc, sizeof doc,
+             "{\"tessera\":1,\"camera\":{\"type\":\"orthographic\",\"from\":[0,0,5],\"to\":[0,0,0],\"height\":2},"
+             "\"film\":{\"width\":4,\"height\":4,\"filter\":{\"type\":\"box\"}},\"sampler\":{\"spp\":2},"
+             "\"integrator\":{\"type\":\"direct\"},"
+             "\"lights\":[{\"type\":\"distant\",\"from\":[0,0,1],\"to\":[0,0,0],\"irradiance\":3.14159265358979}],"
+             "\"textures\":{\"du\":{\"type\":\"bilerp\",\"kind\":\"float\",\"v00\":0,\"v01\":0,\"v10\":%g,"
+             "\"v11\":%g}},\"materials\":{\"m\":{\"type\":\"diffuse\",\"reflectance\":0.5,\"bumpmap\":\"du\"}},"
+             PLANE,
+             a, a);
+    s = load(doc, NULL);
+    ts_error err = {0};
+    ts_film *f = ts_film_create(s->width, s->height, 0, 0, s->width, s->height, &err);
+    ts_render_stats stats = {0};
+    ts_render_request req = {s, s->integrator.type, f, 0, 2, 1, NULL, NULL, NULL};
+    assert_int_equal(ts_render(&req, &stats, &err), TS_OK);
+    for (int y = 0; y < 4; y++)
+        for (int x = 0; x < 4; x++) {
+            float got = ts_film_pixel_rgb(f, x, y).g;
+            if (fabsf(got - 0.5f * 2 * k) > 1e-4f) fail_msg("pixel (%d, %d): %.7g, want %.7g", x, y, got, k);
+        }
+    ts_film_destroy(f);
+    ts_scene_destroy(s);
+}
+
 /* A constant material is not textured, and its BSDF does not depend on the context. */
 static void test_constant_material_ignores_context(void **state)
 {
@@ -333,6 +396,11 @@ static void test_json_refusals(void **state)
             "\"textures\":{\"c\":{\"type\":\"checkerboard\",\"mapping\":{\"type\":\"planar\",\"uscale\":2}}},"
             "\"materials\":{\"m\":{\"type\":\"diffuse\"}}," PLANE,
             "textures.c.mapping.uscale: unknown key (allowed here: type, v1, v2, udelta, vdelta)");
+    refused(HEAD "\"textures\":{\"c\":{\"type\":\"constant\"}},\"materials\":{\"m\":{\"type\":\"diffuse\","
+                 "\"bumpmap\":\"c\"}}," PLANE,
+            "materials.m.bumpmap: texture \"c\" is an RGB texture; expected a float one");
+    refused(HEAD "\"materials\":{\"m\":{\"type\":\"diffuse\",\"bumpmap\":0.5}}," PLANE,
+            "materials.m.bumpmap: expected the name of a float texture, got 0.5");
 }
 
 int main(void)
@@ -340,6 +408,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_json_checkerboard_reflectance),
         cmocka_unit_test(test_render_checkerboard),
+        cmocka_unit_test(test_bump_linear),
         cmocka_unit_test(test_constant_material_ignores_context),
         cmocka_unit_test(test_textured_values_clamped),
         cmocka_unit_test(test_effects_of_textured_materials),

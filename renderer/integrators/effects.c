@@ -107,7 +107,8 @@ static uint32_t constant_material_effects(const ts_material *m)
  * material is classified as the union over stand-in constants that between them raise
  * every lobe the range allows: colours white (a black texel only removes lobes), and a
  * textured roughness both 0 (specular lobes) and 1 (glossy ones). σ and η change no
- * lobe's kind. Never fewer effects than some point of the surface shows. */
+ * lobe's kind; a bump map only turns the shading normal (no lobe of its own). Never
+ * fewer effects than some point of the surface shows. */
 static uint32_t material_effects(const ts_material *m)
 {
     if (!m->textured || m->type == TS_MATERIAL_MIX) return constant_material_effects(m);

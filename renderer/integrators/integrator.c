@@ -76,16 +76,18 @@ static ts_rgb escaped(const ts_scene *s, const ts_ray *ray)
 /* A textured material's BSDF, its parameters read at si's texture context with rd's
  * footprint: a call of its own, so the context's storage does not weigh on the constant
  * path. */
-static __attribute__((noinline)) void textured_bsdf(const ts_material *m, const ts_interaction *si,
+static __attribute__((noinline)) void textured_bsdf(const ts_material *m, ts_interaction *si,
                                                     const ts_ray_differential *rd, ts_bsdf *bsdf)
 {
     ts_texture_context tc;
     ts_ray_differential_context(si, rd, &tc);
+    ts_material_bump(m, si, &tc);
     ts_material_bsdf(m, si, &tc, bsdf);
 }
 
-/* The BSDF at hit si, reached by a ray with differential rd (or NULL). */
-static inline void material_bsdf(const ts_scene *s, const ts_interaction *si, const ts_ray_differential *rd,
+/* The BSDF at hit si, reached by a ray with differential rd (or NULL); a bump map
+ * replaces si's shading normal first (ts_material_bump), as pbrt-v3's does. */
+static inline void material_bsdf(const ts_scene *s, ts_interaction *si, const ts_ray_differential *rd,
                                  ts_bsdf *bsdf)
 {
     const ts_material *m = &s->materials[s->shapes[si->shape].material];
@@ -374,8 +376,10 @@ static ts_rgb li_direct(const ts_scene *s, uint32_t fx, ts_ray ray, const ts_ray
     ts_texture_context tc;
     const bool diff = rd && rd->has;
     if (diff) {
+        const ts_material *m = &s->materials[s->shapes[si.shape].material];
         ts_ray_differential_context(&si, rd, &tc);
-        ts_material_bsdf(&s->materials[s->shapes[si.shape].material], &si, &tc, &bsdf);
+        ts_material_bump(m, &si, &tc);
+        ts_material_bsdf(m, &si, &tc, &bsdf);
     } else {
         material_bsdf(s, &si, NULL, &bsdf);
     }

@@ -41,6 +41,7 @@
 #include "materials/material.h"
 
 #include <float.h>
+#include <math.h>
 
 #include "materials/bsdf.h"
 #include "materials/fourier_bsdf.h"
@@ -84,7 +85,31 @@ bool ts_material_uses_textures(const ts_material *m)
      * ignores only costs the context it is never read from. */
     return m->reflectance.tex || m->transmittance.tex || m->sigma_deg.tex || m->eta.tex || m->conductor_eta.tex ||
            m->conductor_k.tex || m->roughness.tex || m->diffuse.tex || m->specular.tex ||
-           (m->has_vroughness && m->vroughness.tex) || m->opacity.tex || m->amount.tex;
+           (m->has_vroughness && m->vroughness.tex) || m->opacity.tex || m->amount.tex || m->bump;
+}
+
+void ts_material_bump(const ts_material *m, ts_interaction *si, const ts_texture_context *c)
+{
+    if (!m->bump) return;
+    c = context(c);
+    float du = .5f * (fabsf(c->dudx) + fabsf(c->dudy));
+    if (du == 0) du = .0005f;
+    float dv = .5f * (fabsf(c->dvdx) + fabsf(c->dvdy));
+    if (dv == 0) dv = .0005f;
+    ts_texture_context e = *c;
+    e.p = ts_vec3_add(c->p, ts_vec3_scale(c->dpdu, du));
+    e.uv = (ts_vec2){c->uv.x + du, c->uv.y};
+    float u_displace = ts_texture_eval_float(m->bump, &e);
+    e.p = ts_vec3_add(c->p, ts_vec3_scale(c->dpdv, dv));
+    e.uv = (ts_vec2){c->uv.x, c->uv.y + dv};
+    float v_displace = ts_texture_eval_float(m->bump, &e);
+    float displace = ts_texture_eval_float(m->bump, c);
+    ts_vec3 dpdu = ts_vec3_add(si->dpdu, ts_vec3_scale(si->ns, (u_displace - displace) / du));
+    ts_vec3 dpdv = ts_vec3_add(si->dpdv, ts_vec3_scale(si->ns, (v_displace - displace) / dv));
+    ts_vec3 n = ts_vec3_cross(dpdu, dpdv);
+    float len = ts_vec3_length(n);
+    if (!(len > 0) || !isfinite(len)) return;
+    si->ns = ts_vec3_faceforward(ts_vec3_scale(n, 1 / len), si->n);
 }
 
 void ts_material_texture_context(const ts_interaction *si, ts_texture_context *c)

@@ -96,16 +96,30 @@ typedef struct ts_material {
     ts_material_rgb amount;                /* mix: mix[0]'s weight per channel, [0, 1] */
     uint32_t mix_id[2];                    /* mix: builder ids of earlier materials */
     const struct ts_material *mix[2];      /* mix: set by the builder from mix_id (the scene's) */
-    bool textured; /* some parameter has a texture: set by the builder (ts_material_uses_textures) */
+    /* Any type: pbrt-v3's bump map, a float texture of displacement along the shading
+     * normal (NULL: none; ts_material_bump). */
+    const struct ts_texture *bump;
+    bool textured; /* a parameter or the bump map has a texture: set by the builder (ts_material_uses_textures) */
 } ts_material;
 
-/* Whether any parameter of m has a texture (whether or not m's type reads it). */
+/* Whether any parameter of m has a texture (whether or not m's type reads it), or m has a
+ * bump map. */
 bool ts_material_uses_textures(const ts_material *m);
 
 /* The most lobes m's BSDF can have whatever its parameters' values (a mix: the sum of
  * its two materials'; needs mix[] set). pbrt-v3's BSDF holds 8 and aborts beyond; the
  * builder refuses a mix above TS_BSDF_MAX_BXDFS (materials/bsdf.h) instead. */
 int ts_material_max_lobes(const ts_material *m);
+
+/* pbrt-v3's Material::Bump: with displacement d = m->bump at c, and du = ½(|∂u/∂x| +
+ * |∂u/∂y|) of c's footprint (0.0005 without one), likewise dv, the displaced tangents are
+ *   ∂p'/∂u = ∂p/∂u + (d(u + du) − d(u))/du · ns,  ∂p'/∂v likewise,
+ * (d(u + du) read at p + du·∂p/∂u, uv + (du, 0)), and si->ns becomes normalize(∂p'/∂u ×
+ * ∂p'/∂v) turned into si->n's hemisphere — pbrt-v3's SetShadingGeometry with the geometric
+ * orientation authoritative, which makes its ReverseOrientation/handedness flip moot. The
+ * interaction has no ∂n/∂u, so pbrt-v3's d·∂n/∂u terms are 0 (exact on flat surfaces).
+ * A degenerate result (zero cross product) leaves si->ns. Nothing when m->bump is NULL. */
+void ts_material_bump(const ts_material *m, ts_interaction *si, const struct ts_texture_context *c);
 
 /* Textured values are clamped into these: η of a dielectric below the minimum is raised
  * to it (a constant η must be > 0; 1e-3 keeps every Fresnel and refraction term finite). */

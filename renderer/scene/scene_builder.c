@@ -482,6 +482,8 @@ static ts_status check_material(const ts_scene_builder *b, const ts_material *m,
 {
     static const char unit[] = "RGB in [0, 1]", finite[] = "finite RGB ≥ 0";
     bool rough = false;
+    if (m->bump && m->bump->is_rgb)
+        return ts_error_set(err, TS_ERR_INVALID, "bumpmap: expected a float texture, got an RGB one");
     switch (m->type) {
     case TS_MATERIAL_DIFFUSE:
         TRY(check_rgb_param(&m->reflectance, "reflectance", rgb_unit, unit, err));

@@ -415,19 +415,19 @@ static ts_status parse_material(loader *ld, const cJSON *m, const char *path, ts
         return ts_error_set(ld->err, TS_ERR_UNSUPPORTED, "%s: material 'disney' is not supported", p.s);
     }
     TRY(ts_json_enum(m, path, "type", true, types, &type, ld->err));
-    static const char *const k_diffuse[] = {"type", "reflectance", "sigma", NULL};
-    static const char *const k_mirror[] = {"type", "reflectance", NULL};
-    static const char *const k_dielectric[] = {"type",       "eta",        "reflectance",     "transmittance",
+    static const char *const k_diffuse[] = {"type", "bumpmap", "reflectance", "sigma", NULL};
+    static const char *const k_mirror[] = {"type", "bumpmap", "reflectance", NULL};
+    static const char *const k_dielectric[] = {"type", "bumpmap",       "eta",        "reflectance",     "transmittance",
                                                "roughness",  "uroughness", "vroughness",      "remap_roughness", NULL};
-    static const char *const k_conductor[] = {"type",       "eta",        "k",               "roughness", "distribution",
+    static const char *const k_conductor[] = {"type", "bumpmap",       "eta",        "k",               "roughness", "distribution",
                                               "uroughness", "vroughness", "remap_roughness", NULL};
-    static const char *const k_plastic[] = {"type", "diffuse", "specular", "roughness", "remap_roughness", NULL};
-    static const char *const k_fourier[] = {"type", "file", NULL};
-    static const char *const k_uber[] = {"type",      "diffuse",    "specular",   "reflectance", "transmittance", "eta",
+    static const char *const k_plastic[] = {"type", "bumpmap", "diffuse", "specular", "roughness", "remap_roughness", NULL};
+    static const char *const k_fourier[] = {"type", "bumpmap", "file", NULL};
+    static const char *const k_uber[] = {"type", "bumpmap",      "diffuse",    "specular",   "reflectance", "transmittance", "eta",
                                          "roughness", "uroughness", "vroughness", "opacity",     "remap_roughness", NULL};
-    static const char *const k_translucent[] = {"type",          "diffuse",   "specular",        "reflectance",
+    static const char *const k_translucent[] = {"type", "bumpmap",          "diffuse",   "specular",        "reflectance",
                                                 "transmittance", "roughness", "remap_roughness", NULL};
-    static const char *const k_mix[] = {"type", "materials", "amount", NULL};
+    static const char *const k_mix[] = {"type", "bumpmap", "materials", "amount", NULL};
     const char *const *keys[] = {k_diffuse, k_mirror,  k_dielectric, k_conductor,   k_plastic, k_plastic,
                                  k_fourier, k_plastic, k_uber,       k_translucent, k_mix};
     TRY(ts_json_check_object(m, path, keys[type], ld->err));
@@ -438,6 +438,17 @@ static ts_status parse_material(loader *ld, const cJSON *m, const char *path, ts
     out->transmittance = ts_material_rgb_gray(1);
     out->eta = ts_material_float_const(1.5f);
     const ts_json_textures *tx = &ld->textures;
+    /* Every type: pbrt-v3's bump map, the name of a float texture (docs/design.md §4d). */
+    ts_material_float bump = {0, NULL};
+    const cJSON *bv = cJSON_GetObjectItemCaseSensitive(m, "bumpmap");
+    if (bv && !cJSON_IsString(bv)) {
+        char d[64];
+        ts_json_describe(bv, d, sizeof d);
+        ts_jpath bp = ts_jpath_key(path, "bumpmap");
+        return ts_error_set(ld->err, TS_ERR_INVALID, "%s: expected the name of a float texture, got %s", bp.s, d);
+    }
+    TRY(ts_json_material_float(tx, m, path, "bumpmap", TS_J_ANY, &bump, ld->err));
+    out->bump = bump.tex;
     switch (out->type) {
     case TS_MATERIAL_DIFFUSE: {
         TRY(ts_json_material_rgb(tx, m, path, "reflectance", TS_J_UNIT, &out->reflectance, ld->err));
