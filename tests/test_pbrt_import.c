@@ -374,7 +374,7 @@ static void materials_mapped(void **state)
     const ts_material *m[7];
     for (int i = 0; i < 7; i++)
         m[i] = &s->materials[s->shapes[i].material];
-    assert_int_equal(m[0]->type, TS_MATERIAL_PLASTIC);
+    assert_int_equal(m[0]->type, TS_MATERIAL_PLASTIC_PBRT3);
     assert_true(m[0]->diffuse.value.b == 0.3f && m[0]->specular.value.r == 0.25f);
     float x = logf(0.3f);
     float alpha =

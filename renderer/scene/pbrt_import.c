@@ -774,15 +774,14 @@ static ts_status make_material(imp *im, int32_t mi, ts_material *m, bool *no_sur
         TRY(get_mrgb(im, ps, "Kd", ts_rgb_gray(0.5f), &m->reflectance));
         TRY(get_mfloat(im, ps, "sigma", 0, &m->sigma_deg));
     } else if (strcmp(type, "plastic") == 0) {
-        m->type = TS_MATERIAL_PLASTIC;
-        *json_type = "plastic";
+        /* pbrt-v3's PlasticMaterial (material.h: uncoupled, its code's coat Fresnel); the
+         * roughness remapped here as pbrt-v3 remaps it, so the builder's remap stays off. */
+        m->type = TS_MATERIAL_PLASTIC_PBRT3;
+        *json_type = "plastic_pbrt3";
         TRY(get_mrgb(im, ps, "Kd", ts_rgb_gray(0.25f), &m->diffuse));
         TRY(get_mrgb(im, ps, "Ks", ts_rgb_gray(0.25f), &m->specular));
         TRY(get_roughness(im, ps, loc, 0.1f, false, &m->roughness.value, NULL));
-        /* pbrt-v3's plastic is always a microfacet lobe; tessera's takes α < 1e-4 as smooth. */
-        dwarn(im, ps, loc,
-              "pbrt-v3's plastic (Lambertian + microfacet, uncoupled) is not available yet: tessera's "
-              "Fresnel-coupled plastic (docs/design.md §4) is used, whose diffuse lobe is darker");
+        m->remap_roughness = false;
     } else if (strcmp(type, "mirror") == 0) {
         m->type = TS_MATERIAL_MIRROR;
         *json_type = "mirror";
@@ -872,6 +871,9 @@ static ts_status json_material(imp *im, const char *name, const char *type, cons
     case TS_MATERIAL_FOURIER:
         break; /* the file is added by the caller */
     case TS_MATERIAL_PLASTIC_PBRT3:
+        ok = ok && jrgb(j, "diffuse", m->diffuse.value) && jrgb(j, "specular", m->specular.value) &&
+             jnumber(j, "roughness", m->roughness.value);
+        break;
     case TS_MATERIAL_UBER:
     case TS_MATERIAL_TRANSLUCENT:
     case TS_MATERIAL_MIX:
