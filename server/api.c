@@ -835,9 +835,12 @@ static int handle(srv_request *r)
             /* Only a job that has ended is removed (its --max-jobs slot and its files are
              * freed); cancelling is POST …/cancel, so a retried request never deletes. */
             if (!j->failure[0] && !ts_job_state_finished(srv_job_state(j))) {
+                ts_job_progress jp;
+                ts_sched_job_progress(j->sj, &jp);
+                const char *state = srv_job_state_name(j, &jp);
                 srv_job_release(j);
-                return srv_http_error(r, 409, "job '%s' has not ended; cancel it first (POST %s/%s/cancel)", p.id,
-                                      API_PREFIX, p.id);
+                return srv_http_error(r, 409, "job '%s' is %s, not ended; cancel it first (POST %s/%s/cancel)", p.id,
+                                      state, API_PREFIX, p.id);
             }
             bool removed = srv_store_remove(cfg->store, j);
             if (removed && cfg->data_dir) srv_persist_remove(cfg->data_dir, j); /* the bundle's folder with it */

@@ -314,6 +314,22 @@ static enum MHD_Result count_content_length(void *cls, enum MHD_ValueKind kind, 
     return MHD_YES;
 }
 
+/* tessera's own limits on a request's head, answered with JSON 414/431 (docs/security.md):
+ * well inside libmicrohttpd's per-connection memory (HTTP_CONNECTION_MEMORY), which a
+ * request line plus headers must fit in; only a head larger than that gets the library's
+ * own HTML answer, sent before tessera sees the request. */
+#define HTTP_MAX_URI 8192
+#define HTTP_MAX_HEADERS 8192
+#define HTTP_CONNECTION_MEMORY 32768
+
+static enum MHD_Result add_value_bytes(void *cls, enum MHD_ValueKind kind, const char *key, const char *value)
+{
+    (void)kind;
+    /* "key: value\r\n" for a header, "key=value&" for a query argument */
+    *(size_t *)cls += (key ? strlen(key) : 0) + (value ? strlen(value) : 0) + 4;
+    return MHD_YES;
+}
+
 static enum MHD_Result handler(void *cls, struct MHD_Connection *conn, const char *url, const char *method,
                                const char *version, const char *upload, size_t *upload_size, void **con_cls)
 {
@@ -335,6 +351,18 @@ static enum MHD_Result handler(void *cls, struct MHD_Connection *conn, const cha
         }
         r->route = h->handlers.route(url);
         *con_cls = r;
+        size_t uri_bytes = strlen(url), header_bytes = 0;
+        MHD_get_connection_values(conn, MHD_GET_ARGUMENT_KIND, add_value_bytes, &uri_bytes);
+        MHD_get_connection_values(conn, MHD_HEADER_KIND, add_value_bytes, &header_bytes);
+        if (uri_bytes > HTTP_MAX_URI || header_bytes > HTTP_MAX_HEADERS) {
+            r->method = method, r->url = "";
+            r->body_too_large = true; /* discard the body */
+            if (uri_bytes > HTTP_MAX_URI)
+                return (enum MHD_Result)srv_http_error(r, 414, "the request's URL (about %zu bytes) is longer than the limit of %d bytes",
+                                                       uri_bytes, HTTP_MAX_URI);
+            return (enum MHD_Result)srv_http_error(r, 431, "the request's headers (about %zu bytes) are larger than the limit of %d bytes",
+                                                   header_bytes, HTTP_MAX_HEADERS);
+        }
         int n_cl = 0;
         MHD_get_connection_values(conn, MHD_HEADER_KIND, count_content_length, &n_cl);
         if (n_cl > 1) { /* which one frames the body? (request smuggling) */
@@ -447,6 +475,7 @@ srv_http *srv_http_start(const srv_http_config *cfg, const srv_http_handlers *ha
                             MHD_OPTION_UNESCAPE_CALLBACK, keep_escaped, NULL,
                             MHD_OPTION_THREAD_POOL_SIZE, (unsigned)(h->cfg.threads > 0 ? h->cfg.threads : 1),
                             MHD_OPTION_CONNECTION_LIMIT, (unsigned)4000,
+                            MHD_OPTION_CONNECTION_MEMORY_LIMIT, (size_t)HTTP_CONNECTION_MEMORY,
                             /* Slow clients hold no thread (the pool polls); these bound
                              * what they hold: idle connections close, and one address may
                              * keep only so many open (more are refused at accept). */

@@ -804,6 +804,74 @@ static void test_list_pages(void **state)
     free(doc);
 }
 
+/* The answer of POST …/cancel and DELETE is the state the job is in after the request
+ * (docs/design.md §5, proto/openapi.yaml): a queued job is cancelled at once (nothing of it
+ * runs, so "cancelled", not "queued" or "cancelling", even while the only worker is busy);
+ * a running one answers "cancelling" or "cancelled"; an ended one is unchanged. DELETE of a
+ * job that has not ended is 409 naming its state; of an ended one 204, then 404. */
+static const char *post_state(const test_server *s, const char *id, const char *suffix, char *out, size_t n)
+{
+    char path[160];
+    get_path(path, sizeof path, id, suffix);
+    http_resp r;
+    ts_http(s, "POST", path, NULL, 0, NULL, &r);
+    if (r.status != 200) fail_msg("POST %s: %ld %s", path, r.status, r.body);
+    cJSON *o = cJSON_Parse(r.body);
+    assert_non_null(o);
+    snprintf(out, n, "%s", ts_json_str(o, "state"));
+    cJSON_Delete(o);
+    ts_http_free(&r);
+    return out;
+}
+
+static void test_cancel_and_delete_answers(void **state)
+{
+    (void)state;
+    test_server one;
+    const char *args[] = {"--threads", "1", "--max-running", "1", "--max-spp", "4000000", NULL};
+    ts_server_start(&one, args);
+    char *blocker = scene(64, 64, 1000000, NULL), *small = scene(16, 16, 4, NULL);
+    char b[32], q[32], d[32], path[160], st[32];
+    ts_submit(&one, blocker, b, sizeof b);
+    ts_wait_field(&one, b, "spp_done", 1, 20);
+    ts_submit(&one, small, q, sizeof q);
+    get_path(path, sizeof path, q, "");
+    expect(&one, "DELETE", path, NULL, 409, "is queued");
+    assert_string_equal(post_state(&one, q, "/cancel", st, sizeof st), "cancelled");
+    assert_string_equal(post_state(&one, q, "/cancel", st, sizeof st), "cancelled"); /* idempotent */
+    cJSON *o = ts_http_json(&one, path, 200);
+    assert_string_equal(ts_json_str(o, "state"), "cancelled");
+    assert_string_equal(ts_json_str(o, "halt_reason"), "cancelled");
+    assert_true(ts_json_num(o, "spp_done") == 0);
+    cJSON_Delete(o);
+    expect(&one, "DELETE", path, NULL, 204, NULL);
+    expect(&one, "GET", path, NULL, 404, NULL);
+    /* Running: 409 naming it, then the cancel answers what it will be in. */
+    get_path(path, sizeof path, b, "");
+    expect(&one, "DELETE", path, NULL, 409, "is running");
+    post_state(&one, b, "/cancel", st, sizeof st);
+    if (strcmp(st, "cancelling") && strcmp(st, "cancelled")) fail_msg("cancel of a running job answered '%s'", st);
+    cJSON_Delete(ts_wait_done(&one, b, 30));
+    assert_string_equal(post_state(&one, b, "/cancel", st, sizeof st), "cancelled");
+    expect(&one, "DELETE", path, NULL, 204, NULL);
+    /* Done: a cancel changes nothing. */
+    ts_submit(&one, small, d, sizeof d);
+    o = ts_wait_done(&one, d, 30);
+    assert_string_equal(ts_json_str(o, "state"), "done");
+    cJSON_Delete(o);
+    assert_string_equal(post_state(&one, d, "/cancel", st, sizeof st), "done");
+    get_path(path, sizeof path, d, "");
+    o = ts_http_json(&one, path, 200);
+    assert_string_equal(ts_json_str(o, "state"), "done");
+    assert_string_equal(ts_json_str(o, "halt_reason"), "spp");
+    cJSON_Delete(o);
+    expect(&one, "DELETE", path, NULL, 204, NULL);
+    expect(&one, "DELETE", path, NULL, 404, NULL);
+    free(blocker);
+    free(small);
+    assert_int_equal(ts_server_stop(&one, SIGTERM), 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -814,6 +882,7 @@ int main(void)
         cmocka_unit_test(test_job_event_log),
         cmocka_unit_test(test_stops_inside_a_sample_and_max_work),
         cmocka_unit_test(test_priority_order),
+        cmocka_unit_test(test_cancel_and_delete_answers),
         cmocka_unit_test(test_bad_requests),
         cmocka_unit_test(test_auth),
         cmocka_unit_test(test_200_concurrent_clients),

@@ -406,6 +406,7 @@ static void test_bad_entries(void **state)
     const tar_entry ply = {"meshes/quad.ply", 'f', quad_ply, strlen(quad_ply)};
     const char *bad_scene = "{\"tessera\":1,\"camera\":{\"from\":[0,0,5],\"to\":[0,0,0]},\"materials\":{\"w\":{\"type\":\"diffuse\"}},"
                             "\"shapes\":[{\"type\":\"sphere\",\"radius\":-1,\"material\":\"w\"}]}";
+    const char *pbrt_include = "WorldBegin\nInclude \"nothere.pbrt\"\nWorldEnd\n";
     const char *unbundled = "{\"tessera\":1,\"camera\":{\"from\":[0,0,5],\"to\":[0,0,0]},\"materials\":{\"w\":{\"type\":\"diffuse\"}},"
                             "\"shapes\":[{\"type\":\"mesh\",\"file\":\"meshes/missing.obj\",\"material\":\"w\"}]}";
     bad_case cases[] = {
@@ -426,6 +427,8 @@ static void test_bad_entries(void **state)
         {"scene refused", {{"scene.json", 'f', bad_scene, strlen(bad_scene)}}, 1, 400, "scene.json: shapes[0].radius"},
         {"file not in the bundle", {{"scene.json", 'f', unbundled, strlen(unbundled)}}, 1, 400, "missing.obj"},
         {"mesh missing (the scene's files)", {scene, obj}, 2, 400, "quad.ply"},
+        {"pbrt Include missing", {{"scene.pbrt", 'f', pbrt_include, strlen(pbrt_include)}}, 1, 400,
+         "'nothere.pbrt': cannot open"},
     };
     size_t len;
     char *body;
@@ -436,6 +439,10 @@ static void test_bad_entries(void **state)
             if (st != cases[c].status || !strstr(body, cases[c].says))
                 fail_msg("%s (%s): %ld %s; expected %ld and '%s'", cases[c].what, gz ? "gzip" : "tar", st, body,
                          cases[c].status, cases[c].says);
+            /* No answer names a path of the server's (docs/security.md): the bundle's
+             * folder lies under --data or the temporary folder. */
+            if (strstr(body, data) || strstr(body, tmp) || strstr(body, "/jobs/"))
+                fail_msg("%s: the answer names a server path: %s", cases[c].what, body);
             free(body);
             free(tar);
             assert_nothing_left(root, 0, cases[c].what);

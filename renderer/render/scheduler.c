@@ -651,8 +651,10 @@ bool ts_sched_job_cancel(ts_sched_job *j)
     }
     j->cancel = true;
     interrupt_job(s, j);
-    if (s->stopping && j->outstanding == 0 && !j->closing) {
-        /* No workers left to close it: finish here (no new error estimate). */
+    if ((s->stopping || j->state == TS_JOB_QUEUED) && j->outstanding == 0 && !j->closing) {
+        /* No workers left to close it, or it has not started (no tile to wait for): finish
+         * here (no new error estimate), so the answer to a cancel of a queued job is the
+         * state it is in, "cancelled", whatever the workers are busy with. */
         j->state = TS_JOB_CANCELLED;
         j->halt = TS_HALT_CANCELLED;
         if (j->t_start > 0) j->t_end = ts_now_seconds();
