@@ -276,12 +276,6 @@ static ts_status constant_texture(imp *im, ts_pbrt_params *ps, ts_pbrt_param *p,
     return st;
 }
 
-float ts_pbrt_roughness_to_alpha(float roughness)
-{
-    float x = logf(fmaxf(roughness, 1e-3f));
-    return 1.62142f + 0.819955f * x + 0.1734f * x * x + 0.0171201f * x * x * x + 0.000640711f * x * x * x * x;
-}
-
 /* ---------------------------------------------------------------- JSON helpers */
 
 static cJSON *jnum_array(const double *v, size_t n)
@@ -718,37 +712,58 @@ static ts_status map_integrator(imp *im)
 
 /* ---------------------------------------------------------------- materials */
 
-/* Roughness parameters of a microfacet material as tessera's one α: uroughness and
- * vroughness (when given, else roughness), remapped as pbrt-v3 does unless
- * remaproughness is false. *specular: pbrt-v3's glass is smooth when both are 0 before
- * the remapping. */
-static ts_status get_roughness(imp *im, ts_pbrt_params *ps, ts_pbrt_loc loc, float def, bool uv_only,
-                               float *alpha, bool *smooth)
+/* The roughness parameters of a microfacet material into m as pbrt-v3 reads them:
+ * "roughness" (def; not read when !plain, pbrt-v3's glass and substrate have none), and
+ * when uv, "uroughness" and "vroughness" each defaulting to it (pbrt-v3's metal, glass,
+ * uber; substrate's default to def). Each may be a float texture; remaproughness (true by
+ * default) becomes the builder's remap_roughness, so a textured roughness is remapped
+ * where it is evaluated. aniso: the builder takes vroughness on this type; else a
+ * vroughness unlike uroughness is refused. */
+static ts_status get_roughness(imp *im, ts_pbrt_params *ps, ts_pbrt_loc loc, float def, bool plain, bool uv,
+                               bool aniso, ts_material *m)
 {
-    float r = def, u, v;
-    static const char *const names[] = {"roughness", "uroughness", "vroughness"};
-    for (int k = uv_only ? 1 : 0; k < 3; k++) {
-        ts_pbrt_param *p = ts_pbrt_params_get(ps, names[k]);
-        if (p && p->type == TS_PBRT_PARAM_TEXTURE && p->texture_float >= 0 &&
-            strcmp(im->s->textures[p->texture_float].class_name, "constant") != 0)
-            return ts_pbrt_param_error(
-                ps, p, im->err, TS_ERR_UNSUPPORTED,
-                "names the \"%s\" texture \"%s\": a textured roughness is not supported yet",
-                im->s->textures[p->texture_float].class_name, p->strings[0]);
+    ts_material_float r = ts_material_float_const(def), u, v;
+    if (plain) TRY(get_mfloat(im, ps, "roughness", def, &r));
+    u = v = r;
+    if (uv) {
+        if (ts_pbrt_params_get(ps, "uroughness")) TRY(get_mfloat(im, ps, "uroughness", def, &u));
+        if (ts_pbrt_params_get(ps, "vroughness")) TRY(get_mfloat(im, ps, "vroughness", def, &v));
     }
-    if (!uv_only) TRY(get_float(im, ps, "roughness", def, &r));
-    TRY(get_float(im, ps, "uroughness", r, &u));
-    TRY(get_float(im, ps, "vroughness", r, &v));
-    bool remap;
-    TRY(ts_pbrt_find_bool(ps, "remaproughness", true, &remap, im->err));
-    if (!(u >= 0) || !(v >= 0) || !isfinite(u) || !isfinite(v))
-        return derr(im, ps, loc, TS_ERR_INVALID, "roughness must be a finite number ≥ 0, got %g and %g", u,
-                    v);
-    if (u != v)
+    TRY(ts_pbrt_find_bool(ps, "remaproughness", true, &m->remap_roughness, im->err));
+    const ts_material_float *both[2] = {&u, &v};
+    for (int k = 0; k < 2; k++)
+        if (!both[k]->tex && !(both[k]->value >= 0 && isfinite(both[k]->value)))
+            return derr(im, ps, loc, TS_ERR_INVALID, "roughness must be a finite number ≥ 0, got %g",
+                        both[k]->value);
+    bool differ = u.tex != v.tex || u.value != v.value;
+    if (differ && !aniso)
         return derr(im, ps, loc, TS_ERR_UNSUPPORTED,
-                    "anisotropic roughness (uroughness %g ≠ vroughness %g) is not supported yet", u, v);
-    if (smooth) *smooth = u == 0;
-    *alpha = remap ? ts_pbrt_roughness_to_alpha(u) : u;
+                    "anisotropic roughness (uroughness ≠ vroughness) is not supported on this material");
+    m->roughness = u;
+    m->has_vroughness = differ;
+    m->vroughness = differ ? v : u;
+    return TS_OK;
+}
+
+static ts_status material_id(imp *im, int32_t mi, uint32_t *id, bool *no_surface);
+
+/* pbrt-v3's "texture bumpmap" (a float texture of displacement) as the builder's bump.
+ * A "constant" displacement moves every point alike, so its gradient, the only thing
+ * Material::Bump uses with dn/du taken as 0 (docs/design.md), is 0: no bump map. */
+static ts_status get_bump(imp *im, ts_pbrt_params *ps, ts_material *m)
+{
+    ts_pbrt_param *p = ts_pbrt_params_get(ps, "bumpmap");
+    if (!p) return TS_OK;
+    if (p->type != TS_PBRT_PARAM_TEXTURE)
+        return ts_pbrt_param_error(ps, p, im->err, TS_ERR_INVALID, "expects a float texture (\"texture bumpmap\")");
+    if (p->texture_float < 0)
+        return ts_pbrt_param_error(ps, p, im->err, TS_ERR_INVALID, "names no float texture \"%s\" in scope",
+                                   p->strings[0]);
+    if (strcmp(im->s->textures[p->texture_float].class_name, "constant") == 0) {
+        float unused;
+        return constant_texture(im, ps, p, true, &unused, NULL);
+    }
+    m->bump = im->tp.textures[p->texture_float];
     return TS_OK;
 }
 
@@ -766,22 +781,19 @@ static ts_status make_material(imp *im, int32_t mi, ts_material *m, bool *no_sur
         *no_surface = true;
         return TS_OK;
     }
-    ts_pbrt_param *bump = ts_pbrt_params_get(ps, "bumpmap");
-    if (bump) pwarn(im, ps, bump, "is ignored: bump mapping is not supported yet");
+    TRY(get_bump(im, ps, m));
     if (strcmp(type, "matte") == 0) {
         m->type = TS_MATERIAL_DIFFUSE;
         *json_type = "diffuse";
         TRY(get_mrgb(im, ps, "Kd", ts_rgb_gray(0.5f), &m->reflectance));
         TRY(get_mfloat(im, ps, "sigma", 0, &m->sigma_deg));
     } else if (strcmp(type, "plastic") == 0) {
-        /* pbrt-v3's PlasticMaterial (material.h: uncoupled, its code's coat Fresnel); the
-         * roughness remapped here as pbrt-v3 remaps it, so the builder's remap stays off. */
+        /* pbrt-v3's PlasticMaterial (material.h: uncoupled, its code's coat Fresnel). */
         m->type = TS_MATERIAL_PLASTIC_PBRT3;
         *json_type = "plastic_pbrt3";
         TRY(get_mrgb(im, ps, "Kd", ts_rgb_gray(0.25f), &m->diffuse));
         TRY(get_mrgb(im, ps, "Ks", ts_rgb_gray(0.25f), &m->specular));
-        TRY(get_roughness(im, ps, loc, 0.1f, false, &m->roughness.value, NULL));
-        m->remap_roughness = false;
+        TRY(get_roughness(im, ps, loc, 0.1f, true, false, false, m));
     } else if (strcmp(type, "mirror") == 0) {
         m->type = TS_MATERIAL_MIRROR;
         *json_type = "mirror";
@@ -794,9 +806,8 @@ static ts_status make_material(imp *im, int32_t mi, ts_material *m, bool *no_sur
         float eta;
         TRY(get_float(im, ps, "index", 1.5f, &eta));
         TRY(get_mfloat(im, ps, "eta", eta, &m->eta));
-        bool smooth;
-        TRY(get_roughness(im, ps, loc, 0, true, &m->roughness.value, &smooth));
-        if (smooth) m->roughness.value = 0;
+        /* Smooth where both roughnesses are 0 before remapping (the builder's rule, pbrt-v3's). */
+        TRY(get_roughness(im, ps, loc, 0, false, true, true, m));
     } else if (strcmp(type, "metal") == 0) {
         m->type = TS_MATERIAL_CONDUCTOR;
         *json_type = "conductor";
@@ -805,13 +816,13 @@ static ts_status make_material(imp *im, int32_t mi, ts_material *m, bool *no_sur
         TRY(get_mrgb(im, ps, "eta", eta, &m->conductor_eta));
         TRY(get_mrgb(im, ps, "k", k, &m->conductor_k));
         m->distribution = TS_MICROFACET_GGX;
-        TRY(get_roughness(im, ps, loc, 0.01f, false, &m->roughness.value, NULL));
+        TRY(get_roughness(im, ps, loc, 0.01f, true, true, true, m));
     } else if (strcmp(type, "substrate") == 0) {
         m->type = TS_MATERIAL_SUBSTRATE;
         *json_type = "substrate";
         TRY(get_mrgb(im, ps, "Kd", ts_rgb_gray(0.5f), &m->diffuse));
         TRY(get_mrgb(im, ps, "Ks", ts_rgb_gray(0.5f), &m->specular));
-        TRY(get_roughness(im, ps, loc, 0.1f, true, &m->roughness.value, NULL));
+        TRY(get_roughness(im, ps, loc, 0.1f, false, true, false, m));
     } else if (strcmp(type, "fourier") == 0) {
         m->type = TS_MATERIAL_FOURIER;
         *json_type = "fourier";
@@ -826,19 +837,89 @@ static ts_status make_material(imp *im, int32_t mi, ts_material *m, bool *no_sur
                     type[0] == 'd'   ? "the Disney BSDF is not implemented"
                     : type[0] == 'h' ? "hair is not implemented"
                                      : "subsurface scattering needs media, which tessera does not render");
-    } else if (strcmp(type, "uber") == 0 || strcmp(type, "translucent") == 0 || strcmp(type, "mix") == 0) {
-        return derr(im, ps, loc, TS_ERR_UNSUPPORTED, "is not supported yet");
+    } else if (strcmp(type, "uber") == 0) {
+        /* pbrt-v3's UberMaterial: eta, else index; u/vroughness default to roughness. */
+        m->type = TS_MATERIAL_UBER;
+        *json_type = "uber";
+        TRY(get_mrgb(im, ps, "Kd", ts_rgb_gray(0.25f), &m->diffuse));
+        TRY(get_mrgb(im, ps, "Ks", ts_rgb_gray(0.25f), &m->specular));
+        TRY(get_mrgb(im, ps, "Kr", ts_rgb_gray(0), &m->reflectance));
+        TRY(get_mrgb(im, ps, "Kt", ts_rgb_gray(0), &m->transmittance));
+        TRY(get_mrgb(im, ps, "opacity", ts_rgb_gray(1), &m->opacity));
+        float eta;
+        TRY(get_float(im, ps, "index", 1.5f, &eta));
+        TRY(get_mfloat(im, ps, "eta", eta, &m->eta));
+        TRY(get_roughness(im, ps, loc, 0.1f, true, true, true, m));
+    } else if (strcmp(type, "translucent") == 0) {
+        m->type = TS_MATERIAL_TRANSLUCENT;
+        *json_type = "translucent";
+        TRY(get_mrgb(im, ps, "Kd", ts_rgb_gray(0.25f), &m->diffuse));
+        TRY(get_mrgb(im, ps, "Ks", ts_rgb_gray(0.25f), &m->specular));
+        TRY(get_mrgb(im, ps, "reflect", ts_rgb_gray(0.5f), &m->reflectance));
+        TRY(get_mrgb(im, ps, "transmit", ts_rgb_gray(0.5f), &m->transmittance));
+        TRY(get_roughness(im, ps, loc, 0.1f, true, false, false, m));
+    } else if (strcmp(type, "mix") == 0) {
+        /* pbrt-v3's MixMaterial: amount (a spectrum texture) weights namedmaterial1. The
+         * parser resolved both names when the mix was defined, so they are earlier
+         * materials and mapping them first cannot loop. */
+        m->type = TS_MATERIAL_MIX;
+        *json_type = "mix";
+        ts_pbrt_param *ap = ts_pbrt_params_get(ps, "amount");
+        if (ap && ap->type == TS_PBRT_PARAM_FLOAT) {
+            /* pbrt-v3 reads only a spectrum amount (it would leave a "float amount" unused
+             * at 0.5); a float is taken as the grey it means (docs/pbrt-v3.md). */
+            float a;
+            TRY(get_float(im, ps, "amount", 0.5f, &a));
+            m->amount = ts_material_rgb_gray(a);
+        } else {
+            TRY(get_mrgb(im, ps, "amount", ts_rgb_gray(0.5f), &m->amount));
+        }
+        static const char *const keys[2] = {"namedmaterial1", "namedmaterial2"};
+        for (int k = 0; k < 2; k++) {
+            int32_t sub = im->s->materials[mi].mix[k];
+            ts_pbrt_param *kp = ts_pbrt_params_get(ps, keys[k]);
+            if (sub < 0 || sub >= mi)
+                return derr(im, ps, loc, TS_ERR_INVALID, "\"string %s\" names no earlier material", keys[k]);
+            bool none = false;
+            TRY(material_id(im, sub, &m->mix_id[k], &none));
+            if (none)
+                return ts_pbrt_param_error(ps, kp, im->err, TS_ERR_UNSUPPORTED,
+                                           "names material \"%s\" of type \"%s\" (no surface), which cannot be mixed",
+                                           kp->strings[0], im->s->materials[sub].type);
+        }
     } else {
         return derr(im, ps, loc, TS_ERR_UNSUPPORTED, "is not a pbrt-v3 material");
     }
     return TS_OK;
 }
 
-static ts_status json_material(imp *im, const char *name, const char *type, const ts_material *m)
+/* The name material mi is added to the builder (and the JSON document) under. */
+static void material_name(imp *im, int32_t mi, char *name, size_t size)
+{
+    if (mi >= 0 && im->s->materials[mi].name)
+        snprintf(name, size, "%.200s#%d", im->s->materials[mi].name, (int)mi);
+    else if (mi >= 0)
+        snprintf(name, size, "%s#%d", im->s->materials[mi].type, (int)mi);
+    else
+        snprintf(name, size, "default-matte");
+}
+
+/* Roughness as scene format v1 has it: the values as pbrt-v3 gives them, remap_roughness
+ * explicit (v1's default is false, pbrt-v3's true). */
+static bool jroughness(cJSON *j, const ts_material *m)
+{
+    bool ok = jnumber(j, "roughness", m->roughness.value) && cJSON_AddBoolToObject(j, "remap_roughness", m->remap_roughness);
+    if (ok && m->has_vroughness) ok = jnumber(j, "vroughness", m->vroughness.value);
+    return ok;
+}
+
+static ts_status json_material(imp *im, int32_t mi, const char *name, const char *type, const ts_material *m)
 {
     const struct ts_texture *tex[] = {m->reflectance.tex, m->transmittance.tex, m->sigma_deg.tex,
                                       m->eta.tex,         m->conductor_eta.tex, m->conductor_k.tex,
-                                      m->roughness.tex,   m->diffuse.tex,       m->specular.tex};
+                                      m->roughness.tex,   m->diffuse.tex,       m->specular.tex,
+                                      m->vroughness.tex,  m->opacity.tex,       m->amount.tex,
+                                      m->bump};
     for (size_t i = 0; i < sizeof tex / sizeof tex[0]; i++)
         if (tex[i])
             return ts_error_set(im->err, TS_ERR_UNSUPPORTED,
@@ -857,27 +938,46 @@ static ts_status json_material(imp *im, const char *name, const char *type, cons
         break;
     case TS_MATERIAL_DIELECTRIC:
         ok = ok && jnumber(j, "eta", m->eta.value) && jrgb(j, "reflectance", m->reflectance.value) &&
-             jrgb(j, "transmittance", m->transmittance.value) && jnumber(j, "roughness", m->roughness.value);
+             jrgb(j, "transmittance", m->transmittance.value) && jroughness(j, m);
         break;
     case TS_MATERIAL_CONDUCTOR:
         ok = ok && jrgb(j, "eta", m->conductor_eta.value) && jrgb(j, "k", m->conductor_k.value) &&
-             jnumber(j, "roughness", m->roughness.value) && jstring(j, "distribution", "ggx");
+             jroughness(j, m) && jstring(j, "distribution", "ggx");
         break;
     case TS_MATERIAL_PLASTIC:
     case TS_MATERIAL_SUBSTRATE:
         ok = ok && jrgb(j, "diffuse", m->diffuse.value) && jrgb(j, "specular", m->specular.value) &&
-             jnumber(j, "roughness", m->roughness.value);
+             jroughness(j, m);
         break;
     case TS_MATERIAL_FOURIER:
         break; /* the file is added by the caller */
     case TS_MATERIAL_PLASTIC_PBRT3:
         ok = ok && jrgb(j, "diffuse", m->diffuse.value) && jrgb(j, "specular", m->specular.value) &&
-             jnumber(j, "roughness", m->roughness.value);
+             jroughness(j, m);
         break;
     case TS_MATERIAL_UBER:
+        ok = ok && jrgb(j, "diffuse", m->diffuse.value) && jrgb(j, "specular", m->specular.value) &&
+             jrgb(j, "reflectance", m->reflectance.value) && jrgb(j, "transmittance", m->transmittance.value) &&
+             jrgb(j, "opacity", m->opacity.value) && jnumber(j, "eta", m->eta.value) && jroughness(j, m);
+        break;
     case TS_MATERIAL_TRANSLUCENT:
-    case TS_MATERIAL_MIX:
-        break; /* not made by this importer yet */
+        ok = ok && jrgb(j, "diffuse", m->diffuse.value) && jrgb(j, "specular", m->specular.value) &&
+             jrgb(j, "reflectance", m->reflectance.value) && jrgb(j, "transmittance", m->transmittance.value) &&
+             jroughness(j, m);
+        break;
+    case TS_MATERIAL_MIX: {
+        cJSON *list = ok ? cJSON_CreateArray() : NULL;
+        ok = ok && jadd(j, "materials", list); /* jadd frees list when it fails */
+        for (int k = 0; ok && k < 2; k++) {
+            char sub[300];
+            material_name(im, im->s->materials[mi].mix[k], sub, sizeof sub);
+            cJSON *s = cJSON_CreateString(sub);
+            ok = s && cJSON_AddItemToArray(list, s);
+            if (!ok) cJSON_Delete(s);
+        }
+        ok = ok && jrgb(j, "amount", m->amount.value);
+        break;
+    }
     }
     if (!ok || !jadd(im->jmaterials, name, j)) {
         if (!ok) cJSON_Delete(j);
@@ -909,12 +1009,7 @@ static ts_status material_id(imp *im, int32_t mi, uint32_t *id, bool *no_surface
         return TS_OK;
     }
     char name[300];
-    if (mi >= 0 && im->s->materials[mi].name)
-        snprintf(name, sizeof name, "%.200s#%d", im->s->materials[mi].name, (int)mi);
-    else if (mi >= 0)
-        snprintf(name, sizeof name, "%s#%d", im->s->materials[mi].type, (int)mi);
-    else
-        snprintf(name, sizeof name, "default-matte");
+    material_name(im, mi, name, sizeof name);
     ts_pbrt_params *ps = mi >= 0 ? &im->s->materials[mi].params : NULL;
     ts_pbrt_loc loc = mi >= 0 ? im->s->materials[mi].loc : (ts_pbrt_loc){0};
     if (ps) {
@@ -924,7 +1019,7 @@ static ts_status material_id(imp *im, int32_t mi, uint32_t *id, bool *no_surface
         TRY(ts_scene_builder_add_material(im->b, name, &m, id, im->err));
     }
     if (im->doc) {
-        TRY(json_material(im, name, jtype, &m));
+        TRY(json_material(im, mi, name, jtype, &m));
         if (m.type == TS_MATERIAL_FOURIER) {
             const char *file = NULL;
             ts_pbrt_find_string(ps, "bsdffile", NULL, &file, im->err);

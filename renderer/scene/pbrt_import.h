@@ -41,8 +41,4 @@ typedef void (*ts_warning_fn)(void *ctx, const char *message);
 ts_status ts_pbrt_import(ts_pbrt_scene *scene, ts_scene_builder *b, struct cJSON *doc, ts_warning_fn warn,
                          void *warn_ctx, ts_error *err);
 
-/* pbrt-v3's TrowbridgeReitzDistribution::RoughnessToAlpha (remaproughness): a polynomial
- * in log(max(roughness, 1e-3)). */
-float ts_pbrt_roughness_to_alpha(float roughness);
-
 #endif
