@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "scene/pbrt_lexer.h"
 #include "textures/noise.h"
 #include "textures/texture_image.h"
 
@@ -27,8 +28,11 @@ static ts_status tex_error(const maker *m, ts_error *err, ts_status st, const ch
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
-    return ts_error_set(err, st, "%s:%u:%u: Texture \"%s\": %s", m->def->loc.file, m->def->loc.line,
-                        m->def->loc.column, m->def->name, msg);
+    ts_status r = ts_error_set(err, st, "%s:%u:%u: Texture \"%s\": %s", m->def->loc.file, m->def->loc.line,
+                               m->def->loc.column, m->def->name, msg);
+    /* The names in it (a class, a file) are the scene's bytes: one clean UTF-8 sentence. */
+    if (err) ts_pbrt_sanitize_utf8(err->message);
+    return r;
 }
 
 static ts_status make(const ts_texture_pbrt *tp, const ts_texture *proto, const ts_texture **out,
