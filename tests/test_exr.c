@@ -465,6 +465,48 @@ static void test_read_tiled(void **state)
     }
 }
 
+/* All-HALF files of 3 and 4 channels (RGBA textures are usually stored so): OpenEXR 3.1's
+ * fast half→float path for four interleaved channels reversed them (A,B,G,R read as
+ * R,G,B,A; pbrt-v3 scene f10-1ac's lines.exr turned its red into alpha = 1). Every channel
+ * and pixel holds a different value, so any permutation or misplaced block fails. */
+static void test_read_all_half_channel_order(void **state)
+{
+    (void)state;
+    enum { W = 21, H = 19 };
+    static uint16_t planes[4][W * H];
+    for (int c = 0; c < 4; c++)
+        for (int k = 0; k < W * H; k++) planes[c][k] = (uint16_t)(0x3c00 + c * 0x400 + k); /* 2^c·(1 + k·2^-10) */
+    const char *names[4] = {"R", "G", "B", "A"};
+    exr_storage_t storages[] = {EXR_STORAGE_SCANLINE, EXR_STORAGE_SCANLINE, EXR_STORAGE_TILED};
+    exr_compression_t comps[] = {EXR_COMPRESSION_ZIP, EXR_COMPRESSION_NONE, EXR_COMPRESSION_PIZ};
+    for (int n = 3; n <= 4; n++)
+        for (int t = 0; t < 3; t++) {
+            fixture fx = {.storage = storages[t], .x0 = 2, .y0 = -5, .w = W, .h = H, .tile_w = 16, .tile_h = 8,
+                          .levels = EXR_TILE_ONE_LEVEL, .compression = comps[t], .n = n,
+                          .names = {names[0], names[1], names[2], names[3]},
+                          .types = {EXR_PIXEL_HALF, EXR_PIXEL_HALF, EXR_PIXEL_HALF, EXR_PIXEL_HALF},
+                          .planes = {planes[0], planes[1], planes[2], planes[3]}};
+            char path[512];
+            path_in_dir(path, sizeof path, "allhalf.exr");
+            write_fixture(path, &fx);
+            ts_image img;
+            ts_error err = {0};
+            if (ts_exr_read(path, &img, &err)) fail_msg("%d channels, case %d: %s", n, t, err.message);
+            assert_int_equal(img.width, W);
+            assert_int_equal(img.height, H);
+            assert_int_equal(img.n_channels, n);
+            for (int c = 0; c < n; c++) {
+                int ci = ts_image_channel(&img, names[c]);
+                assert_true(ci >= 0);
+                for (int k = 0; k < W * H; k++)
+                    if (float_bits(img.data[k * n + ci]) != float_bits(half_value(planes[c][k])))
+                        fail_msg("%d channels, case %d: channel %s pixel %d reads %g, wrote %g", n, t, names[c], k,
+                                 (double)img.data[k * n + ci], (double)half_value(planes[c][k]));
+            }
+            ts_image_fini(&img);
+        }
+}
+
 static void test_unsupported_multipart(void **state)
 {
     (void)state;
@@ -751,6 +793,7 @@ int main(void)
         cmocka_unit_test(test_round_trip_file),
         cmocka_unit_test(test_round_trip_memory),
         cmocka_unit_test(test_read_half_uint_offset_scanline),
+        cmocka_unit_test(test_read_all_half_channel_order),
         cmocka_unit_test(test_read_tiled),
         cmocka_unit_test(test_unsupported_multipart),
         cmocka_unit_test(test_unsupported_deep),

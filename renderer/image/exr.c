@@ -305,9 +305,24 @@ ts_status ts_exr_write(const char *path, const ts_image *img, ts_error *err)
 
 /* ---- reading ---- */
 
-/* Points the decoder's channels at the interleaved block of chunk ci at (col, row). */
+/* OpenEXR 3.1's fast path for exactly four HALF channels converted to FLOAT into an
+ * interleaved buffer (unpack_half_to_float_4chan_interleave, picked when the four output
+ * pointers are consecutive floats) writes the channels in reverse order: a file's A,B,G,R
+ * came out as R,G,B,A (measured on Debian's 3.1.5; fixed upstream later). Such chunks are
+ * decoded into a scratch block whose pixel stride is one float wider than the image's, so
+ * the library takes its generic per-channel path, and then copied into place. */
+static bool needs_scratch(const exr_decode_pipeline_t *dec)
+{
+    if (dec->channel_count != 4) return false;
+    for (int k = 0; k < dec->channel_count; k++)
+        if (dec->channels[k].data_type != EXR_PIXEL_HALF) return false;
+    return true;
+}
+
+/* Points the decoder's channels at the interleaved block of chunk ci at (col, row), or at
+ * scratch (stride n + 1 floats, ci->width pixels a line) when scratch is given. */
 static exr_result_t bind_decode_channels(exr_decode_pipeline_t *dec, ts_image *img, const exr_chunk_info_t *ci,
-                                         int64_t col, int64_t row)
+                                         int64_t col, int64_t row, float *scratch)
 {
     int n = img->n_channels;
     if (col < 0 || row < 0 || ci->width < 1 || ci->height < 1 || col + ci->width > img->width ||
@@ -317,26 +332,61 @@ static exr_result_t bind_decode_channels(exr_decode_pipeline_t *dec, ts_image *i
         exr_coding_channel_info_t *ch = &dec->channels[k];
         int c = ts_image_channel(img, ch->channel_name);
         if (c < 0 || ch->width != ci->width || ch->height != ci->height) return EXR_ERR_CORRUPT_CHUNK;
-        ch->decode_to_ptr = (uint8_t *)(img->data + ((size_t)row * (size_t)img->width + (size_t)col) * (size_t)n + (size_t)c);
-        ch->user_pixel_stride = (int32_t)(n * (int)sizeof(float));
-        ch->user_line_stride = (int32_t)((size_t)img->width * (size_t)n * sizeof(float));
+        if (scratch) {
+            ch->decode_to_ptr = (uint8_t *)(scratch + c);
+            ch->user_pixel_stride = (int32_t)((n + 1) * (int)sizeof(float));
+            ch->user_line_stride = (int32_t)((size_t)ci->width * (size_t)(n + 1) * sizeof(float));
+        } else {
+            ch->decode_to_ptr =
+                (uint8_t *)(img->data + ((size_t)row * (size_t)img->width + (size_t)col) * (size_t)n + (size_t)c);
+            ch->user_pixel_stride = (int32_t)(n * (int)sizeof(float));
+            ch->user_line_stride = (int32_t)((size_t)img->width * (size_t)n * sizeof(float));
+        }
         ch->user_data_type = EXR_PIXEL_FLOAT;
         ch->user_bytes_per_element = (int16_t)sizeof(float);
     }
     return EXR_ERR_SUCCESS;
 }
 
+/* A grow-only scratch block for needs_scratch chunks, freed by read_pixels. */
+typedef struct decode_scratch {
+    float *data;
+    size_t n_floats;
+} decode_scratch;
+
 static exr_result_t decode_chunk(exr_context_t ctxt, exr_decode_pipeline_t *dec, bool *dec_live, const exr_chunk_info_t *ci,
-                                 ts_image *img, int64_t col, int64_t row)
+                                 ts_image *img, int64_t col, int64_t row, decode_scratch *scratch)
 {
     exr_result_t rv = *dec_live ? exr_decoding_update(ctxt, 0, ci, dec) : exr_decoding_initialize(ctxt, 0, ci, dec);
     if (rv) return rv;
     *dec_live = true;
-    rv = bind_decode_channels(dec, img, ci, col, row);
+    float *block = NULL;
+    int n = img->n_channels;
+    if (needs_scratch(dec)) {
+        /* Checked before allocating, so the block is never larger than the image. */
+        if (col < 0 || row < 0 || ci->width < 1 || ci->height < 1 || col + ci->width > img->width ||
+            row + ci->height > img->height)
+            return EXR_ERR_CORRUPT_CHUNK;
+        size_t need = (size_t)ci->width * (size_t)ci->height * (size_t)(n + 1);
+        if (need > scratch->n_floats) {
+            float *p = realloc(scratch->data, need * sizeof(float));
+            if (!p) return EXR_ERR_OUT_OF_MEMORY;
+            scratch->data = p;
+            scratch->n_floats = need;
+        }
+        block = scratch->data;
+    }
+    rv = bind_decode_channels(dec, img, ci, col, row, block);
     if (rv) return rv;
     rv = exr_decoding_choose_default_routines(ctxt, 0, dec);
     if (rv) return rv;
-    return exr_decoding_run(ctxt, 0, dec);
+    rv = exr_decoding_run(ctxt, 0, dec);
+    if (rv || !block) return rv;
+    for (int64_t y = 0; y < ci->height; y++)
+        for (int64_t x = 0; x < ci->width; x++)
+            memcpy(img->data + ((size_t)(row + y) * (size_t)img->width + (size_t)(col + x)) * (size_t)n,
+                   block + ((size_t)y * (size_t)ci->width + (size_t)x) * (size_t)(n + 1), (size_t)n * sizeof(float));
+    return EXR_ERR_SUCCESS;
 }
 
 /* Copies the non-standard string/int/double/float attributes of part 0 into img. */
@@ -374,6 +424,7 @@ static ts_status read_pixels(exr_context_t ctxt, exr_storage_t storage, const ex
 {
     exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
     bool dec_live = false;
+    decode_scratch scratch = {0};
     exr_result_t rv = EXR_ERR_SUCCESS;
     if (storage == EXR_STORAGE_SCANLINE) {
         int32_t lines_per_chunk = 0;
@@ -383,7 +434,7 @@ static ts_status read_pixels(exr_context_t ctxt, exr_storage_t storage, const ex
             exr_chunk_info_t ci;
             rv = exr_read_scanline_chunk_info(ctxt, 0, (int)y, &ci);
             if (!rv) rv = decode_chunk(ctxt, &dec, &dec_live, &ci, img, (int64_t)ci.start_x - dw->min.x,
-                                       (int64_t)ci.start_y - dw->min.y);
+                                       (int64_t)ci.start_y - dw->min.y, &scratch);
         }
     } else {
         int32_t tile_w = 0, tile_h = 0;
@@ -395,10 +446,11 @@ static ts_status read_pixels(exr_context_t ctxt, exr_storage_t storage, const ex
             for (int64_t tx = 0; !rv && tx < tiles_x; tx++) {
                 exr_chunk_info_t ci;
                 rv = exr_read_tile_chunk_info(ctxt, 0, (int)tx, (int)ty, 0, 0, &ci);
-                if (!rv) rv = decode_chunk(ctxt, &dec, &dec_live, &ci, img, tx * tile_w, ty * tile_h);
+                if (!rv) rv = decode_chunk(ctxt, &dec, &dec_live, &ci, img, tx * tile_w, ty * tile_h, &scratch);
             }
     }
     if (dec_live) exr_decoding_destroy(ctxt, &dec);
+    free(scratch.data);
     return rv ? exr_fail(err, io, rv, what) : TS_OK;
 }
 
