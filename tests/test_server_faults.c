@@ -941,7 +941,7 @@ static void test_idle_subscribers(void **state)
     double t0 = now_s();
     while (metric(&s, "tessera_event_streams_dropped_total") < 3 && now_s() - t0 < 30) ts_sleep_ms(100);
     assert_int_equal((int)metric(&s, "tessera_event_streams_dropped_total"), 3);
-    assert_true(closed_by_server(fa1, 10));
+    assert_true(closed_by_server(fa1, 30)); /* a loaded machine: 10 s was once too short */
     close(fa1), close(fa2), close(fb1);
     t0 = now_s();
     while (metric(&s, "tessera_event_streams") > 0 && now_s() - t0 < 10) ts_sleep_ms(50);
