@@ -3,7 +3,7 @@
  * The scene is imported and built completely (every check a render makes), then its JSON
  * v1 document (scene_load.h) is written to -o FILE — through a temporary file renamed
  * into place, so a failed conversion leaves nothing — or to stdout without -o. The
- * document's file references (environment maps, Fourier tables) keep their paths relative
+ * document's file references (environment maps, image textures, Fourier tables) keep their paths relative
  * to the pbrt-v3 file's folder, where a JSON scene resolves them only when it lies in
  * that folder too: a note says so when -o names another folder. Warnings go to stderr
  * once each, as for render. */
@@ -24,8 +24,8 @@ static void convert_usage(FILE *f)
     fprintf(f,
             "usage: tessera convert SCENE.pbrt [-o OUT.json] [--quiet]\n"
             "Writes the pbrt-v3 scene SCENE as the equivalent scene document (JSON, format v1), which\n"
-            "renders bit-identically to it. Meshes are written inline; environment maps and Fourier\n"
-            "tables keep their paths, relative to SCENE's folder (write OUT there for them to load).\n"
+            "renders bit-identically to it. Meshes are written inline; environment maps, image\n"
+            "textures and Fourier tables keep their paths, relative to SCENE's folder (write OUT there for them to load).\n"
             "  -o, --output FILE   the document (default: standard output)\n"
             "  --quiet             no warnings\n"
             "Exit status: 0 written, 1 the scene was refused or OUT could not be written, 2 usage error.\n");

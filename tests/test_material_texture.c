@@ -401,6 +401,43 @@ static void test_json_refusals(void **state)
             "materials.m.bumpmap: texture \"c\" is an RGB texture; expected a float one");
     refused(HEAD "\"materials\":{\"m\":{\"type\":\"diffuse\",\"bumpmap\":0.5}}," PLANE,
             "materials.m.bumpmap: expected the name of a float texture, got 0.5");
+    refused(HEAD "\"textures\":{\"f\":{\"type\":\"fbm\",\"transform\":[{\"scale\":2}],"
+                 "\"world_to_texture\":[1,0,0,0,0,1,0,0,0,0,1,0,0,0,0,1]}},\"materials\":{\"m\":{\"type\":"
+                 "\"diffuse\"}}," PLANE,
+            "textures.f.world_to_texture: give either 'transform' (texture → world) or 'world_to_texture', not "
+            "both");
+    refused(HEAD "\"textures\":{\"f\":{\"type\":\"fbm\",\"world_to_texture\":[1,0,0]}},"
+                 "\"materials\":{\"m\":{\"type\":\"diffuse\"}}," PLANE,
+            "textures.f.world_to_texture: expected an array of 16 numbers (row-major), got an array of 3");
+}
+
+/* "world_to_texture" is the solid lookup's matrix itself: an fbm given diag(2, 2, 2) as
+ * world_to_texture is the fbm whose transform is scale 0.5 (texture → world), read at
+ * the same points. */
+static void test_json_world_to_texture(void **state)
+{
+    (void)state;
+    const char *docs[2] = {
+        HEAD "\"textures\":{\"f\":{\"type\":\"fbm\",\"kind\":\"float\",\"world_to_texture\":[2,0,0,0,0,2,0,0,0,"
+             "0,2,0,0,0,0,1]}},\"materials\":{\"m\":{\"type\":\"diffuse\",\"reflectance\":\"f\"}}," PLANE,
+        HEAD "\"textures\":{\"f\":{\"type\":\"fbm\",\"kind\":\"float\",\"transform\":[{\"scale\":0.5}]}},"
+             "\"materials\":{\"m\":{\"type\":\"diffuse\",\"reflectance\":\"f\"}}," PLANE};
+    float v[2][3];
+    for (int k = 0; k < 2; k++) {
+        ts_scene *s = NULL;
+        ts_error err = {0};
+        if (ts_scene_load_text(docs[k], strlen(docs[k]), NULL, "w2t", NULL, &s, &err)) fail_msg("%s", err.message);
+        const ts_texture *t = s->materials[0].reflectance.tex;
+        assert_non_null(t);
+        for (int i = 0; i < 3; i++) {
+            ts_texture_context c = {.p = {0.3f + 0.7f * (float)i, 0.2f, -0.4f * (float)i}};
+            v[k][i] = ts_texture_eval_float(t, &c);
+        }
+        ts_scene_destroy(s);
+    }
+    for (int i = 0; i < 3; i++)
+        assert_float_equal(v[0][i], v[1][i], 0);
+    assert_true(v[0][0] != v[0][1]); /* the points see different noise: the comparison means something */
 }
 
 int main(void)
@@ -415,6 +452,7 @@ int main(void)
         cmocka_unit_test(test_json_imagemap),
         cmocka_unit_test(test_builder_textures),
         cmocka_unit_test(test_json_refusals),
+        cmocka_unit_test(test_json_world_to_texture),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -23,6 +23,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <cjson/cJSON.h>
+
 #include "image/exr.h"
 #include "render/render.h"
 #include "scene/scene_json.h"
@@ -710,6 +712,120 @@ static void cli_convert_and_render(void **state)
     assert_non_null(strstr(line, "bad.pbrt:2:16: Shape \"sphere\": \"float radius\" expects 1 value, got 2"));
 }
 
+/* Every texture class, mapping and textured parameter, for the textured round trip. */
+static const char every_texture[] =
+    "LookAt 0 1.2 5  0 0.4 0  0 1 0\n"
+    "Camera \"perspective\" \"float fov\" 45\n"
+    "Film \"image\" \"integer xresolution\" 32 \"integer yresolution\" 20\n"
+    "Sampler \"sobol\" \"integer pixelsamples\" 4\n"
+    "Integrator \"path\" \"integer maxdepth\" 3\n"
+    "WorldBegin\n"
+    "LightSource \"infinite\" \"rgb L\" [0.6 0.6 0.6]\n"
+    "LightSource \"point\" \"point from\" [1 3 2] \"rgb I\" [6 6 6]\n"
+    "Texture \"img\" \"color\" \"imagemap\" \"string filename\" \"img.pfm\" \"float uscale\" 2 \"string wrap\" "
+    "\"clamp\" \"bool trilinear\" \"true\"\n"
+    "Texture \"imgf\" \"float\" \"imagemap\" \"string filename\" \"img.pfm\" \"float maxanisotropy\" 4 "
+    "\"float scale\" 0.5 \"bool invert\" \"true\" \"float vdelta\" 0.25\n"
+    "Texture \"checks\" \"color\" \"checkerboard\" \"float uscale\" 4 \"float vscale\" 3 \"rgb tex1\" [0.8 0.2 "
+    "0.1] \"texture tex2\" \"img\"\n"
+    "TransformBegin Scale 3 3 3 Rotate 20 0 1 0\n"
+    "  Texture \"checks\" \"color\" \"checkerboard\" \"integer dimension\" 3\n" /* the name again: "#2" */
+    "  Texture \"f\" \"float\" \"fbm\" \"integer octaves\" 5 \"float roughness\" 0.6\n"
+    "  Texture \"w\" \"float\" \"wrinkled\"\n"
+    "  Texture \"wi\" \"float\" \"windy\"\n"
+    "  Texture \"mb\" \"color\" \"marble\" \"float scale\" 2 \"float variation\" 0.5\n"
+    "TransformEnd\n"
+    "TransformBegin Translate 0.1 0.4 0 Rotate 30 1 0 0\n"
+    "  Texture \"sph\" \"float\" \"bilerp\" \"string mapping\" \"spherical\" \"float v00\" 0.2 \"float v11\" 0.7\n"
+    "  Texture \"cyl\" \"color\" \"uv\" \"string mapping\" \"cylindrical\"\n"
+    "TransformEnd\n"
+    "Texture \"pl\" \"color\" \"dots\" \"string mapping\" \"planar\" \"vector v1\" [1 0 1] \"vector v2\" [0 1 0] "
+    "\"float udelta\" 0.3 \"rgb inside\" [0.9 0.8 0.1]\n"
+    "Texture \"sc\" \"color\" \"scale\" \"texture tex1\" \"pl\" \"rgb tex2\" [0.5 0.7 0.9]\n"
+    "Texture \"mx\" \"color\" \"mix\" \"texture tex1\" \"checks\" \"texture tex2\" \"mb\" \"texture amount\" \"f\"\n"
+    "Texture \"bl\" \"color\" \"bilerp\" \"rgb v00\" [0.1 0.2 0.3]\n"
+    "Texture \"none\" \"color\" \"checkerboard\" \"string aamode\" \"none\" \"float uscale\" 8\n"
+    "Material \"matte\" \"texture Kd\" \"img\"\n"
+    "Shape \"trianglemesh\" \"point P\" [-4 0 -4 4 0 -4 4 0 4 -4 0 4] \"integer indices\" [0 1 2 0 2 3]"
+    " \"float uv\" [0 0 1 0 1 1 0 1]\n"
+    "MakeNamedMaterial \"a\" \"string type\" \"matte\" \"texture Kd\" \"mx\" \"texture sigma\" \"w\" \"texture "
+    "bumpmap\" \"wi\"\n"
+    "MakeNamedMaterial \"b\" \"string type\" \"plastic\" \"texture Kd\" \"sc\" \"texture Ks\" \"none\" \"texture "
+    "roughness\" \"imgf\" \"texture bumpmap\" \"f\"\n"
+    "MakeNamedMaterial \"m\" \"string type\" \"mix\" \"string namedmaterial1\" \"a\" \"string namedmaterial2\" "
+    "\"b\" \"texture amount\" \"cyl\"\n"
+    "AttributeBegin Translate -1.4 0.4 0 NamedMaterial \"m\" Shape \"sphere\" \"float radius\" 0.4 AttributeEnd\n"
+    "AttributeBegin Translate -0.5 0.4 0.5 Material \"metal\" \"texture uroughness\" \"sph\" \"texture "
+    "vroughness\" \"w\"\n"
+    "  Shape \"sphere\" \"float radius\" 0.35 AttributeEnd\n"
+    "AttributeBegin Translate 0.4 0.4 0.6 Material \"glass\" \"texture Kr\" \"bl\" \"texture eta\" \"sph\"\n"
+    "  Shape \"sphere\" \"float radius\" 0.3 AttributeEnd\n"
+    "AttributeBegin Translate 1.2 0.4 0 Material \"uber\" \"texture opacity\" \"checks\" \"texture Kd\" \"pl\" "
+    "\"texture bumpmap\" \"imgf\"\n"
+    "  Shape \"sphere\" \"float radius\" 0.4 AttributeEnd\n"
+    "AttributeBegin Translate 0.3 1.2 -0.8 Material \"substrate\" \"texture Kd\" \"mb\" \"texture bumpmap\" "
+    "\"sph\"\n"
+    "  Shape \"sphere\" \"float radius\" 0.35 AttributeEnd\n"
+    "AttributeBegin Translate -0.6 1.2 -0.8 Material \"translucent\" \"texture Kd\" \"bl\" \"texture reflect\" "
+    "\"cyl\"\n"
+    "  Shape \"sphere\" \"float radius\" 0.35 AttributeEnd\n"
+    "WorldEnd\n";
+
+/* Textures through convert: the document holds every texture of the scene (the name given
+ * twice written as "checks#2"), material parameters name them, and it renders
+ * bit-identically to the .pbrt. A negative colour constant, which v1 cannot hold, is
+ * refused with its position. */
+static void convert_textures_round_trip(void **state)
+{
+    (void)state;
+    /* A 4 × 3 RGB PFM (bottom row first) of distinct values. */
+    char pfm[512];
+    snprintf(pfm, sizeof pfm, "%s/img.pfm", tmp_dir);
+    FILE *f = fopen(pfm, "wb");
+    assert_non_null(f);
+    fprintf(f, "PF\n4 3\n-1.0\n");
+    for (int i = 0; i < 36; i++) {
+        float v = 0.05f + 0.025f * (float)i;
+        assert_int_equal(fwrite(&v, sizeof v, 1, f), 1);
+    }
+    assert_int_equal(fclose(f), 0);
+    char path[512];
+    write_file("tex.pbrt", every_texture, path, sizeof path);
+    char *json = NULL;
+    size_t len = 0;
+    ts_error err = {0};
+    if (ts_scene_convert_pbrt_path(path, NULL, NULL, NULL, &json, &len, &err)) fail_msg("%s", err.message);
+    cJSON *doc = cJSON_Parse(json);
+    assert_non_null(doc);
+    const cJSON *tex = cJSON_GetObjectItemCaseSensitive(doc, "textures");
+    assert_int_equal(cJSON_GetArraySize(tex), 15); /* the 15 Texture directives */
+    const cJSON *c2 = cJSON_GetObjectItemCaseSensitive(tex, "checks#2");
+    assert_non_null(c2);
+    assert_int_equal(cJSON_GetArraySize(cJSON_GetObjectItemCaseSensitive(c2, "world_to_texture")), 16);
+    const cJSON *mats = cJSON_GetObjectItemCaseSensitive(doc, "materials");
+    const cJSON *b = cJSON_GetObjectItemCaseSensitive(mats, "b#2");
+    assert_string_equal(cJSON_GetObjectItemCaseSensitive(b, "bumpmap")->valuestring, "f");
+    assert_string_equal(cJSON_GetObjectItemCaseSensitive(b, "roughness")->valuestring, "imgf");
+    cJSON_Delete(doc);
+    ts_scene *sa = NULL, *sb = NULL;
+    if (ts_scene_load_path(path, NULL, NULL, NULL, &sa, &err)) fail_msg("%s", err.message);
+    if (ts_scene_load_text(json, len, tmp_dir, "tex", NULL, &sb, &err)) fail_msg("%s", err.message);
+    assert_true(sa->textured && sb->textured);
+    assert_same_pixels(sa, sb, 4);
+    free(json);
+    ts_scene_destroy(sa);
+    ts_scene_destroy(sb);
+
+    write_file("neg.pbrt",
+               "WorldBegin\nTexture \"n\" \"color\" \"scale\" \"rgb tex1\" [-1 0 0]\n"
+               "Material \"matte\" \"texture Kd\" \"n\"\nShape \"sphere\"\nWorldEnd\n",
+               path, sizeof path);
+    assert_int_equal(ts_scene_convert_pbrt_path(path, NULL, NULL, NULL, &json, &len, &err), TS_ERR_UNSUPPORTED);
+    assert_null(json);
+    assert_non_null(strstr(err.message, "neg.pbrt:2:1: texture \"n\": its tex1 (-1, 0, 0) is a negative colour, "
+                                        "which scene format v1 cannot hold"));
+}
+
 /* The digest: a function of the bytes read, not of the path; any byte changes it. */
 static void digest_of_bytes(void **state)
 {
@@ -753,6 +869,7 @@ int main(void)
         cmocka_unit_test(unused_parameters_warned),
         cmocka_unit_test(convert_round_trip),
         cmocka_unit_test(cli_convert_and_render),
+        cmocka_unit_test(convert_textures_round_trip),
         cmocka_unit_test(digest_of_bytes),
     };
     return cmocka_run_group_tests(tests, group_setup, group_teardown);

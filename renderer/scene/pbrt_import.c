@@ -19,6 +19,7 @@
 #include "scene/mesh_read.h"
 #include "scene/mesh_subdiv.h"
 #include "scene/spectrum.h"
+#include "scene/scene_json_texture_write.h"
 #include "textures/texture_pbrt.h"
 
 #define TRY(expr)                                                                                            \
@@ -45,6 +46,7 @@ typedef struct imp {
     bool direct_all;    /* the integrator takes several samples per light (nsamples matters) */
     ts_texture_pbrt tp; /* the scene's textures (textures/texture_pbrt.h), when it has any */
     bool has_textures;
+    ts_json_texture_writer jtex; /* the document's "textures", when converting */
 } imp;
 
 /* ---------------------------------------------------------------- messages */
@@ -237,7 +239,7 @@ static ts_status get_mrgb(imp *im, ts_pbrt_params *ps, const char *name, ts_rgb 
     if (p && p->type == TS_PBRT_PARAM_TEXTURE && im->has_textures) {
         int32_t ti = p->texture_spectrum >= 0 ? p->texture_spectrum : p->texture_float;
         if (ti >= 0 && strcmp(im->s->textures[ti].class_name, "constant") != 0) {
-            out->tex = im->tp.textures[ti];
+            *out = (ts_material_rgb){ts_rgb_gray(0), im->tp.textures[ti]}; /* value 0, as JSON v1 has it */
             return TS_OK;
         }
     }
@@ -251,7 +253,7 @@ static ts_status get_mfloat(imp *im, ts_pbrt_params *ps, const char *name, float
     *out = ts_material_float_const(def);
     if (p && p->type == TS_PBRT_PARAM_TEXTURE && im->has_textures && p->texture_float >= 0 &&
         strcmp(im->s->textures[p->texture_float].class_name, "constant") != 0) {
-        out->tex = im->tp.textures[p->texture_float];
+        *out = (ts_material_float){0, im->tp.textures[p->texture_float]}; /* value 0, as JSON v1 has it */
         return TS_OK;
     }
     return get_float(im, ps, name, def, &out->value);
@@ -904,86 +906,118 @@ static void material_name(imp *im, int32_t mi, char *name, size_t size)
         snprintf(name, size, "default-matte");
 }
 
+/* A material parameter as v1 has it: the name of its texture, else its constant. */
+static ts_status jparam(imp *im, cJSON *j, const char *mname, const char *key, const struct ts_texture *tex,
+                        cJSON *constant)
+{
+    if (tex) {
+        cJSON_Delete(constant);
+        char hint[400];
+        snprintf(hint, sizeof hint, "%.300s.%s", mname, key);
+        constant = ts_json_texture_ref(&im->jtex, tex, hint, im->err);
+        if (!constant) return im->err->status;
+    }
+    return jadd(j, key, constant) ? TS_OK : nomem(im);
+}
+
+static cJSON *jrgb_item(ts_rgb c)
+{
+    const double v[3] = {c.r, c.g, c.b};
+    return jnum_array(v, 3);
+}
+
+static ts_status jmrgb(imp *im, cJSON *j, const char *mname, const char *key, const ts_material_rgb *p)
+{
+    return jparam(im, j, mname, key, p->tex, p->tex ? NULL : jrgb_item(p->value));
+}
+
+static ts_status jmfloat(imp *im, cJSON *j, const char *mname, const char *key, const ts_material_float *p)
+{
+    return jparam(im, j, mname, key, p->tex, p->tex ? NULL : cJSON_CreateNumber(p->value));
+}
+
 /* Roughness as scene format v1 has it: the values as pbrt-v3 gives them, remap_roughness
  * explicit (v1's default is false, pbrt-v3's true). */
-static bool jroughness(cJSON *j, const ts_material *m)
+static ts_status jroughness(imp *im, cJSON *j, const char *mname, const ts_material *m)
 {
-    bool ok = jnumber(j, "roughness", m->roughness.value) && cJSON_AddBoolToObject(j, "remap_roughness", m->remap_roughness);
-    if (ok && m->has_vroughness) ok = jnumber(j, "vroughness", m->vroughness.value);
-    return ok;
+    TRY(jmfloat(im, j, mname, "roughness", &m->roughness));
+    if (!cJSON_AddBoolToObject(j, "remap_roughness", m->remap_roughness)) return nomem(im);
+    return m->has_vroughness ? jmfloat(im, j, mname, "vroughness", &m->vroughness) : TS_OK;
+}
+
+static ts_status json_material_fill(imp *im, cJSON *j, int32_t mi, const char *name, const char *type,
+                                    const ts_material *m)
+{
+    if (!jstring(j, "type", type)) return nomem(im);
+    if (m->bump) TRY(jparam(im, j, name, "bumpmap", m->bump, NULL));
+    switch (m->type) {
+    case TS_MATERIAL_DIFFUSE:
+        TRY(jmrgb(im, j, name, "reflectance", &m->reflectance));
+        if (m->sigma_deg.tex || m->sigma_deg.value != 0) TRY(jmfloat(im, j, name, "sigma", &m->sigma_deg));
+        break;
+    case TS_MATERIAL_MIRROR:
+        TRY(jmrgb(im, j, name, "reflectance", &m->reflectance));
+        break;
+    case TS_MATERIAL_DIELECTRIC:
+        TRY(jmfloat(im, j, name, "eta", &m->eta));
+        TRY(jmrgb(im, j, name, "reflectance", &m->reflectance));
+        TRY(jmrgb(im, j, name, "transmittance", &m->transmittance));
+        TRY(jroughness(im, j, name, m));
+        break;
+    case TS_MATERIAL_CONDUCTOR:
+        TRY(jmrgb(im, j, name, "eta", &m->conductor_eta));
+        TRY(jmrgb(im, j, name, "k", &m->conductor_k));
+        TRY(jroughness(im, j, name, m));
+        if (!jstring(j, "distribution", "ggx")) return nomem(im);
+        break;
+    case TS_MATERIAL_PLASTIC:
+    case TS_MATERIAL_SUBSTRATE:
+    case TS_MATERIAL_PLASTIC_PBRT3:
+        TRY(jmrgb(im, j, name, "diffuse", &m->diffuse));
+        TRY(jmrgb(im, j, name, "specular", &m->specular));
+        TRY(jroughness(im, j, name, m));
+        break;
+    case TS_MATERIAL_FOURIER:
+        break; /* the file is added by the caller */
+    case TS_MATERIAL_UBER:
+    case TS_MATERIAL_TRANSLUCENT:
+        TRY(jmrgb(im, j, name, "diffuse", &m->diffuse));
+        TRY(jmrgb(im, j, name, "specular", &m->specular));
+        TRY(jmrgb(im, j, name, "reflectance", &m->reflectance));
+        TRY(jmrgb(im, j, name, "transmittance", &m->transmittance));
+        if (m->type == TS_MATERIAL_UBER) {
+            TRY(jmrgb(im, j, name, "opacity", &m->opacity));
+            TRY(jmfloat(im, j, name, "eta", &m->eta));
+        }
+        TRY(jroughness(im, j, name, m));
+        break;
+    case TS_MATERIAL_MIX: {
+        cJSON *list = cJSON_CreateArray();
+        if (!jadd(j, "materials", list)) return nomem(im); /* jadd frees list when it fails */
+        for (int k = 0; k < 2; k++) {
+            char sub[300];
+            material_name(im, im->s->materials[mi].mix[k], sub, sizeof sub);
+            cJSON *s = cJSON_CreateString(sub);
+            if (!s || !cJSON_AddItemToArray(list, s)) {
+                cJSON_Delete(s);
+                return nomem(im);
+            }
+        }
+        TRY(jmrgb(im, j, name, "amount", &m->amount));
+        break;
+    }
+    }
+    return TS_OK;
 }
 
 static ts_status json_material(imp *im, int32_t mi, const char *name, const char *type, const ts_material *m)
 {
-    const struct ts_texture *tex[] = {m->reflectance.tex, m->transmittance.tex, m->sigma_deg.tex,
-                                      m->eta.tex,         m->conductor_eta.tex, m->conductor_k.tex,
-                                      m->roughness.tex,   m->diffuse.tex,       m->specular.tex,
-                                      m->vroughness.tex,  m->opacity.tex,       m->amount.tex,
-                                      m->bump};
-    for (size_t i = 0; i < sizeof tex / sizeof tex[0]; i++)
-        if (tex[i])
-            return ts_error_set(im->err, TS_ERR_UNSUPPORTED,
-                                "material \"%s\": textured material parameters are not converted to JSON yet "
-                                "(the scene renders from its .pbrt)",
-                                name);
     cJSON *j = cJSON_CreateObject();
-    bool ok = j && jstring(j, "type", type);
-    switch (m->type) {
-    case TS_MATERIAL_DIFFUSE:
-        ok = ok && jrgb(j, "reflectance", m->reflectance.value) &&
-             (m->sigma_deg.value == 0 || jnumber(j, "sigma", m->sigma_deg.value));
-        break;
-    case TS_MATERIAL_MIRROR:
-        ok = ok && jrgb(j, "reflectance", m->reflectance.value);
-        break;
-    case TS_MATERIAL_DIELECTRIC:
-        ok = ok && jnumber(j, "eta", m->eta.value) && jrgb(j, "reflectance", m->reflectance.value) &&
-             jrgb(j, "transmittance", m->transmittance.value) && jroughness(j, m);
-        break;
-    case TS_MATERIAL_CONDUCTOR:
-        ok = ok && jrgb(j, "eta", m->conductor_eta.value) && jrgb(j, "k", m->conductor_k.value) &&
-             jroughness(j, m) && jstring(j, "distribution", "ggx");
-        break;
-    case TS_MATERIAL_PLASTIC:
-    case TS_MATERIAL_SUBSTRATE:
-        ok = ok && jrgb(j, "diffuse", m->diffuse.value) && jrgb(j, "specular", m->specular.value) &&
-             jroughness(j, m);
-        break;
-    case TS_MATERIAL_FOURIER:
-        break; /* the file is added by the caller */
-    case TS_MATERIAL_PLASTIC_PBRT3:
-        ok = ok && jrgb(j, "diffuse", m->diffuse.value) && jrgb(j, "specular", m->specular.value) &&
-             jroughness(j, m);
-        break;
-    case TS_MATERIAL_UBER:
-        ok = ok && jrgb(j, "diffuse", m->diffuse.value) && jrgb(j, "specular", m->specular.value) &&
-             jrgb(j, "reflectance", m->reflectance.value) && jrgb(j, "transmittance", m->transmittance.value) &&
-             jrgb(j, "opacity", m->opacity.value) && jnumber(j, "eta", m->eta.value) && jroughness(j, m);
-        break;
-    case TS_MATERIAL_TRANSLUCENT:
-        ok = ok && jrgb(j, "diffuse", m->diffuse.value) && jrgb(j, "specular", m->specular.value) &&
-             jrgb(j, "reflectance", m->reflectance.value) && jrgb(j, "transmittance", m->transmittance.value) &&
-             jroughness(j, m);
-        break;
-    case TS_MATERIAL_MIX: {
-        cJSON *list = ok ? cJSON_CreateArray() : NULL;
-        ok = ok && jadd(j, "materials", list); /* jadd frees list when it fails */
-        for (int k = 0; ok && k < 2; k++) {
-            char sub[300];
-            material_name(im, im->s->materials[mi].mix[k], sub, sizeof sub);
-            cJSON *s = cJSON_CreateString(sub);
-            ok = s && cJSON_AddItemToArray(list, s);
-            if (!ok) cJSON_Delete(s);
-        }
-        ok = ok && jrgb(j, "amount", m->amount.value);
-        break;
-    }
-    }
-    if (!ok || !jadd(im->jmaterials, name, j)) {
-        if (!ok) cJSON_Delete(j);
-        return nomem(im);
-    }
-    return TS_OK;
+    if (!j) return nomem(im);
+    ts_status st = json_material_fill(im, j, mi, name, type, m);
+    if (!st && !jadd(im->jmaterials, name, j)) return nomem(im); /* jadd frees j */
+    if (st) cJSON_Delete(j);
+    return st;
 }
 
 /* The builder id of material mi (mapped on first use), or TS_NONE with *no_surface. */
@@ -1652,6 +1686,20 @@ static ts_status run(imp *im)
         im->has_textures = true;
         for (size_t i = 0; i < s->texture_count; i++)
             warn_unused(im, &s->textures[i].params);
+        if (im->doc) {
+            /* Every texture in definition order (children before parents, as v1 wants),
+             * under its name; a name given again in another scope gets "#k". */
+            cJSON *jt = cJSON_CreateObject();
+            if (!jadd(im->doc, "textures", jt)) return nomem(im);
+            ts_json_texture_writer_init(&im->jtex, jt, cache);
+            for (size_t i = 0; i < s->texture_count; i++) {
+                ts_status st = ts_json_texture_write(&im->jtex, im->tp.textures[i], s->textures[i].name, im->err);
+                if (st && st != TS_ERR_NOMEM)
+                    ts_error_prefix(im->err, "%s:%u:%u", s->textures[i].loc.file,
+                                    s->textures[i].loc.line, s->textures[i].loc.column);
+                if (st) return st;
+            }
+        }
     }
     for (size_t i = 0; i < s->shape_count; i++) {
         if (s->shapes[i].object >= 0) continue; /* an object nothing instances */
@@ -1719,5 +1767,6 @@ ts_status ts_pbrt_import(ts_pbrt_scene *scene, ts_scene_builder *b, cJSON *doc, 
     free(im.seen);
     free(im.mat_id);
     free(im.mat_state);
+    ts_json_texture_writer_fini(&im.jtex);
     return st;
 }

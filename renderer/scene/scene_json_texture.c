@@ -102,7 +102,7 @@ typedef struct reader {
     const cJSON *obj;
     const char *path;
     bool rgb; /* the texture's kind */
-    const ts_xform *to_world;
+    const ts_mat4 *world_to_texture; /* the inverse of "transform", or "world_to_texture" */
     ts_error *err;
 } reader;
 
@@ -185,17 +185,43 @@ static ts_status mapping2d(const reader *r, ts_texture_mapping2d *out)
         *out = ts_texture_mapping2d_planar(v1, v2, du, dv);
     } else {
         /* World → texture: the inverse of the texture's "transform". */
-        *out = type == 1 ? ts_texture_mapping2d_spherical(&r->to_world->m_inv)
-                         : ts_texture_mapping2d_cylindrical(&r->to_world->m_inv);
+        *out = type == 1 ? ts_texture_mapping2d_spherical(r->world_to_texture)
+                         : ts_texture_mapping2d_cylindrical(r->world_to_texture);
     }
     return TS_OK;
 }
 
 /* Solid textures: world → texture is the inverse of "transform" (not pbrt-v3's quirk of
- * the CTM itself, which its importer reproduces: textures/texture_pbrt.h). */
+ * the CTM itself, which its importer reproduces: textures/texture_pbrt.h), or
+ * "world_to_texture" as given (which is how tessera convert writes pbrt-v3's). */
 static ts_status mapping3d(const reader *r, ts_texture_mapping3d *out)
 {
-    out->world_to_texture = r->to_world->m_inv;
+    out->world_to_texture = *r->world_to_texture;
+    return TS_OK;
+}
+
+/* "world_to_texture": 16 numbers, row-major, within the float range; absent: *out untouched. */
+static ts_status world_to_texture(const cJSON *obj, const char *path, ts_mat4 *out, ts_error *err)
+{
+    const cJSON *m = cJSON_GetObjectItemCaseSensitive(obj, "world_to_texture");
+    if (!m) return TS_OK;
+    ts_jpath mp = ts_jpath_key(path, "world_to_texture");
+    if (cJSON_GetObjectItemCaseSensitive(obj, "transform"))
+        return ts_error_set(err, TS_ERR_INVALID,
+                            "%s: give either 'transform' (texture → world) or 'world_to_texture', not both", mp.s);
+    if (!cJSON_IsArray(m) || cJSON_GetArraySize(m) != 16) {
+        char d[64];
+        ts_json_describe(m, d, sizeof d);
+        return ts_error_set(err, TS_ERR_INVALID, "%s: expected an array of 16 numbers (row-major), got %s", mp.s, d);
+    }
+    int k = 0;
+    for (const cJSON *c = m->child; c; c = c->next, k++) {
+        if (!cJSON_IsNumber(c) || !isfinite((float)c->valuedouble)) {
+            ts_jpath ep = ts_jpath_index(mp.s, k);
+            return ts_error_set(err, TS_ERR_INVALID, "%s: expected a finite number within the float range", ep.s);
+        }
+        out->m[k / 4][k % 4] = c->valuedouble;
+    }
     return TS_OK;
 }
 
@@ -252,7 +278,7 @@ ts_status ts_json_texture_parse(ts_json_textures *tt, ts_scene_builder *b, const
     if (!cJSON_IsObject(obj)) return ts_json_check_object(obj, path, types, err);
     int type;
     TRY(ts_json_enum(obj, path, "type", true, types, &type, err));
-#define COMMON "type", "kind", "transform"
+#define COMMON "type", "kind", "transform", "world_to_texture"
 #define MAP2D  COMMON, "mapping"
     static const char *const k_constant[] = {COMMON, "value", NULL};
     static const char *const k_scale[] = {COMMON, "tex1", "tex2", NULL};
@@ -280,7 +306,9 @@ ts_status ts_json_texture_parse(ts_json_textures *tt, ts_scene_builder *b, const
         return ts_error_set(err, TS_ERR_INVALID, "%s: a %s texture is RGB only (as in pbrt-v3)", kp.s,
                             types[type]);
     }
-    reader r = {tt, b, obj, path, rgb, to_world, err};
+    ts_mat4 w2t = to_world->m_inv;
+    TRY(world_to_texture(obj, path, &w2t, err));
+    reader r = {tt, b, obj, path, rgb, &w2t, err};
     ts_texture t = {.is_rgb = rgb};
     switch (type) {
     case CONSTANT: {

@@ -39,8 +39,11 @@ void ts_json_textures_fini(ts_json_textures *t);
 const ts_texture *ts_json_textures_find(const ts_json_textures *t, const char *name);
 
 /* Reads the texture object tex at path (its name `name`, not yet in t) and adds it to t.
- * to_world is its "transform" (texture space → world; the caller reads it), used by the
- * spherical and cylindrical mappings and by solid textures. */
+ * to_world is its "transform" (texture space → world; the caller reads it), whose inverse
+ * the spherical and cylindrical mappings and solid textures look the world point up
+ * through — unless the texture gives that matrix itself as "world_to_texture" (16
+ * numbers; not with "transform"), as tessera convert writes it
+ * (scene/scene_json_texture_write.h). */
 ts_status ts_json_texture_parse(ts_json_textures *t, ts_scene_builder *b, const cJSON *tex, const char *path,
                                 const char *name, const ts_xform *to_world, ts_error *err);
 

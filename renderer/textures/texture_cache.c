@@ -14,6 +14,7 @@
 typedef struct cache_entry {
     struct cache_entry *next;
     char *path; /* canonical */
+    char *file; /* as the first texture to name it wrote it */
     int n_channels;
     bool gamma;
     uint32_t scale_bits;
@@ -40,6 +41,7 @@ void ts_texture_cache_destroy(ts_texture_cache *c)
         next = e->next;
         ts_mipmap_destroy(e->map);
         free(e->path);
+        free(e->file);
         free(e);
     }
     free(c);
@@ -123,13 +125,16 @@ ts_status ts_texture_cache_get(ts_texture_cache *c, const char *base_dir, const 
     }
     cache_entry *e = calloc(1, sizeof *e);
     char *p = e ? strdup(path) : NULL;
-    if (!e || !p) {
+    char *f = p ? strdup(filename) : NULL;
+    if (!e || !p || !f) {
+        free(p);
         free(e);
         ts_mipmap_destroy(map);
         return ts_error_set(err, TS_ERR_NOMEM, "texture image '%s': out of memory", filename);
     }
     *e = (cache_entry){.next = c->head,
                        .path = p,
+                       .file = f,
                        .n_channels = opt->n_channels,
                        .gamma = opt->gamma,
                        .scale_bits = scale_bits,
@@ -140,4 +145,19 @@ ts_status ts_texture_cache_get(ts_texture_cache *c, const char *base_dir, const 
     c->count++;
     *out = map;
     return TS_OK;
+}
+
+bool ts_texture_cache_source(const ts_texture_cache *c, const ts_mipmap *map, const char **filename,
+                             ts_texture_image_options *opt)
+{
+    for (const cache_entry *e = c ? c->head : NULL; e; e = e->next)
+        if (e->map == map) {
+            *filename = e->file;
+            memcpy(&opt->scale, &e->scale_bits, sizeof opt->scale);
+            opt->n_channels = e->n_channels;
+            opt->gamma = e->gamma;
+            opt->wrap = e->wrap;
+            return true;
+        }
+    return false;
 }

@@ -49,6 +49,12 @@ ts_status ts_texture_cache_get(ts_texture_cache *c, const char *base_dir, const 
                                uint64_t max_file_bytes, const ts_texture_image_options *opt,
                                const ts_mipmap **out, ts_error *err);
 
+/* Where map (one of c's) came from: the file name as the first texture naming it wrote
+ * it (valid while c lives) and the options it was built with; false when c holds no such
+ * map. For writing a scene's textures back out (scene/scene_json_texture_write.h). */
+bool ts_texture_cache_source(const ts_texture_cache *c, const ts_mipmap *map, const char **filename,
+                             ts_texture_image_options *opt);
+
 /* Bytes held by the cache's maps, and how many maps it holds. */
 size_t ts_texture_cache_bytes(const ts_texture_cache *c);
 size_t ts_texture_cache_count(const ts_texture_cache *c);
