@@ -6,10 +6,14 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/socket.h>
 
 typedef struct sub {
     struct srv_events *hub;      /* immutable */
     struct MHD_Connection *conn; /* immutable */
+    int fd;                      /* immutable: conn's socket, or -1; open while the sub is
+                                  * listed (libmicrohttpd frees the response, and the sub
+                                  * with it, before it closes the socket) */
     srv_events_limits *limits;   /* immutable */
     srv_events_source src;       /* immutable */
     /* guarded by hub->mu */
@@ -54,8 +58,15 @@ void srv_events_set_items(srv_events *h, int n_items)
 
 static bool backlog_done(const sub *s) { return s->cursor > s->src.n_items; }
 
-/* Drops a subscriber that is too far behind (or out of memory): nothing more is sent, its
- * connection is closed at the next read. */
+/* Drops a subscriber that is too far behind (or out of memory): nothing more is sent and
+ * its connection is aborted now; hub->mu held, s listed or being subscribed (so s->fd is
+ * still its socket). libmicrohttpd alone would end the response only when it next asks
+ * sub_read for data, i.e. once the socket takes more: for a client that stopped reading,
+ * not before the idle timeout; and even after that close the kernel sends the FIN only
+ * behind the events still queued for the client. So the socket is shut down (the next
+ * send fails and libmicrohttpd closes the connection at once, as for the request deadline
+ * in http.c) with a zero linger time, which makes the close a reset: the stale events
+ * queued are discarded and the client learns at once, whether or not it reads. */
 static void drop(sub *s)
 {
     atomic_fetch_add(&s->limits->dropped, 1);
@@ -63,6 +74,11 @@ static void drop(sub *s)
     free(s->buf);
     s->buf = NULL;
     s->len = s->off = s->cap = 0;
+    if (s->fd >= 0) {
+        struct linger abort_on_close = {1, 0};
+        setsockopt(s->fd, SOL_SOCKET, SO_LINGER, &abort_on_close, sizeof abort_on_close);
+        shutdown(s->fd, SHUT_RDWR);
+    }
 }
 
 static void sub_append(sub *s, const char *text, size_t n)
@@ -282,6 +298,8 @@ struct MHD_Response *srv_events_subscribe(srv_events *h, struct MHD_Connection *
     }
     s->hub = h;
     s->conn = conn;
+    const union MHD_ConnectionInfo *ci = MHD_get_connection_info(conn, MHD_CONNECTION_INFO_CONNECTION_FD);
+    s->fd = ci ? ci->connect_fd : -1;
     s->limits = limits;
     s->src = *src;
     pthread_mutex_lock(&h->mu);

@@ -17,8 +17,9 @@
  * pulls more of the backlog, ends the stream once the hub is closed, the backlog is done
  * and the buffer drained, and otherwise suspends its connection (never busy-waits, never
  * blocks). A subscriber whose buffer would pass SRV_EVENTS_BUFFER_CAP (a client that
- * stopped reading) is dropped: its buffer is freed and its connection closed (an
- * EventSource reconnects and gets a fresh backlog). Subscribers are capped per job and in
+ * stopped reading) is dropped: its buffer is freed and its connection reset at once,
+ * without waiting for the client to read (events.c, drop; an EventSource reconnects and
+ * gets a fresh backlog). Subscribers are capped per job and in
  * all (srv_events_limits): past either, subscribing fails (503).
  *
  * Thread-safe: one mutex per hub; the source's functions are called with it held and may
