@@ -13,6 +13,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
@@ -38,8 +39,13 @@ void ts_server_start(test_server *s, const char *const *args)
     snprintf(s->log, sizeof s->log, "/tmp/tessera-test-server-%d-%d.log", (int)getpid(), counter++);
     int fds[2];
     assert_int_equal(pipe(fds), 0);
-    pid_t pid = fork();
+    pid_t parent = getpid(), pid = fork();
     if (pid == 0) {
+        /* A test that fails before it stops its server (cmocka goes on to the next case)
+         * leaves it running at most until the test process ends, not rendering on for
+         * the tests after it. */
+        prctl(PR_SET_PDEATHSIG, SIGKILL);
+        if (getppid() != parent) _exit(127);
         dup2(fds[1], 1);
         close(fds[0]);
         int fd = open(s->log, O_WRONLY | O_CREAT | O_TRUNC, 0644);
