@@ -543,9 +543,13 @@ static void instanced_interaction(const ts_accel *a, uint32_t k, uint32_t local,
     /* Normals by the inverse transpose: the same side of the surface as in object space. */
     ts_dvec3 n = ts_dvec3_normalize(ts_xform_normal(x, ts_dvec3_from(o.n)));
     ts_dvec3 ns = ts_dvec3_normalize(ts_xform_normal(x, ts_dvec3_from(o.ns)));
-    if (ts_dvec3_dot(ns, n) < 0) ns = ts_dvec3_scale(ns, -1);
+    double sign = 1;
+    if (ts_dvec3_dot(ns, n) < 0) ns = ts_dvec3_scale(ns, -1), sign = -1;
     si->n = ts_dvec3_to_vec3(n);
     si->ns = ts_dvec3_to_vec3(ns);
+    /* ∂n/∂u, ∂n/∂v as normals (pbrt-v3's instance transform of shading.dndu), turned with ns. */
+    si->dndu = ts_dvec3_to_vec3(ts_dvec3_scale(ts_xform_normal(x, ts_dvec3_from(o.dndu)), sign));
+    si->dndv = ts_dvec3_to_vec3(ts_dvec3_scale(ts_xform_normal(x, ts_dvec3_from(o.dndv)), sign));
     si->dpdu = ts_dvec3_to_vec3(ts_xform_vector(x, ts_dvec3_from(o.dpdu)));
     si->dpdv = ts_dvec3_to_vec3(ts_xform_vector(x, ts_dvec3_from(o.dpdv)));
     ts_dvec3 wo = ts_dvec3_scale(ts_dvec3_from(ray->d), -1);

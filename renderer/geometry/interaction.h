@@ -31,6 +31,7 @@ typedef struct ts_interaction {
     ts_vec3 n;         /* unit geometric normal on the shape's front side (docs/design.md §4) */
     ts_vec3 ns;        /* unit shading normal, in n's hemisphere */
     ts_vec3 dpdu, dpdv;
+    ts_vec3 dndu, dndv; /* ∂ns/∂u, ∂ns/∂v, world space (pbrt-v3's shading.dndu, dndv; shape.h) */
     ts_vec2 uv;
     ts_vec3 wo;        /* unit direction back towards the ray origin */
     float t;           /* ray parameter of the hit */
@@ -38,6 +39,8 @@ typedef struct ts_interaction {
     uint32_t prim;     /* triangle index for meshes, 0 otherwise */
     uint32_t inst;     /* 0, or k + 1 when the hit is on a shape of object instance k (accel.h):
                           everything above is then in world space all the same */
+    bool mesh_normals; /* ns interpolates a mesh's vertex normals: a bump map then uses pbrt-v3's
+                          unit shading tangents (materials/material.h, ts_material_bump) */
 } ts_interaction;
 
 static inline ts_vec3 ts_ray_at(const ts_ray *r, float t) { return ts_vec3_add(r->o, ts_vec3_scale(r->d, t)); }

@@ -403,8 +403,34 @@ bool ts_shape_intersect(const ts_shape *s, const ts_ray *ray, float tmax, float 
 
 /* ---- public: interaction ---- */
 
+/* pbrt-v3's Weingarten equations: ∂N/∂u, ∂N/∂v of the unit normal N of a surface with
+ * first derivatives dpdu, dpdv and second derivatives d2uu, d2uv, d2vv (object space).
+ * A degenerate first fundamental form gives 0. */
+static void weingarten(ts_dvec3 N, ts_dvec3 dpdu, ts_dvec3 dpdv, ts_dvec3 d2uu, ts_dvec3 d2uv, ts_dvec3 d2vv,
+                       ts_dvec3 *dndu, ts_dvec3 *dndv)
+{
+    double E = ts_dvec3_dot(dpdu, dpdu), F = ts_dvec3_dot(dpdu, dpdv), G = ts_dvec3_dot(dpdv, dpdv);
+    double e = ts_dvec3_dot(N, d2uu), f = ts_dvec3_dot(N, d2uv), g = ts_dvec3_dot(N, d2vv);
+    double det = E * G - F * F;
+    *dndu = *dndv = (ts_dvec3){0, 0, 0};
+    if (!(fabs(det) > 0) || !isfinite(det)) return;
+    double inv = 1 / det;
+    *dndu = ts_dvec3_add(ts_dvec3_scale(dpdu, (f * F - e * G) * inv), ts_dvec3_scale(dpdv, (e * F - f * E) * inv));
+    *dndv = ts_dvec3_add(ts_dvec3_scale(dpdu, (g * F - f * G) * inv), ts_dvec3_scale(dpdv, (f * F - g * E) * inv));
+}
+
+/* The derivative of the world normal n_w = M^-T·N / |M^-T·N| given ∂N/∂u in object space. */
+static ts_dvec3 world_normal_derivative(const ts_xform *X, ts_dvec3 N, ts_dvec3 n_w, ts_dvec3 dN)
+{
+    double len = ts_dvec3_length(ts_xform_normal(X, N));
+    ts_dvec3 dm = ts_xform_normal(X, dN);
+    ts_dvec3 d = ts_dvec3_sub(dm, ts_dvec3_scale(n_w, ts_dvec3_dot(n_w, dm)));
+    return len > 0 ? ts_dvec3_scale(d, 1 / len) : (ts_dvec3){0, 0, 0};
+}
+
 static void analytic_interaction(const ts_shape *s, const ts_ray *ray, const obj_hit *h, ts_interaction *si)
 {
+    ts_dvec3 d2uu = {0, 0, 0}, d2uv = {0, 0, 0}, d2vv = {0, 0, 0}; /* ∂²p/∂u², ∂²p/∂u∂v, ∂²p/∂v² */
     const ts_xform *X = &s->to_world;
     const double(*m)[4] = X->m.m;
     ts_dvec3 p = h->p, n_obj, dpdu, dpdv;
@@ -435,6 +461,9 @@ static void analytic_interaction(const ts_shape *s, const ts_ray *ray, const obj
         }
         double sin_theta = sqrt(fmax(0.0, 1 - cos_theta * cos_theta));
         dpdv = ts_dvec3_scale((ts_dvec3){p.z * cos_phi, p.z * sin_phi, -r * sin_theta}, th_range);
+        d2uu = ts_dvec3_scale((ts_dvec3){p.x, p.y, 0}, -phi_max * phi_max);
+        d2uv = ts_dvec3_scale((ts_dvec3){-sin_phi, cos_phi, 0}, th_range * p.z * phi_max);
+        d2vv = ts_dvec3_scale(p, -th_range * th_range);
         n_obj = p;
         break;
     }
@@ -462,6 +491,7 @@ static void analytic_interaction(const ts_shape *s, const ts_ray *ray, const obj
         v = p.z / hgt;
         dpdu = (ts_dvec3){-phi_max * p.y, phi_max * p.x, 0};
         dpdv = (ts_dvec3){0, 0, hgt};
+        d2uu = ts_dvec3_scale((ts_dvec3){p.x, p.y, 0}, -phi_max * phi_max);
         n_obj = (ts_dvec3){p.x, p.y, 0};
         break;
     }
@@ -487,11 +517,21 @@ static void analytic_interaction(const ts_shape *s, const ts_ray *ray, const obj
      * handedness, so the result is M^-T·n_obj, the front side of docs/design.md §4
      * (outwards, or the disk's +z side), flipped again by ReverseOrientation. */
     ts_dvec3 n_w = ts_dvec3_normalize(ts_xform_normal(X, n_obj));
+    /* ∂n/∂u, ∂n/∂v (a disk's second derivatives are 0, so are its): of the unit object
+     * normal, then of the world normal, turned with it. */
+    ts_dvec3 N = ts_dvec3_normalize(n_obj), dndu, dndv;
+    weingarten(N, dpdu, dpdv, d2uu, d2uv, d2vv, &dndu, &dndv);
+    dndu = world_normal_derivative(X, N, n_w, dndu);
+    dndv = world_normal_derivative(X, N, n_w, dndv);
+    double sign = s->reverse_orientation ? -1 : 1;
     if (s->reverse_orientation) n_w = ts_dvec3_scale(n_w, -1);
     si->n = ts_dvec3_to_vec3(n_w);
     si->ns = si->n;
     si->dpdu = ts_dvec3_to_vec3(ts_xform_vector(X, dpdu));
     si->dpdv = ts_dvec3_to_vec3(ts_xform_vector(X, dpdv));
+    si->dndu = ts_dvec3_to_vec3(ts_dvec3_scale(dndu, sign));
+    si->dndv = ts_dvec3_to_vec3(ts_dvec3_scale(dndv, sign));
+    si->mesh_normals = false;
     si->uv = (ts_vec2){(float)u, (float)v};
     si->wo = to_unit_f(ts_dvec3_scale(ts_dvec3_from(ray->d), -1));
     si->t = (float)h->t;
@@ -588,17 +628,38 @@ static void triangle_interaction(const ts_shape *s, const ts_tri_cache *c, uint3
     si->p_error = round_up_v((ts_dvec3){g7 * ab.x + slide, g7 * ab.y + slide, g7 * ab.z + slide});
     si->n = c->n;
 
-    /* Shading normal: interpolated vertex normals, on n's side. */
+    /* Shading normal: interpolated vertex normals, on n's side; ∂n/∂u, ∂n/∂v as pbrt-v3's
+     * Triangle::Intersect: of the interpolated normal, from the vertex normals' and the
+     * uvs' differences (default uvs (0,0), (1,0), (1,1)), turned with ns. */
     si->ns = si->n;
+    si->dndu = si->dndv = (ts_vec3){0, 0, 0};
+    si->mesh_normals = mesh->n != NULL;
     if (mesh->n) {
         ts_dvec3 n_d = N_len > 0 ? ts_dvec3_scale(N, 1 / N_len) : (ts_dvec3){0, 0, 1};
         const float *n0 = mesh->n + 3 * tr.i0, *n1 = mesh->n + 3 * tr.i1, *n2 = mesh->n + 3 * tr.i2;
         ts_dvec3 ns = {b0 * n0[0] + b1 * n1[0] + b2 * n2[0], b0 * n0[1] + b1 * n1[1] + b2 * n2[1],
                        b0 * n0[2] + b1 * n1[2] + b2 * n2[2]};
+        double sign = 1;
         if (ts_dvec3_length(ns) > 0) {
             ns = ts_dvec3_normalize(ns);
-            if (ts_dvec3_dot(ns, n_d) < 0) ns = ts_dvec3_scale(ns, -1);
+            if (ts_dvec3_dot(ns, n_d) < 0) ns = ts_dvec3_scale(ns, -1), sign = -1;
             si->ns = ts_dvec3_to_vec3(ns);
+        }
+        double uv[3][2] = {{0, 0}, {1, 0}, {1, 1}};
+        if (mesh->uv) {
+            uint32_t ids[3] = {tr.i0, tr.i1, tr.i2};
+            for (int k = 0; k < 3; k++)
+                uv[k][0] = mesh->uv[2 * ids[k]], uv[k][1] = mesh->uv[2 * ids[k] + 1];
+        }
+        double du02 = uv[0][0] - uv[2][0], dv02 = uv[0][1] - uv[2][1];
+        double du12 = uv[1][0] - uv[2][0], dv12 = uv[1][1] - uv[2][1];
+        double det = du02 * dv12 - dv02 * du12;
+        if (det != 0) {
+            ts_dvec3 dn1 = {(double)n0[0] - n2[0], (double)n0[1] - n2[1], (double)n0[2] - n2[2]};
+            ts_dvec3 dn2 = {(double)n1[0] - n2[0], (double)n1[1] - n2[1], (double)n1[2] - n2[2]};
+            double inv = sign / det;
+            si->dndu = ts_dvec3_to_vec3(ts_dvec3_scale(ts_dvec3_sub(ts_dvec3_scale(dn1, dv12), ts_dvec3_scale(dn2, dv02)), inv));
+            si->dndv = ts_dvec3_to_vec3(ts_dvec3_scale(ts_dvec3_sub(ts_dvec3_scale(dn2, du02), ts_dvec3_scale(dn1, du12)), inv));
         }
     }
 

@@ -97,7 +97,13 @@ bool ts_shape_intersect(const ts_shape *s, const ts_ray *ray, float tmax, float 
 
 /* The full interaction of a hit found by traversal: shape s, primitive prim, parameter t
  * along ray (triangles: recomputed in double from the ray, not from Embree's barycentrics).
- * Fills p, p_error, n, ns, dpdu, dpdv, uv, wo, t, shape index (shape_index), prim. */
+ * Fills p, p_error, n, ns, dpdu, dpdv, dndu, dndv, uv, wo, t, shape index (shape_index),
+ * prim, mesh_normals. ∂ns/∂u, ∂ns/∂v are pbrt-v3's: spheres and cylinders by the
+ * Weingarten equations of their parameterisation (in object space; then the derivative
+ * of the world normal, so a scaled shape's are its world curvature's), disks 0; triangles
+ * of a mesh with normals the derivatives of the interpolated (unnormalised) vertex normal
+ * in (u, v) (0 when the uvs are degenerate), without normals 0. Each is the derivative of
+ * ns as it faces: turned with it by ReverseOrientation or a flipped vertex normal. */
 void ts_shape_interaction(const ts_shape *s, uint32_t shape_index, uint32_t prim, const ts_ray *ray, float t,
                           ts_interaction *si);
 

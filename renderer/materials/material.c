@@ -88,28 +88,50 @@ bool ts_material_uses_textures(const ts_material *m)
            (m->has_vroughness && m->vroughness.tex) || m->opacity.tex || m->amount.tex || m->bump;
 }
 
-void ts_material_bump(const ts_material *m, ts_interaction *si, const ts_texture_context *c)
+/* pbrt-v3's Material::Bump of displacement texture d on si's shading frame. */
+static void bump(const ts_texture *d, ts_interaction *si, const ts_texture_context *c)
 {
-    if (!m->bump) return;
-    c = context(c);
     float du = .5f * (fabsf(c->dudx) + fabsf(c->dudy));
     if (du == 0) du = .0005f;
     float dv = .5f * (fabsf(c->dvdx) + fabsf(c->dvdy));
     if (dv == 0) dv = .0005f;
+    /* The shading tangents: ∂p/∂u, ∂p/∂v, or with vertex normals the unit frame about ns
+     * (pbrt-v3's Triangle: ss along ∂p/∂u made orthogonal to ns, ts = ns × ss). */
+    ts_vec3 dpdu = si->dpdu, dpdv = si->dpdv;
+    if (si->mesh_normals) {
+        ts_vec3 ts = ts_vec3_cross(si->ns, dpdu);
+        float len = ts_vec3_length(ts);
+        if (len > 0 && isfinite(len)) {
+            ts = ts_vec3_scale(ts, 1 / len);
+            dpdu = ts_vec3_cross(ts, si->ns);
+            dpdv = ts;
+        } else {
+            ts_coordinate_system(si->ns, &dpdu, &dpdv);
+        }
+    }
     ts_texture_context e = *c;
-    e.p = ts_vec3_add(c->p, ts_vec3_scale(c->dpdu, du));
+    e.p = ts_vec3_add(c->p, ts_vec3_scale(dpdu, du));
     e.uv = (ts_vec2){c->uv.x + du, c->uv.y};
-    float u_displace = ts_texture_eval_float(m->bump, &e);
-    e.p = ts_vec3_add(c->p, ts_vec3_scale(c->dpdv, dv));
+    float u_displace = ts_texture_eval_float(d, &e);
+    e.p = ts_vec3_add(c->p, ts_vec3_scale(dpdv, dv));
     e.uv = (ts_vec2){c->uv.x, c->uv.y + dv};
-    float v_displace = ts_texture_eval_float(m->bump, &e);
-    float displace = ts_texture_eval_float(m->bump, c);
-    ts_vec3 dpdu = ts_vec3_add(si->dpdu, ts_vec3_scale(si->ns, (u_displace - displace) / du));
-    ts_vec3 dpdv = ts_vec3_add(si->dpdv, ts_vec3_scale(si->ns, (v_displace - displace) / dv));
-    ts_vec3 n = ts_vec3_cross(dpdu, dpdv);
+    float v_displace = ts_texture_eval_float(d, &e);
+    float displace = ts_texture_eval_float(d, c);
+    /* ∂/∂u of p + d·ns: the tangent, the displacement's slope along ns, and d·∂ns/∂u. */
+    ts_vec3 bu = ts_vec3_add(ts_vec3_add(dpdu, ts_vec3_scale(si->ns, (u_displace - displace) / du)),
+                             ts_vec3_scale(si->dndu, displace));
+    ts_vec3 bv = ts_vec3_add(ts_vec3_add(dpdv, ts_vec3_scale(si->ns, (v_displace - displace) / dv)),
+                             ts_vec3_scale(si->dndv, displace));
+    ts_vec3 n = ts_vec3_cross(bu, bv);
     float len = ts_vec3_length(n);
     if (!(len > 0) || !isfinite(len)) return;
     si->ns = ts_vec3_faceforward(ts_vec3_scale(n, 1 / len), si->n);
+}
+
+void ts_material_bump(const ts_material *m, ts_interaction *si, const ts_texture_context *c)
+{
+    c = context(c);
+    if (m->bump) bump(m->bump, si, c);
 }
 
 void ts_material_texture_context(const ts_interaction *si, ts_texture_context *c)

@@ -113,12 +113,14 @@ int ts_material_max_lobes(const ts_material *m);
 
 /* pbrt-v3's Material::Bump: with displacement d = m->bump at c, and du = ½(|∂u/∂x| +
  * |∂u/∂y|) of c's footprint (0.0005 without one), likewise dv, the displaced tangents are
- *   ∂p'/∂u = ∂p/∂u + (d(u + du) − d(u))/du · ns,  ∂p'/∂v likewise,
+ *   ∂p'/∂u = ∂p/∂u + (d(u + du) − d(u))/du · ns + d(u)·∂ns/∂u,  ∂p'/∂v likewise,
  * (d(u + du) read at p + du·∂p/∂u, uv + (du, 0)), and si->ns becomes normalize(∂p'/∂u ×
  * ∂p'/∂v) turned into si->n's hemisphere — pbrt-v3's SetShadingGeometry with the geometric
- * orientation authoritative, which makes its ReverseOrientation/handedness flip moot. The
- * interaction has no ∂n/∂u, so pbrt-v3's d·∂n/∂u terms are 0 (exact on flat surfaces).
- * A degenerate result (zero cross product) leaves si->ns. Nothing when m->bump is NULL. */
+ * orientation authoritative, which makes its ReverseOrientation/handedness flip moot.
+ * ∂p/∂u, ∂p/∂v are the shading tangents: si's, or with vertex normals (si->mesh_normals)
+ * pbrt-v3's unit frame about ns (ss = ∂p/∂u made orthogonal to ns, ts = ns × ss);
+ * ∂ns/∂u, ∂ns/∂v are si's (geometry/shape.h). A degenerate result (zero cross product)
+ * leaves si->ns. Nothing when m->bump is NULL. */
 void ts_material_bump(const ts_material *m, ts_interaction *si, const struct ts_texture_context *c);
 
 /* Textured values are clamped into these: η of a dielectric below the minimum is raised
