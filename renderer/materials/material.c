@@ -132,6 +132,11 @@ void ts_material_bump(const ts_material *m, ts_interaction *si, const ts_texture
 {
     c = context(c);
     if (m->bump) bump(m->bump, si, c);
+    /* pbrt-v3's MixMaterial: the first material computes on the interaction itself, the
+     * second on a copy; the mixed BSDF keeps the first's frame (mix_bsdf), so the first's
+     * bump maps (a mix's, recursively) make the shading normal and the second's cannot
+     * show. */
+    if (m->type == TS_MATERIAL_MIX && m->mix[0]) ts_material_bump(m->mix[0], si, c);
 }
 
 void ts_material_texture_context(const ts_interaction *si, ts_texture_context *c)

@@ -120,7 +120,9 @@ int ts_material_max_lobes(const ts_material *m);
  * ∂p/∂u, ∂p/∂v are the shading tangents: si's, or with vertex normals (si->mesh_normals)
  * pbrt-v3's unit frame about ns (ss = ∂p/∂u made orthogonal to ns, ts = ns × ss);
  * ∂ns/∂u, ∂ns/∂v are si's (geometry/shape.h). A degenerate result (zero cross product)
- * leaves si->ns. Nothing when m->bump is NULL. */
+ * leaves si->ns. A mix then bumps with its first material (recursively), as pbrt-v3's
+ * MixMaterial does: the second bumps a copy of the frame the mixed BSDF does not use.
+ * Nothing when no bump map applies. */
 void ts_material_bump(const ts_material *m, ts_interaction *si, const struct ts_texture_context *c);
 
 /* Textured values are clamped into these: η of a dielectric below the minimum is raised

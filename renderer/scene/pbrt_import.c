@@ -783,7 +783,8 @@ static ts_status make_material(imp *im, int32_t mi, ts_material *m, bool *no_sur
         *no_surface = true;
         return TS_OK;
     }
-    TRY(get_bump(im, ps, m));
+    /* pbrt-v3's MixMaterial reads no bumpmap (its materials' own apply): left unused, warned. */
+    if (strcmp(type, "mix") != 0) TRY(get_bump(im, ps, m));
     if (strcmp(type, "matte") == 0) {
         m->type = TS_MATERIAL_DIFFUSE;
         *json_type = "diffuse";
