@@ -1,10 +1,18 @@
 /* differential.c — ray differentials; see differential.h. The specular rules are
- * pbrt-v3's, in its order of operations, with ∂n/∂x = ∂n/∂y = 0 (differential.h). */
+ * pbrt-v3's, in its order of operations, with its ∂n/∂x = ∂n/∂u·∂u/∂x + ∂n/∂v·∂v/∂x. */
 #include "integrators/differential.h"
 
 #include <math.h>
 
 #include "materials/material.h"
+
+/* The shading normal's change per pixel in x (*dndx) and y: pbrt-v3's from the
+ * interaction's ∂n/∂u, ∂n/∂v and the footprint's ∂u/∂x, …. */
+static void normal_footprint(const ts_interaction *si, const ts_texture_context *c, ts_vec3 *dndx, ts_vec3 *dndy)
+{
+    *dndx = ts_vec3_add(ts_vec3_scale(si->dndu, c->dudx), ts_vec3_scale(si->dndv, c->dvdx));
+    *dndy = ts_vec3_add(ts_vec3_scale(si->dndu, c->dudy), ts_vec3_scale(si->dndv, c->dvdy));
+}
 
 static ts_vec3 lerp_towards(ts_vec3 main, ts_vec3 offset, float s)
 {
@@ -36,7 +44,8 @@ void ts_ray_differential_reflect(const ts_ray_differential *rd, const ts_interac
                                  const ts_texture_context *c, ts_vec3 wi, ts_ray_differential *out)
 {
     const ts_vec3 wo = si->wo, ns = si->ns;
-    const ts_vec3 dndx = {0, 0, 0}, dndy = {0, 0, 0};
+    ts_vec3 dndx, dndy;
+    normal_footprint(si, c, &dndx, &dndy);
     out->has = true;
     out->rx_o = ts_vec3_add(si->p, c->dpdx);
     out->ry_o = ts_vec3_add(si->p, c->dpdy);
@@ -57,7 +66,8 @@ void ts_ray_differential_transmit(const ts_ray_differential *rd, const ts_intera
                                   ts_ray_differential *out)
 {
     const ts_vec3 wo = si->wo;
-    ts_vec3 ns = si->ns, dndx = {0, 0, 0}, dndy = {0, 0, 0};
+    ts_vec3 ns = si->ns, dndx, dndy;
+    normal_footprint(si, c, &dndx, &dndy);
     out->has = true;
     out->rx_o = ts_vec3_add(si->p, c->dpdx);
     out->ry_o = ts_vec3_add(si->p, c->dpdy);

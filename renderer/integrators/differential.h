@@ -12,9 +12,9 @@
  * integrator, as pbrt-v3's PathIntegrator, has them on camera rays only. Every other
  * ray has none, and its hits point-sample textures.
  *
- * **Departure:** the interaction carries no ∂n/∂u, ∂n/∂v, so the specular rules take the
- * shading normal's screen derivatives as zero: exact for flat mirrors and interfaces, a
- * narrower footprint than pbrt-v3's after a curved one. Pure and thread-safe. */
+ * The rules take the shading normal's screen derivatives as pbrt-v3 does, ∂n/∂x =
+ * ∂n/∂u·∂u/∂x + ∂n/∂v·∂v/∂x from the interaction's ∂n/∂u, ∂n/∂v (geometry/shape.h), so a
+ * curved mirror or interface spreads the footprint as in pbrt-v3. Pure and thread-safe. */
 #ifndef TS_DIFFERENTIAL_H
 #define TS_DIFFERENTIAL_H
 
