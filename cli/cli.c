@@ -26,6 +26,7 @@
 #include "outputs.h"
 #include "serve.h"
 #include "tessera.h"
+#include "usage.h"
 
 
 static void usage(FILE *f)
@@ -77,22 +78,8 @@ static void render_usage(FILE *f)
             "by a signal with --checkpoint (the checkpoint saved).\n");
 }
 
-static int usage_error(const char *fmt, const char *arg)
-{
-    fprintf(stderr, "tessera: ");
-    fprintf(stderr, fmt, arg);
-    fprintf(stderr, "\n");
-    usage(stderr);
-    return 2;
-}
-
-static int render_usage_error(const char *fmt, const char *arg)
-{
-    fprintf(stderr, "tessera render: ");
-    fprintf(stderr, fmt, arg);
-    fprintf(stderr, "\n(tessera render --help lists the options)\n");
-    return 2;
-}
+#define usage_error(...) (srv_usage_error("tessera", usage, __VA_ARGS__), SRV_USAGE_EXIT)
+#define render_usage_error(...) (srv_usage_error("tessera render", NULL, __VA_ARGS__), SRV_USAGE_EXIT)
 
 /* A relative error as "0.01" or "1%": in (0, 1). */
 static bool parse_relative_error(const char *s, double *out)
@@ -211,7 +198,7 @@ static int parse_render_options(int argc, char **argv, render_opts *o)
     o->scene_path = optind < argc ? argv[optind] : NULL;
     const char *unsupported = cli_outputs_unsupported(&o->outputs);
     if (unsupported) return render_usage_error("-o %s: the extension must be .exr or .png", unsupported);
-    if (o->shard_count && !o->shard_text) return render_usage_error("%s", "--shard-count goes with --shard auto");
+    if (o->shard_count && !o->shard_text) return render_usage_error("--shard-count goes with --shard auto");
     if (o->shard_text && o->outputs.n > 0) {
         bool exr = false;
         for (int i = 0; i < o->outputs.n; i++) exr = exr || cli_output_is_exr(o->outputs.path[i]);

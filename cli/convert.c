@@ -18,6 +18,7 @@
 
 #include "diagnostics.h"
 #include "tessera.h"
+#include "usage.h"
 
 static void convert_usage(FILE *f)
 {
@@ -31,13 +32,7 @@ static void convert_usage(FILE *f)
             "Exit status: 0 written, 1 the scene was refused or OUT could not be written, 2 usage error.\n");
 }
 
-static int convert_usage_error(const char *fmt, const char *arg)
-{
-    fprintf(stderr, "tessera convert: ");
-    fprintf(stderr, fmt, arg);
-    fprintf(stderr, "\n(tessera convert --help lists the options)\n");
-    return 2;
-}
+#define convert_usage_error(...) (srv_usage_error("tessera convert", NULL, __VA_ARGS__), SRV_USAGE_EXIT)
 
 static void quiet_warning(void *ctx, const char *message) { (void)ctx, (void)message; }
 
@@ -67,7 +62,7 @@ int cli_convert(int argc, char **argv)
     for (int c; (c = getopt_long(argc, argv, "o:", opts, NULL)) != -1;) {
         switch (c) {
         case 'o':
-            if (out_path) return convert_usage_error("-o given twice%s", "");
+            if (out_path) return convert_usage_error("-o given twice");
             out_path = optarg;
             break;
         case OPT_QUIET:
@@ -80,7 +75,7 @@ int cli_convert(int argc, char **argv)
             return convert_usage_error("unknown or incomplete option '%s'", argv[optind - 1]);
         }
     }
-    if (optind != argc - 1) return convert_usage_error("expected one scene file%s", "");
+    if (optind != argc - 1) return convert_usage_error("expected one scene file");
     const char *scene = argv[optind];
     if (ts_scene_format_of(scene, NULL, 0) == TS_SCENE_FORMAT_JSON && strstr(scene, ".json"))
         return convert_usage_error("'%s' is a scene document already; convert reads pbrt-v3 scenes", scene);

@@ -11,6 +11,7 @@
 
 #include "outputs.h"
 #include "tessera.h"
+#include "usage.h"
 
 static void usage(FILE *f)
 {
@@ -23,14 +24,7 @@ static void usage(FILE *f)
                "  --quiet             no summary\n");
 }
 
-static int usage_error(const char *fmt, const char *arg)
-{
-    fprintf(stderr, "tessera merge: ");
-    fprintf(stderr, fmt, arg);
-    fprintf(stderr, "\n");
-    usage(stderr);
-    return 2;
-}
+#define usage_error(...) (srv_usage_error("tessera merge", usage, __VA_ARGS__), SRV_USAGE_EXIT)
 
 int cli_merge(int argc, char **argv)
 {
@@ -57,9 +51,9 @@ int cli_merge(int argc, char **argv)
         default: return usage_error("unknown option '%s'", argv[optind - 1]);
         }
     }
-    if (optind >= argc) return usage_error("%s", "no shard files given");
+    if (optind >= argc) return usage_error("no shard files given");
     if (outputs.n == 0)
-        return usage_error("%s", "no output: give -o MERGED.exr (mergeable again) and/or -o MERGED.png");
+        return usage_error("no output: give -o MERGED.exr (mergeable again) and/or -o MERGED.png");
     const char *unsupported = cli_outputs_unsupported(&outputs);
     if (unsupported) return usage_error("-o %s: the extension must be .exr or .png", unsupported);
 

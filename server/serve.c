@@ -19,6 +19,7 @@
 #include <unistd.h>
 
 #include "persist.h"
+#include "usage.h"
 #include "tessera.h"
 
 #define KEEPALIVE_S 15.0
@@ -71,14 +72,7 @@ static void usage(FILE *f)
             "docs/security.md has the threat model and every limit.\n");
 }
 
-static int usage_error(const char *fmt, const char *arg)
-{
-    fprintf(stderr, "tessera serve: ");
-    fprintf(stderr, fmt, arg);
-    fprintf(stderr, "\n");
-    usage(stderr);
-    return 2;
-}
+#define usage_error(...) (srv_usage_error("tessera serve", usage, __VA_ARGS__), SRV_USAGE_EXIT)
 
 /* The first line of FILE, without its line end or trailing blanks (malloc'd), or NULL with
  * a sentence in msg. The token itself is never echoed. */
@@ -416,7 +410,7 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
             break;
         case OPT_DATA: cfg->data_dir = optarg; break;
         case OPT_TOKEN:
-            if (!optarg[0]) return usage_error("--token: expected a non-empty token%s", "");
+            if (!optarg[0]) return usage_error("--token: expected a non-empty token");
             cfg->token = optarg;
             break;
         case OPT_TOKEN_FILE: token_file = optarg; break;
@@ -532,7 +526,7 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
         }
     }
     if (optind < argc) return usage_error("unexpected argument '%s'", argv[optind]);
-    if (token_file && cfg->token) return usage_error("--token and --token-file: give one of them%s", "");
+    if (token_file && cfg->token) return usage_error("--token and --token-file: give one of them");
     owned[0] = owned[1] = NULL;
     if (token_file) {
         char msg[256];

@@ -150,6 +150,36 @@ static void test_usage_errors_exit_2(void **state)
     assert_int_equal(run(a5), 2);
 }
 
+/* Every command words a usage error alike (server/usage.c): "tessera COMMAND: " and the
+ * sentence as the first line of stderr, then the command's usage text (the short ones) or
+ * where to find it. A '%' in a sentence comes out once. */
+static void test_usage_error_lines(void **state)
+{
+    (void)state;
+    static const struct {
+        const char *args[4], *first, *then;
+    } cases[] = {
+        {{"frobnicate"}, "tessera: unknown command 'frobnicate'\n", "usage: tessera COMMAND [OPTIONS]\n"},
+        {{"render", "--bogus"}, "tessera render: unknown option '--bogus'\n", "(tessera render --help lists the options)\n"},
+        {{"render", "--target-error", "10"},
+         "tessera render: --target-error: expected a relative error above 0 and below 1, as 0.01 or 1%, got '10'\n",
+         "(tessera render --help lists the options)\n"},
+        {{"convert", "a.pbrt", "b.pbrt"}, "tessera convert: expected one scene file\n",
+         "(tessera convert --help lists the options)\n"},
+        {{"merge", "x.exr"}, "tessera merge: no output: give -o MERGED.exr (mergeable again) and/or -o MERGED.png\n",
+         "usage: tessera merge "},
+        {{"serve", "--token", ""}, "tessera serve: --token: expected a non-empty token\n", "usage: tessera serve [OPTIONS]\n"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+        assert_int_equal(run(cases[i].args), 2);
+        const char *log = read_log();
+        size_t n = strlen(cases[i].first);
+        if (strncmp(log, cases[i].first, n) || strncmp(log + n, cases[i].then, strlen(cases[i].then)))
+            fail_msg("tessera %s: stderr reads\n%.300s\nexpected\n%s%s…", cases[i].args[0], log, cases[i].first,
+                     cases[i].then);
+    }
+}
+
 /* What a new user meets: no -o writes NAME.exr and says so; merge needs -o; a shard needs
  * an EXR; --target-error takes 0.01 or 1% and refuses 1 or more; --help lists every option. */
 static void test_honest_command_line(void **state)
@@ -221,6 +251,7 @@ int main(void)
         cmocka_unit_test(test_bad_scene_exit_1_and_nothing_written),
         cmocka_unit_test(test_long_string_refused_before_rendering),
         cmocka_unit_test(test_usage_errors_exit_2),
+        cmocka_unit_test(test_usage_error_lines),
         cmocka_unit_test(test_honest_command_line),
         cmocka_unit_test(test_builtin_default),
     };
