@@ -106,6 +106,18 @@ shared_dir() {
     if [ "$(id -u)" = 0 ]; then chown -R 10001:10001 "$1"; else chmod -R a+rwX "$1"; fi
 }
 json_field() { sed -n "s/.*\"$2\":\"\{0,1\}\([^,\"}]*\).*/\1/p" "$1" | head -n 1; }
+# Polls the server at $URL until job $1 has ended (600 polls 0.2 s apart); fails unless it
+# is done, naming it as $2 with its status.
+wait_done() {
+    local state=""
+    for _ in $(seq 600); do
+        curl -sS --max-time 10 "$URL/api/v1/jobs/$1" >"$T/status.json" || true
+        state=$(json_field "$T/status.json" state)
+        case $state in done | failed | cancelled) break ;; esac
+        sleep 0.2
+    done
+    [ "$state" = done ] || fail "$2 $1 ended '$state': $(cat "$T/status.json")"
+}
 
 # ---- 1. serve ----
 part=$(date +%s.%N)
@@ -144,14 +156,7 @@ curl -sS --max-time 30 -X POST -H 'Content-Type: application/json' --data-binary
     "$URL/api/v1/jobs" >"$T/post.json" || fail "POST /api/v1/jobs failed"
 id=$(json_field "$T/post.json" id)
 [ -n "$id" ] || fail "the job was not created: $(cat "$T/post.json")"
-state=""
-for _ in $(seq 600); do
-    curl -sS --max-time 10 "$URL/api/v1/jobs/$id" >"$T/status.json" || true
-    state=$(json_field "$T/status.json" state)
-    case $state in done | failed | cancelled) break ;; esac
-    sleep 0.2
-done
-[ "$state" = done ] || fail "job $id ended '$state': $(cat "$T/status.json")"
+wait_done "$id" job
 curl -sSf --max-time 30 -o "$T/job.exr" "$URL/api/v1/jobs/$id/image.exr" || fail "GET image.exr failed"
 "$TS_EXR_COMPARE" "$T/cli.exr" "$T/job.exr" >"$T/cmp.txt" 2>&1 || fail "the job's EXR differs from the CLI's: $(cat "$T/cmp.txt")"
 log "serve: job $id over HTTP, its EXR equals tessera render's ($(cat "$T/cmp.txt"))"
@@ -163,13 +168,7 @@ curl -sS --max-time 30 -X POST -H 'Content-Type: application/x-tar' --data-binar
     "$URL/api/v1/jobs" >"$T/post-bundle.json" || fail "POST of a bundle failed"
 bid=$(json_field "$T/post-bundle.json" id)
 [ -n "$bid" ] || fail "the bundle job was not created: $(cat "$T/post-bundle.json")"
-for _ in $(seq 600); do
-    curl -sS --max-time 10 "$URL/api/v1/jobs/$bid" >"$T/status.json" || true
-    state=$(json_field "$T/status.json" state)
-    case $state in done | failed | cancelled) break ;; esac
-    sleep 0.2
-done
-[ "$state" = done ] || fail "bundle job $bid ended '$state': $(cat "$T/status.json")"
+wait_done "$bid" "bundle job"
 curl -sSf --max-time 30 -o "$T/bundle.exr" "$URL/api/v1/jobs/$bid/image.exr" || fail "GET the bundle job's image.exr failed"
 "$TS_EXR_COMPARE" "$T/cli.exr" "$T/bundle.exr" >"$T/cmp.txt" 2>&1 || fail "the bundle job's EXR differs from the CLI's: $(cat "$T/cmp.txt")"
 log "serve: a gzip tar bundle as job $bid, its EXR equals tessera render's"
