@@ -209,7 +209,8 @@ static void test_same_scene_as_json(void **state)
 }
 
 /* A mirroring transform reverses the winding: the triangle keeps facing +y (as in object
- * space) and the normals are normalised in world space. */
+ * space), and the normals go through the inverse transpose keeping their lengths (which
+ * weight their interpolation, as in pbrt-v3): y scaled by 4 divides them by 4, exactly. */
 static void test_mesh_to_world(void **state)
 {
     (void)state;
@@ -218,7 +219,7 @@ static void test_mesh_to_world(void **state)
     static const float n[] = {0, 2, 0, 0, 3, 0, 0, 1, 0, 0, 0.5f, 0};
     ts_shape_desc d = quad();
     d.mesh.n = n;
-    d.to_world = ts_xform_scale((ts_dvec3){1, 1, -2});
+    d.to_world = ts_xform_scale((ts_dvec3){1, 4, -2});
     uint32_t id = 9;
     ok(ts_scene_builder_add_shape(b, &d, &id, &err), &err);
     assert_int_equal(id, 0);
@@ -235,8 +236,11 @@ static void test_mesh_to_world(void **state)
     /* object space: (p1 − p0) × (p2 − p0) of triangle 0, 2, 1 points along +y */
     ts_vec3 f = ts_vec3_cross(ts_vec3_sub(p[1], p[0]), ts_vec3_sub(p[2], p[0]));
     assert_true(f.y > 0);
-    for (uint32_t v = 0; v < 4; v++)
-        assert_float_equal(m->n[3 * v + 1], 1, 0);
+    for (uint32_t v = 0; v < 4; v++) {
+        assert_float_equal(m->n[3 * v], 0, 0);
+        assert_float_equal(m->n[3 * v + 1], n[3 * v + 1] / 4, 0);
+        assert_float_equal(m->n[3 * v + 2], 0, 0);
+    }
     assert_float_equal(m->p[2], 2, 0); /* z = −1 scaled by −2 */
     ts_scene_destroy(s);
 }

@@ -303,9 +303,10 @@ ts_status ts_mesh_loop_subdivide(const float *p, uint32_t n_vertices, const uint
     out->n = malloc(3 * (size_t)L.nv * sizeof *out->n);
     out->index = malloc(3 * (size_t)L.nf * sizeof *out->index);
     uint32_t *ring = malloc(((size_t)max_count(&L) + 2) * sizeof *ring);
-    ts_dvec3 *wind = calloc((size_t)L.nv, sizeof *wind);
-    if (!out->p || !out->n || !out->index || !ring || !wind) {
-        free(ring), free(wind);
+    ts_dvec3 *wind = calloc((size_t)L.nv, sizeof *wind), *lim = malloc((size_t)L.nv * sizeof *lim),
+             *nrm = malloc((size_t)L.nv * sizeof *nrm);
+    if (!out->p || !out->n || !out->index || !ring || !wind || !lim || !nrm) {
+        free(ring), free(wind), free(lim), free(nrm);
         st = nomem(err);
         goto done;
     }
@@ -315,13 +316,27 @@ ts_status ts_mesh_loop_subdivide(const float *p, uint32_t n_vertices, const uint
         ts_dvec3 a = ts_dvec3_cross(ts_dvec3_sub(L.p[v[1]], L.p[v[0]]), ts_dvec3_sub(L.p[v[2]], L.p[v[0]]));
         for (int k = 0; k < 3; k++) wind[v[k]] = ts_dvec3_add(wind[v[k]], a);
     }
+    /* Every vertex to its limit position first: pbrt-v3 then takes the tangent masks over
+     * the pushed positions (its one-ring reads them), not over the last level's. */
     for (uint32_t i = 0; i < L.nv; i++) {
-        ts_dvec3 q = L.p[i], n = {0, 0, 1};
+        lim[i] = L.p[i];
+        if (L.start[i] == NONE) continue;
+        uint32_t k = one_ring(&L, i, ring);
+        lim[i] = L.boundary[i] ? weight_boundary(&L, i, ring, k, BOUNDARY_LIMIT)
+                               : weight_one_ring(&L, i, ring, k, loop_gamma(k));
+    }
+    free(L.p);
+    L.p = lim;
+    /* Normals S × T as pbrt-v3 leaves them, unnormalised: its triangles interpolate them
+     * with their lengths (a high-valence vertex, whose tangent sums are long, weighs more),
+     * so the lengths are kept, the whole mesh scaled by one power of two to stay in float. */
+    double n_max = 0;
+    for (uint32_t i = 0; i < L.nv; i++) {
+        ts_dvec3 n = wind[i];
         if (L.start[i] != NONE) {
             uint32_t k = one_ring(&L, i, ring);
             ts_dvec3 S = {0, 0, 0}, T = {0, 0, 0};
             if (L.boundary[i]) {
-                q = weight_boundary(&L, i, ring, k, BOUNDARY_LIMIT);
                 S = ts_dvec3_sub(L.p[ring[k - 1]], L.p[ring[0]]);
                 if (k == 2) {
                     T = ts_dvec3_sub(ts_dvec3_add(L.p[ring[0]], L.p[ring[1]]), ts_dvec3_scale(L.p[i], 2));
@@ -340,27 +355,39 @@ ts_status ts_mesh_loop_subdivide(const float *p, uint32_t n_vertices, const uint
                     T = ts_dvec3_scale(T, -1);
                 }
             } else {
-                q = weight_one_ring(&L, i, ring, k, loop_gamma(k));
                 for (uint32_t j = 0; j < k; j++) {
                     S = ts_dvec3_add(S, ts_dvec3_scale(L.p[ring[j]], cos(2 * TS_PI_D * j / k)));
                     T = ts_dvec3_add(T, ts_dvec3_scale(L.p[ring[j]], sin(2 * TS_PI_D * j / k)));
                 }
             }
-            n = ts_dvec3_cross(S, T);
-            double len = ts_dvec3_length(n);
-            if (!(len > 0) || !isfinite(len)) n = wind[i], len = ts_dvec3_length(n);
-            n = len > 0 && isfinite(len) ? ts_dvec3_scale(n, 1 / len) : (ts_dvec3){0, 0, 1};
+            ts_dvec3 c = ts_dvec3_cross(S, T);
+            double len = ts_dvec3_length(c);
+            /* A degenerate ring: the winding's area vector (a length² as S × T is). */
+            if (len > 0 && isfinite(len)) n = c;
             if (ts_dvec3_dot(n, wind[i]) < 0) n = ts_dvec3_scale(n, -1);
         }
+        double len = ts_dvec3_length(n);
+        if (!(len > 0 && isfinite(len))) n = (ts_dvec3){0, 0, 1}, len = 1;
+        nrm[i] = n;
+        n_max = fmax(n_max, len);
+    }
+    int e;
+    frexp(n_max, &e);
+    for (uint32_t i = 0; i < L.nv; i++) {
+        ts_dvec3 q = L.p[i], n = ts_dvec3_scale(nrm[i], ldexp(1, -e));
+        /* One 2^60 times shorter than the longest is lengthened to that (its weight was
+         * nil): every normal stays a float whose squared length is non-zero in float. */
+        double len = ts_dvec3_length(n);
+        if (len < 0x1p-60) n = ts_dvec3_scale(n, 0x1p-60 / len);
         out->p[3 * i] = (float)q.x, out->p[3 * i + 1] = (float)q.y, out->p[3 * i + 2] = (float)q.z;
         out->n[3 * i] = (float)n.x, out->n[3 * i + 1] = (float)n.y, out->n[3 * i + 2] = (float)n.z;
         if (!(isfinite(out->p[3 * i]) && isfinite(out->p[3 * i + 1]) && isfinite(out->p[3 * i + 2]))) {
-            free(ring), free(wind);
+            free(ring), free(wind), free(nrm);
             st = ts_error_set(err, TS_ERR_INVALID, "a subdivided vertex is not a finite float");
             goto done;
         }
     }
-    free(ring), free(wind);
+    free(ring), free(wind), free(nrm);
     memcpy(out->index, L.v, 3 * (size_t)L.nf * sizeof *out->index);
     out->n_vertices = L.nv;
     out->n_triangles = L.nf;

@@ -14,8 +14,11 @@
  * mask, where pbrt-v3 has ⅗ and ⅕ — a departure, docs/design.md §4) and gives it the limit
  * normal, the cross product of pbrt-v3's two limit tangents (interior: Σ cos(2πj/k)·p_j
  * and Σ sin(2πj/k)·p_j over the ring; boundary: the chord between the boundary neighbours
- * and pbrt-v3's valence-dependent across tangent). The arithmetic is done in double,
- * rounded to float once at the end.
+ * and pbrt-v3's valence-dependent across tangent), taken as pbrt-v3 takes them: over the
+ * ring's positions already pushed to the limit (and the vertex's own pushed position), and
+ * left unnormalised, since pbrt-v3's triangles interpolate the vertex normals with their
+ * lengths (docs/pbrt-v3.md, the comparison: without either, killeroo-simple's shading
+ * differs visibly). The arithmetic is done in double, rounded to float once at the end.
  *
  * Orientation. Refinement keeps every triangle's winding, so the result faces the way the
  * control mesh does (docs/design.md §4); the normals are turned to the winding's side
@@ -42,8 +45,9 @@
 
 /* Subdivides the control mesh (positions p, 3·n_vertices finite floats; index, 3·n_triangles,
  * each < n_vertices) `levels` times (0 … TS_SUBDIV_MAX_LEVELS; 0 still moves the vertices
- * to the limit surface, as pbrt-v3 does) into *out (malloc-owned, with unit normals, no
- * uvs; free with ts_mesh_data_free). max_triangles bounds the result (0: none).
+ * to the limit surface, as pbrt-v3 does) into *out (malloc-owned, no uvs; free with
+ * ts_mesh_data_free) with pbrt-v3's unnormalised normals, all scaled by one power of two so
+ * the longest is in [½, 1) (none shorter than 2^-60). max_triangles bounds the result (0: none).
  * TS_ERR_INVALID / TS_ERR_LIMIT / TS_ERR_NOMEM with a sentence that names no place (the
  * caller prefixes it); *out is zeroed on failure. */
 ts_status ts_mesh_loop_subdivide(const float *p, uint32_t n_vertices, const uint32_t *index, uint32_t n_triangles,

@@ -795,21 +795,21 @@ static ts_status place_mesh(ts_scene_builder *b, const ts_mesh *m, const ts_xfor
             if (!(fabs(q.x) < 3e38 && fabs(q.y) < 3e38 && fabs(q.z) < 3e38))
                 return ts_error_set(err, TS_ERR_INVALID, "a transformed vertex is not a finite float");
             p[3 * k] = (float)q.x, p[3 * k + 1] = (float)q.y, p[3 * k + 2] = (float)q.z;
-            if (n) {
-                ts_dvec3 w =
-                    ts_dvec3_normalize(ts_xform_normal(xf, (ts_dvec3){n[3 * k], n[3 * k + 1], n[3 * k + 2]}));
-                n[3 * k] = (float)w.x, n[3 * k + 1] = (float)w.y, n[3 * k + 2] = (float)w.z;
-            }
+        }
+        /* Vertex normals keep their lengths, which weight their interpolation as in pbrt-v3
+         * (docs/design.md §4, shapes): transformed by the inverse transpose, a linear map,
+         * then all scaled by one power of two when the longest would leave float's range. */
+        double n_max = 0;
+        for (uint32_t k = 0; n && k < nv; k++)
+            n_max = fmax(n_max, ts_dvec3_length(ts_xform_normal(xf, (ts_dvec3){n[3 * k], n[3 * k + 1], n[3 * k + 2]})));
+        int e = 0;
+        if (n_max > 0x1p64 || n_max < 0x1p-64) frexp(n_max, &e);
+        for (uint32_t k = 0; n && k < nv; k++) {
+            ts_dvec3 w = ts_dvec3_scale(ts_xform_normal(xf, (ts_dvec3){n[3 * k], n[3 * k + 1], n[3 * k + 2]}),
+                                        ldexp(1, -e));
+            n[3 * k] = (float)w.x, n[3 * k + 1] = (float)w.y, n[3 * k + 2] = (float)w.z;
         }
         if (ts_xform_swaps_handedness(xf)) reverse = !reverse;
-    } else if (n) {
-        for (uint32_t k = 0; k < nv; k++) {
-            ts_vec3 v = {n[3 * k], n[3 * k + 1], n[3 * k + 2]};
-            ts_vec3 w = ts_vec3_normalize(v);
-            /* A normal too long or too short for float arithmetic: normalised in double. */
-            if (!ts_vec3_is_finite(w)) w = ts_dvec3_to_vec3(ts_dvec3_normalize(ts_dvec3_from(v)));
-            n[3 * k] = w.x, n[3 * k + 1] = w.y, n[3 * k + 2] = w.z;
-        }
     }
     if (reverse)
         for (uint32_t t = 0; t < nt; t++) {
