@@ -328,8 +328,9 @@ ts_status ts_mesh_loop_subdivide(const float *p, uint32_t n_vertices, const uint
     free(L.p);
     L.p = lim;
     /* Normals S × T as pbrt-v3 leaves them, unnormalised: its triangles interpolate them
-     * with their lengths (a high-valence vertex, whose tangent sums are long, weighs more),
-     * so the lengths are kept, the whole mesh scaled by one power of two to stay in float. */
+     * with their lengths (a high-valence vertex, whose tangent sums are long, weighs more)
+     * and take ∂n/∂u from their differences, so the lengths are kept — the whole mesh scaled
+     * by one power of two only where the longest is outside [2^-8, 2^64]. */
     double n_max = 0;
     for (uint32_t i = 0; i < L.nv; i++) {
         ts_dvec3 n = wind[i];
@@ -371,14 +372,14 @@ ts_status ts_mesh_loop_subdivide(const float *p, uint32_t n_vertices, const uint
         nrm[i] = n;
         n_max = fmax(n_max, len);
     }
-    int e;
-    frexp(n_max, &e);
+    int e = 0;
+    if (n_max > 0x1p64 || n_max < 0x1p-8) frexp(n_max, &e);
     for (uint32_t i = 0; i < L.nv; i++) {
         ts_dvec3 q = L.p[i], n = ts_dvec3_scale(nrm[i], ldexp(1, -e));
-        /* One 2^60 times shorter than the longest is lengthened to that (its weight was
-         * nil): every normal stays a float whose squared length is non-zero in float. */
-        double len = ts_dvec3_length(n);
-        if (len < 0x1p-60) n = ts_dvec3_scale(n, 0x1p-60 / len);
+        /* One over 2^60 times shorter than the longest is lengthened to that (its weight was
+         * nil): every normal's squared length stays non-zero in float. */
+        double len = ts_dvec3_length(n), floor_len = ldexp(n_max, -e - 60);
+        if (len < floor_len) n = ts_dvec3_scale(n, floor_len / len);
         out->p[3 * i] = (float)q.x, out->p[3 * i + 1] = (float)q.y, out->p[3 * i + 2] = (float)q.z;
         out->n[3 * i] = (float)n.x, out->n[3 * i + 1] = (float)n.y, out->n[3 * i + 2] = (float)n.z;
         if (!(isfinite(out->p[3 * i]) && isfinite(out->p[3 * i + 1]) && isfinite(out->p[3 * i + 2]))) {

@@ -46,8 +46,8 @@
 /* Subdivides the control mesh (positions p, 3·n_vertices finite floats; index, 3·n_triangles,
  * each < n_vertices) `levels` times (0 … TS_SUBDIV_MAX_LEVELS; 0 still moves the vertices
  * to the limit surface, as pbrt-v3 does) into *out (malloc-owned, no uvs; free with
- * ts_mesh_data_free) with pbrt-v3's unnormalised normals, all scaled by one power of two so
- * the longest is in [½, 1) (none shorter than 2^-60). max_triangles bounds the result (0: none).
+ * ts_mesh_data_free) with pbrt-v3's unnormalised normals (all scaled by one power of two
+ * only if the longest is outside [2^-8, 2^64]; none shorter than 2^-60 of the longest). max_triangles bounds the result (0: none).
  * TS_ERR_INVALID / TS_ERR_LIMIT / TS_ERR_NOMEM with a sentence that names no place (the
  * caller prefixes it); *out is zeroed on failure. */
 ts_status ts_mesh_loop_subdivide(const float *p, uint32_t n_vertices, const uint32_t *index, uint32_t n_triangles,
