@@ -55,7 +55,7 @@ typedef enum ts_shape_type {
 typedef struct ts_mesh {
     uint32_t n_vertices, n_triangles;
     const float *p;        /* 3·n_vertices, world space */
-    const float *n;        /* 3·n_vertices world-space unit shading normals, or NULL */
+    const float *n;        /* 3·n_vertices world-space shading normals (lengths weight them), or NULL */
     const float *uv;       /* 2·n_vertices, or NULL */
     const uint32_t *index; /* 3·n_triangles, validated < n_vertices */
 } ts_mesh;

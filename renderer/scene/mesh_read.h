@@ -30,7 +30,7 @@ typedef struct ts_mesh_limits {
 typedef struct ts_mesh_data {
     uint32_t n_vertices, n_triangles;
     float *p;        /* 3·n_vertices, malloc-owned */
-    float *n;        /* 3·n_vertices unit normals, or NULL */
+    float *n;        /* 3·n_vertices normals (the file readers' unit, a subdivision's not), or NULL */
     float *uv;       /* 2·n_vertices, or NULL */
     uint32_t *index; /* 3·n_triangles, every index < n_vertices */
 } ts_mesh_data;

@@ -239,7 +239,8 @@ typedef struct ts_shape_desc {
 } ts_shape_desc;
 
 /* Adds a shape and writes its id to *id (may be NULL). A mesh is copied into the arena and
- * taken to world space (normals normalised; a mirroring transform reverses the winding,
+ * taken to world space (normals by the inverse transpose, their lengths kept: they weight
+ * the interpolation as in pbrt-v3; a mirroring transform reverses the winding,
  * so each triangle keeps facing the way it faced in object space); "a transformed vertex is
  * not a finite float" when the transform takes a vertex beyond the float range. At most
  * limits.max_shapes shapes and limits.max_triangles triangles. */
