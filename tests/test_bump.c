@@ -22,6 +22,10 @@
 
 #define HEAD "{\"tessera\":1,\"camera\":{\"from\":[0,0,9],\"to\":[0,0,0]},\"film\":{\"width\":4,\"height\":4},"
 #define PI_D 3.14159265358979323846
+/* A textured material "m": interactions of a scene without textures carry no dn/du
+ * (geometry/shape.h), nothing there reads them. */
+#define TEXTURED_M                                                                                           \
+    "\"textures\":{\"t\":{\"type\":\"checkerboard\"}},\"materials\":{\"m\":{\"type\":\"diffuse\",\"reflectance\":\"t\"}},"
 
 static ts_scene *load(const char *doc)
 {
@@ -55,7 +59,7 @@ static void assert_near(ts_vec3 got, ts_vec3 want, float tol, const char *what)
 static void closed_forms(void **state)
 {
     (void)state;
-    ts_scene *s = load(HEAD "\"materials\":{\"m\":{\"type\":\"diffuse\"}},\"shapes\":["
+    ts_scene *s = load(HEAD TEXTURED_M "\"shapes\":["
                             "{\"type\":\"sphere\",\"radius\":2,\"material\":\"m\",\"transform\":[{\"rotate\":{"
                             "\"angle\":30,\"axis\":[1,1,0]}},{\"scale\":1.5},{\"translate\":[-3,0,0]}]},"
                             "{\"type\":\"sphere\",\"radius\":1,\"center\":[3,0,0],\"reverse_orientation\":true,"
@@ -95,7 +99,7 @@ static void closed_forms(void **state)
 static void ellipsoid_against_differences(void **state)
 {
     (void)state;
-    ts_scene *s = load(HEAD "\"materials\":{\"m\":{\"type\":\"diffuse\"}},\"shapes\":[{\"type\":\"sphere\","
+    ts_scene *s = load(HEAD TEXTURED_M "\"shapes\":[{\"type\":\"sphere\","
                             "\"radius\":1,\"material\":\"m\",\"transform\":[{\"scale\":[1,2,0.5]},{\"rotate\":{"
                             "\"angle\":20,\"axis\":[0,1,0]}}]}]}");
     const ts_xform *X = &s->shapes[0].to_world;
@@ -132,7 +136,7 @@ static void ellipsoid_against_differences(void **state)
 static void triangle_derivatives(void **state)
 {
     (void)state;
-    ts_scene *s = load(HEAD "\"materials\":{\"m\":{\"type\":\"diffuse\"}},\"shapes\":["
+    ts_scene *s = load(HEAD TEXTURED_M "\"shapes\":["
                             "{\"type\":\"mesh\",\"positions\":[-1,-1,0,1,-1,0,-1,1,0],\"indices\":[0,1,2],"
                             "\"uvs\":[0,0,1,0,0,1],\"normals\":[0,0,1,0.6,0,0.8,0,-0.6,0.8],\"material\":\"m\"},"
                             "{\"type\":\"mesh\",\"positions\":[2,-1,0,4,-1,0,2,1,0],\"indices\":[0,1,2],"
@@ -143,6 +147,12 @@ static void triangle_derivatives(void **state)
     assert_near(si.dndv, (ts_vec3){0, -0.6f, -0.2f}, 1e-6f, "dndv");
     si = hit_towards(s, (ts_vec3){2.5f, -0.4f, 5}, (ts_vec3){2.5f, -0.4f, 0});
     assert_false(si.mesh_normals);
+    assert_true(ts_vec3_length(si.dndu) == 0 && ts_vec3_length(si.dndv) == 0);
+    ts_scene_destroy(s);
+    /* Without textures nothing reads them, and they are left 0. */
+    s = load(HEAD "\"materials\":{\"m\":{\"type\":\"diffuse\"}},\"shapes\":[{\"type\":\"sphere\",\"radius\":1,"
+                  "\"material\":\"m\"}]}");
+    si = hit_towards(s, (ts_vec3){0.2f, 0.1f, 5}, (ts_vec3){0.2f, 0.1f, 0});
     assert_true(ts_vec3_length(si.dndu) == 0 && ts_vec3_length(si.dndv) == 0);
     ts_scene_destroy(s);
 }

@@ -118,7 +118,7 @@ static void test_mirror_rule(void **state)
     near3(out.ry_d, my, 1e-6f, "ry direction");
 }
 
-/* A curved mirror (a sphere of radius 1): pbrt-v3's rule with ∂n/∂x = ∂n/∂u·∂u/∂x + …
+/* A curved mirror (a sphere of radius 1, textured: differentials come with textures): pbrt-v3's rule with ∂n/∂x = ∂n/∂u·∂u/∂x + …
  * is the first-order expansion of reflecting the offset ray at its own hit, so it
  * matches that exact reflection to second order in the offset (|Δp| ≈ 0.02 here: error
  * ≲ |Δp|²/r ≈ 4e-4, bound 2e-3); with ∂n taken as 0 it misses by the first-order term,
@@ -127,7 +127,8 @@ static void test_curved_mirror_rule(void **state)
 {
     (void)state;
     const char *doc = "{\"tessera\":1,\"camera\":{\"from\":[0,0,5],\"to\":[0,0,0]},\"film\":{\"width\":4,"
-                      "\"height\":4},\"materials\":{\"m\":{\"type\":\"mirror\"}},\"shapes\":[{\"type\":"
+                      "\"height\":4},\"textures\":{\"t\":{\"type\":\"constant\",\"value\":0.9}},"
+                      "\"materials\":{\"m\":{\"type\":\"mirror\",\"reflectance\":\"t\"}},\"shapes\":[{\"type\":"
                       "\"sphere\",\"radius\":1,\"material\":\"m\"}]}";
     ts_scene *s = NULL;
     ts_error err = {0};

@@ -519,10 +519,13 @@ static void analytic_interaction(const ts_shape *s, const ts_ray *ray, const obj
     ts_dvec3 n_w = ts_dvec3_normalize(ts_xform_normal(X, n_obj));
     /* ∂n/∂u, ∂n/∂v (a disk's second derivatives are 0, so are its): of the unit object
      * normal, then of the world normal, turned with it. */
-    ts_dvec3 N = ts_dvec3_normalize(n_obj), dndu, dndv;
-    weingarten(N, dpdu, dpdv, d2uu, d2uv, d2vv, &dndu, &dndv);
-    dndu = world_normal_derivative(X, N, n_w, dndu);
-    dndv = world_normal_derivative(X, N, n_w, dndv);
+    ts_dvec3 dndu = {0, 0, 0}, dndv = {0, 0, 0};
+    if (!s->no_normal_derivatives) {
+        ts_dvec3 N = ts_dvec3_normalize(n_obj);
+        weingarten(N, dpdu, dpdv, d2uu, d2uv, d2vv, &dndu, &dndv);
+        dndu = world_normal_derivative(X, N, n_w, dndu);
+        dndv = world_normal_derivative(X, N, n_w, dndv);
+    }
     double sign = s->reverse_orientation ? -1 : 1;
     if (s->reverse_orientation) n_w = ts_dvec3_scale(n_w, -1);
     si->n = ts_dvec3_to_vec3(n_w);
@@ -654,7 +657,7 @@ static void triangle_interaction(const ts_shape *s, const ts_tri_cache *c, uint3
         double du02 = uv[0][0] - uv[2][0], dv02 = uv[0][1] - uv[2][1];
         double du12 = uv[1][0] - uv[2][0], dv12 = uv[1][1] - uv[2][1];
         double det = du02 * dv12 - dv02 * du12;
-        if (det != 0) {
+        if (det != 0 && !s->no_normal_derivatives) {
             ts_dvec3 dn1 = {(double)n0[0] - n2[0], (double)n0[1] - n2[1], (double)n0[2] - n2[2]};
             ts_dvec3 dn2 = {(double)n1[0] - n2[0], (double)n1[1] - n2[1], (double)n1[2] - n2[2]};
             double inv = sign / det;

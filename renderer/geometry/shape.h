@@ -75,6 +75,10 @@ typedef struct ts_shape {
      * too), seen only through its instances; otherwise (false, the zero value) in the scene. */
     bool in_object;
     uint32_t object;
+    /* Leave the interaction's dndu, dndv 0: the builder sets it in scenes without textures,
+     * where nothing reads them (bump maps and ray differentials come with textures), so
+     * their hits do not pay for them. */
+    bool no_normal_derivatives;
     union {
         /* z_min < z_max within [−radius, radius], theta_min = acos(z_min/radius) >
          * theta_max = acos(z_max/radius): read only when partial */

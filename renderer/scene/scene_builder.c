@@ -1109,6 +1109,8 @@ static ts_status build(ts_scene_builder *b, ts_error *err)
         if (s->lights[i].type == TS_LIGHT_INFINITE) s->infinite_lights[s->n_infinite_lights++] = i;
     for (uint32_t i = 0; i < s->n_materials; i++)
         if (s->materials[i].textured) s->textured = true;
+    for (uint32_t i = 0; i < s->n_shapes; i++) /* dn/du is for bump maps and differentials */
+        s->shapes[i].no_normal_derivatives = !s->textured;
     s->effects = ts_effects_analyse(s) & ~s->job.effects_off;
     return TS_OK;
 }
