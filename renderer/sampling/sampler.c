@@ -69,20 +69,23 @@ static inline void dim_seeds(uint32_t h, uint32_t seeds[3])
 
 /* The index is shuffled by a nested-uniform scramble (seeds[0]), x = scramble(
  * reverse_bits(shuffled)) and y = scramble(sobol_dim1(shuffled)) (seeds[1], seeds[2]),
- * each written out with the double reversals cancelled. */
-static inline ts_vec2 sobol_value_seeded(const uint32_t seeds[3], uint32_t index)
+ * each written out with the double reversals cancelled; the index comes reversed
+ * (index_reversed = reverse_bits(index)), as the shuffle's first step takes it. */
+static inline ts_vec2 sobol_value_reversed(const uint32_t seeds[3], uint32_t index_reversed)
 {
-    uint32_t shuffled = reverse_bits(lk_permute(reverse_bits(index), seeds[0]));
+    uint32_t shuffled = reverse_bits(lk_permute(index_reversed, seeds[0]));
     uint32_t x = reverse_bits(lk_permute(shuffled, seeds[1]));
     uint32_t y = reverse_bits(lk_permute(sobol_dim1_reversed(shuffled), seeds[2]));
     return (ts_vec2){bits_to_unit(x), bits_to_unit(y)};
 }
 
-static inline ts_vec2 sobol_value_hashed(uint32_t h, uint32_t index)
+/* index_reversed = reverse_bits(index): a stream reverses its index once for all its
+ * dimensions (ts_sampler_begin). */
+static inline ts_vec2 sobol_value_hashed(uint32_t h, uint32_t index_reversed)
 {
     uint32_t seeds[3];
     dim_seeds(h, seeds);
-    return sobol_value_seeded(seeds, index);
+    return sobol_value_reversed(seeds, index_reversed);
 }
 
 /* Hash of (seed, px, py): ts_hash4(seed, px, py, d) = ts_hash_combine(pixel_hash, d). */
@@ -93,7 +96,7 @@ static inline uint32_t pixel_hash(uint32_t seed, uint32_t px, uint32_t py)
 
 static ts_vec2 sobol_value(uint32_t seed, uint32_t px, uint32_t py, uint32_t index, uint32_t dim)
 {
-    return sobol_value_hashed(ts_hash_combine(pixel_hash(seed, px, py), dim), index);
+    return sobol_value_hashed(ts_hash_combine(pixel_hash(seed, px, py), dim), reverse_bits(index));
 }
 
 static ts_vec2 independent_value(uint32_t seed, uint32_t px, uint32_t py, uint32_t index, uint32_t dim)
@@ -120,7 +123,7 @@ void ts_sampler_begin(const ts_sampler *s, uint32_t px, uint32_t py, uint32_t in
     /* The stream caches what every dimension of this sample shares: for sobol the pixel's
      * hash, for independent that combined with the index (see independent_value). */
     if (s->type == TS_SAMPLER_INDEPENDENT) h = ts_hash_combine(h, index);
-    *out = (ts_sample_stream){s->type, s->seed, px, py, index, 0, h, NULL};
+    *out = (ts_sample_stream){s->type, s->seed, px, py, index, 0, h, reverse_bits(index), NULL};
 }
 
 void ts_sampler_pixel_init(const ts_sampler *s, uint32_t px, uint32_t py, ts_sampler_pixel *pixel)
@@ -140,7 +143,8 @@ void ts_sampler_begin_in_pixel(ts_sampler_pixel *pixel, uint32_t index, ts_sampl
         ts_sampler_begin(&sampler, pixel->px, pixel->py, index, out);
         return;
     }
-    *out = (ts_sample_stream){pixel->type, pixel->seed, pixel->px, pixel->py, index, 0, pixel->hash, pixel};
+    *out = (ts_sample_stream){pixel->type, pixel->seed, pixel->px, pixel->py, index, 0, pixel->hash,
+                              reverse_bits(index), pixel};
 }
 
 /* The seeds of dimension dim (< TS_SAMPLER_PIXEL_DIMS) of a stream's pixel, from its
@@ -162,8 +166,9 @@ static inline ts_vec2 stream_value(const ts_sample_stream *st, uint32_t dim)
         uint32_t h = ts_hash_combine(st->hash, dim);
         return (ts_vec2){bits_to_unit(h), bits_to_unit(ts_hash_u32(h ^ 0x68e31da4u))};
     }
-    if (st->pixel && dim < TS_SAMPLER_PIXEL_DIMS) return sobol_value_seeded(cached_seeds(st->pixel, dim), st->index);
-    return sobol_value_hashed(ts_hash_combine(st->hash, dim), st->index);
+    if (st->pixel && dim < TS_SAMPLER_PIXEL_DIMS)
+        return sobol_value_reversed(cached_seeds(st->pixel, dim), st->index_reversed);
+    return sobol_value_hashed(ts_hash_combine(st->hash, dim), st->index_reversed);
 }
 
 float ts_sample_1d(ts_sample_stream *st)

@@ -56,6 +56,7 @@ typedef struct ts_sample_stream {
     ts_sampler_type type;
     uint32_t seed, px, py, index, dim; /* dim = next dimension to be drawn */
     uint32_t hash; /* set by ts_sampler_begin: hash of what all dimensions share */
+    uint32_t index_reversed; /* sobol: index with its bits reversed, shared by all dimensions */
     ts_sampler_pixel *pixel; /* NULL, or the pixel's seed cache (ts_sampler_begin_in_pixel) */
 } ts_sample_stream;
 
