@@ -601,6 +601,76 @@ static void test_triangle_known(void **state)
     assert_vec_close(b.hi, (ts_vec3){3, 2, 0}, 0, "bounds hi");
 }
 
+/* ---- the filter's test with the cache: the same answer as without ---- */
+
+/* ts_shape_triangle_ahead_cached answers most queries from the cached float normal and
+ * leaves the unclear ones to the exact test (shape.c, triangle_ahead_clear); its answer
+ * must be ts_shape_triangle_ahead's for every ray. The rays are chosen around both of
+ * the shortcut's boundaries, where a shortcut taken too eagerly answers differently:
+ * origins at log-uniform distances 0 and 1e-16…1e-1 (relative to the triangle's size)
+ * off its plane, on either side, at up to 3 sizes from it, and directions random or
+ * within 1e-12…1e-1 of the plane. A deterministic check (fixed seed): it fails on any
+ * single disagreement, and the counts below show that both answers occur where the
+ * exact test is close to its threshold (origin within 1e-12 of the plane). */
+static void test_triangle_ahead_cached(void **state)
+{
+    (void)state;
+    ts_pcg32 g;
+    ts_pcg32_seed(&g, 0x5eedu, 7);
+    int n = 0, disagree = 0, near_yes = 0, near_no = 0, yes = 0;
+    for (int tri = 0; tri < 400; tri++) {
+        tri_store st;
+        double L = exp(rnd_range(&g, log(1e-3), log(1e3)));
+        ts_shape s = rnd_triangle(&g, &st, L, 1e4);
+        ts_tri_cache c;
+        ts_shape_triangle_cache_init(&s, 0, &c);
+        ts_dvec3 v[3];
+        for (int k = 0; k < 3; k++) v[k] = (ts_dvec3){st.p[3 * k], st.p[3 * k + 1], st.p[3 * k + 2]};
+        ts_dvec3 e1 = ts_dvec3_sub(v[1], v[0]), e2 = ts_dvec3_sub(v[2], v[0]);
+        ts_dvec3 N = ts_dvec3_cross(e1, e2);
+        if (!(ts_dvec3_length(N) > 0)) continue;
+        N = ts_dvec3_normalize(N);
+        double size = ts_dvec3_length(e1) + ts_dvec3_length(e2);
+        for (int i = 0; i < 500; i++) {
+            ts_ray r;
+            double rel = 1;
+            if (i < 100) {
+                r = rnd_ray_triangle(&g, &s);
+            } else {
+                double b1 = rnd_range(&g, -3, 3), b2 = rnd_range(&g, -3, 3);
+                rel = rnd(&g) < 0.1 ? 0 : exp(rnd_range(&g, log(1e-16), log(1e-1)));
+                double off = (rnd(&g) < 0.5 ? -1 : 1) * rel * size;
+                ts_dvec3 o = ts_dvec3_add(ts_dvec3_add(v[0], ts_dvec3_add(ts_dvec3_scale(e1, b1), ts_dvec3_scale(e2, b2))),
+                                          ts_dvec3_scale(N, off));
+                ts_dvec3 d = rnd_unit(&g);
+                if (rnd(&g) < 0.5) { /* nearly along the plane */
+                    ts_dvec3 u = ts_dvec3_normalize(ts_dvec3_cross(N, d));
+                    double dz = (rnd(&g) < 0.5 ? -1 : 1) * exp(rnd_range(&g, log(1e-12), log(1e-1)));
+                    d = ts_dvec3_add(u, ts_dvec3_scale(N, dz));
+                }
+                r = ts_ray_make(to_f(o), to_f(d), INFINITY);
+            }
+            bool want = ts_shape_triangle_ahead(&s, 0, &r);
+            bool got = ts_shape_triangle_ahead_cached(&s, &c, 0, &r);
+            n++;
+            if (want != got) {
+                if (disagree < 5) fprintf(stderr, "triangle %d ray %d: ahead %d, cached %d\n", tri, i, want, got);
+                disagree++;
+            }
+            yes += want;
+            if (i >= 100 && rel < 1e-12) {
+                if (want) near_yes++;
+                else near_no++;
+            }
+        }
+    }
+    printf("triangle_ahead_cached: %d rays, %d ahead; origin within 1e-12: %d ahead, %d not; %d disagree\n", n, yes,
+           near_yes, near_no, disagree);
+    assert_int_equal(disagree, 0);
+    assert_true(near_yes > 100 && near_no > 100); /* both answers near the threshold */
+    assert_true(yes > n / 10 && yes < n - n / 10);
+}
+
 /* ---- grazing and just-missing rays (values exact in float and double) ---- */
 
 static void test_grazing(void **state)
@@ -987,7 +1057,7 @@ int main(void)
         cmocka_unit_test(test_bound_triangle), cmocka_unit_test(test_spawn_sphere),
         cmocka_unit_test(test_spawn_disk),     cmocka_unit_test(test_spawn_cylinder),
         cmocka_unit_test(test_spawn_triangle), cmocka_unit_test(test_spawn_quad),
-        cmocka_unit_test(test_spawn_ray_to),
+        cmocka_unit_test(test_spawn_ray_to),   cmocka_unit_test(test_triangle_ahead_cached),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

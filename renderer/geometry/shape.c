@@ -371,9 +371,43 @@ bool ts_shape_triangle_ahead(const ts_shape *s, uint32_t prim, const ts_ray *ray
                           ts_dvec3_length(ts_dvec3_sub(tr.p2, tr.p0)));
 }
 
+/* triangle_ahead's "yes" where it is clear by a wide margin, from p0 and the cache's float
+ * unit normal n alone; -1 where it is not clear (then triangle_ahead decides).
+ *
+ * With n̂ = N/|N| (N = e1 × e2), triangle_ahead's num = e2·(tvec × e1) is tvec·N and its
+ * det = e1·(d × e2) is −d·N, each up to a few double roundoffs of |tvec|·|e1|·|e2| and
+ * |d|·|e1|·|e2|; it answers yes iff num·det > 0 and |num| > T_GUARD·|e1|·|e2|·|tvec|.
+ * Here a = tvec·n and b = d·n, in double. n is n̂ rounded to float: |n − n̂| ≤ 2^-24·√3
+ * < 1.1e-7, so |a − num/|N|| < 1.2e-7·|tvec|·k and |b + det/|N|| < 1.2e-7·|d|·k with
+ * k = |e1|·|e2|/|N| ≥ 1 (inv_sin; the double roundoffs of num and det are inside that).
+ * If |a| > AHEAD_CLEAR·k·|tvec| and |b| > AHEAD_CLEAR·k·|d|, AHEAD_CLEAR = 2^-20
+ * (9.5e-7, eight times the error), then num has a's sign and |num| > 8.3e-7·|e1|·|e2|·|tvec|
+ * — 3·10^7 times T_GUARD's threshold — and det has −b's sign and is not 0, so the exact
+ * test says yes iff a·b < 0; t = num/det cannot underflow to 0 for float input (|t| ≥
+ * 8e-7·|tvec|/|d| ≥ 1e-90). The comparisons are of squares (no square root) and fail for
+ * NaN, ∞ (a degenerate triangle's k) and tvec = 0, which all go to the exact test. So the
+ * answer is triangle_ahead's, bit for bit; what it saves is the two other vertices' loads,
+ * two cross products, a division and a square root for all but the hits near the ray's
+ * origin plane (a neighbour of the triangle it leaves) or along the triangle's plane. */
+#define AHEAD_CLEAR 0x1p-20
+static inline bool triangle_ahead_clear(const ts_mesh *m, const ts_tri_cache *c, uint32_t prim, const ts_ray *ray,
+                                        bool *ahead)
+{
+    const float *p0 = m->p + 3 * (size_t)m->index[3 * prim];
+    ts_dvec3 tvec = {(double)ray->o.x - p0[0], (double)ray->o.y - p0[1], (double)ray->o.z - p0[2]};
+    ts_dvec3 n = ts_dvec3_from(c->n), d = ts_dvec3_from(ray->d);
+    double a = ts_dvec3_dot(tvec, n), b = ts_dvec3_dot(d, n);
+    double k2 = AHEAD_CLEAR * AHEAD_CLEAR * c->inv_sin * c->inv_sin;
+    if (!(a * a > k2 * ts_dvec3_dot(tvec, tvec)) || !(b * b > k2 * ts_dvec3_dot(d, d))) return false;
+    *ahead = (a < 0) != (b < 0);
+    return true;
+}
+
 bool ts_shape_triangle_ahead_cached(const ts_shape *s, const ts_tri_cache *c, uint32_t prim, const ts_ray *ray)
 {
     if (s->type != TS_SHAPE_MESH || prim >= s->mesh.n_triangles) return false;
+    bool ahead;
+    if (triangle_ahead_clear(&s->mesh, c, prim, ray, &ahead)) return ahead;
     tri_d tr = tri_load(&s->mesh, prim);
     return triangle_ahead(&tr, ray, c->e1_len, c->e2_len);
 }
