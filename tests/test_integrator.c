@@ -369,6 +369,50 @@ static void test_degenerate_emitter_triangles(void **state)
     assert_true(ts_rs_passes(&c, a.n, 1e-4));
 }
 
+/* pbrt-v3's per-light nSamples under direct's strategy all (a light's "samples", an
+ * emitter's "light_samples"): each light is estimated from its own count of samples,
+ * averaged. A white-ish diffuse disk of radius 100 seen from 1 above, under a constant
+ * environment of radiance 1, reflects exactly ρ·L = 0.5 (its whole hemisphere is open),
+ * whatever the count. The light's 16 samples must (1) keep that mean — Student's t over
+ * K = 16 renders at p ≥ 1e-4, as check() — where summing them would give 8, and (2) cut
+ * the variance of a render's mean: 16 averaged samples have at most 1/16 of one sample's
+ * variance (less with the stratified arrays), so the observed ratio of the two sample
+ * variances (15 dof each) is below 1/2 unless F(15, 15) > 8, p = 1.2e-4 — the false-failure
+ * rate; a count that is not honoured gives a ratio near 1. Inside a two-sided emitting
+ * sphere the light estimate is exact for any count (the zero-variance case above), so an
+ * emitter's light_samples 8 must give Le (1 + ρ) to float rounding, not 8 Le ρ + Le. */
+static void test_light_samples(void **state)
+{
+    (void)state;
+    const char *fmt = "{\"tessera\":1,\"camera\":{\"from\":[0,0,1],\"to\":[0,0,0],\"up\":[0,1,0],\"fov\":20},"
+                      "\"film\":{\"width\":8,\"height\":8,\"filter\":{\"type\":\"box\"}},"
+                      "\"integrator\":{\"type\":\"direct\",\"strategy\":\"all\",\"max_depth\":1},"
+                      "\"materials\":{\"m\":{\"type\":\"diffuse\",\"reflectance\":0.5}},"
+                      "\"shapes\":[{\"type\":\"disk\",\"center\":[0,0,0],\"normal\":[0,0,1],\"radius\":100,"
+                      "\"material\":\"m\"}],\"lights\":[{\"type\":\"infinite\",\"radiance\":1%s}]}";
+    char doc[2048];
+    snprintf(doc, sizeof doc, fmt, "");
+    result one = render_k(doc, 64, 300);
+    check("environment, 1 sample per light", one, 0.5, 1e-5, 1e-4);
+    snprintf(doc, sizeof doc, fmt, ",\"samples\":16");
+    result many = render_k(doc, 64, 400);
+    check("environment, 16 samples per light", many, 0.5, 1e-5, 1e-4);
+    double ratio = (many.se * many.se) / (one.se * one.se);
+    print_message("variance of a render's mean, 16 samples / 1 sample: %.4f (at most 1/16 = 0.0625 expected)\n", ratio);
+    if (!(ratio < 0.5)) fail_msg("16 samples per light did not reduce the variance: ratio %.3f", ratio);
+
+    char integ[] = "{\"type\":\"direct\",\"strategy\":\"all\"}";
+    const double rho = 0.5, le = 0.75;
+    snprintf(doc, sizeof doc,
+             "{\"tessera\":1,\"camera\":{\"from\":[0,0,0],\"to\":[0,0,-1],\"fov\":60},"
+             "\"film\":{\"width\":8,\"height\":8,\"filter\":{\"type\":\"box\"}},\"sampler\":{\"seed\":3},"
+             "\"integrator\":%s,\"materials\":{\"m\":{\"type\":\"diffuse\",\"reflectance\":%g}},"
+             "\"shapes\":[{\"type\":\"sphere\",\"radius\":1,\"material\":\"m\",\"emission\":%g,\"two_sided\":true,"
+             "\"light_samples\":8}]}",
+             integ, rho, le);
+    check("emitting sphere, light_samples 8", render_doc(doc, 4), le * (1 + rho), 1e-4, 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -380,6 +424,7 @@ int main(void)
         cmocka_unit_test(test_furnace_from_behind),
         cmocka_unit_test(test_total_internal_reflection),
         cmocka_unit_test(test_degenerate_emitter_triangles),
+        cmocka_unit_test(test_light_samples),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -66,6 +66,7 @@ typedef struct ts_shape {
     bool emissive;        /* emission set and non-black: a diffuse area light */
     bool two_sided;       /* emits on both sides */
     ts_rgb emission;      /* radiance leaving the front side (both sides if two_sided) */
+    uint32_t light_samples; /* emitters: samples per light under direct's strategy all (0: the integrator's) */
     uint32_t first_light; /* index of this shape's first area light (meshes: + triangle) */
     ts_xform to_world;    /* object → world (identity for meshes) */
     bool reverse_orientation; /* analytic shapes: the front side is the inside (disk: −z) */

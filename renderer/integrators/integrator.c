@@ -188,16 +188,23 @@ static ts_rgb sample_one_light(const ts_scene *s, uint32_t fx, const ts_interact
     return ts_rgb_scale(estimate_direct(s, si, bsdf, li, u_light, u_lobe, u_bsdf, c), 1.0f / pmf);
 }
 
-/* pbrt's UniformSampleAllLights: samples_per_light samples of every light, drawn as arrays
+/* The samples a light takes under strategy all: its own count (pbrt-v3's nSamples) or the
+ * integrator's samples_per_light. */
+static uint32_t light_samples(const ts_scene *s, uint32_t li)
+{
+    uint32_t n = s->lights[li].samples;
+    return n ? n : (uint32_t)s->integrator.samples_per_light;
+}
+
+/* pbrt's UniformSampleAllLights: each light's samples (light_samples), drawn as arrays
  * (consecutive sequence indices of one dimension) so that they are stratified together. */
 static ts_rgb sample_all_lights(const ts_scene *s, uint32_t fx, const ts_interaction *si, const ts_bsdf *bsdf,
                                 ts_sample_stream *st, ts_counters *c)
 {
     ts_rgb L = ts_rgb_gray(0);
-    uint32_t n = (uint32_t)s->integrator.samples_per_light;
     ts_sampler sampler = {st->type, st->seed};
     for (uint32_t li = 0; li < s->n_lights && !stopped(c); li++) {
-        uint32_t dim = st->dim;
+        uint32_t n = light_samples(s, li), dim = st->dim;
         st->dim += 3;
         ts_rgb Ll = ts_rgb_gray(0);
         for (uint32_t j = 0; j < n; j++) {
@@ -422,9 +429,11 @@ double ts_integrator_rays_per_sample(const ts_scene *s, ts_integrator_type type,
     }
     case TS_INTEGRATOR_DIRECT: {
         double vertices = (fx & TS_EFFECT_INDIRECT) && s->integrator.max_depth > 1 ? s->integrator.max_depth : 1;
-        double nee = s->integrator.strategy == TS_LIGHTS_ALL
-                         ? 2.0 * (double)s->n_lights * (double)s->integrator.samples_per_light
-                         : 2.0;
+        double nee = 2.0;
+        if (s->integrator.strategy == TS_LIGHTS_ALL) {
+            nee = 0;
+            for (uint32_t li = 0; li < s->n_lights; li++) nee += 2.0 * (double)light_samples(s, li);
+        }
         return vertices * (1 + nee);
     }
     }

@@ -52,6 +52,8 @@ typedef struct ts_light {
     float cos_total, cos_falloff_start; /* spot: cos(cone_angle), cos(cone_angle − cone_delta) (pbrt-v3) */
     uint32_t shape, prim;  /* area: the emitting shape and triangle (prim 0 for analytic shapes) */
     bool two_sided;        /* area */
+    uint32_t samples;      /* samples of this light per camera sample under direct's strategy all
+                              (pbrt-v3's nSamples); 0: the integrator's samples_per_light */
     const struct ts_envmap *map; /* infinite: map or NULL for constant */
     ts_xform to_world;     /* infinite: map space → world */
     ts_vec3 scene_center;  /* distant/infinite: filled by ts_lights_prepare */

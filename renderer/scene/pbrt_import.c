@@ -189,6 +189,28 @@ static ts_status nomem(imp *im)
 static ts_status constant_texture(imp *im, ts_pbrt_params *ps, ts_pbrt_param *p, bool want_float, float *f,
                                   ts_rgb *c);
 
+/* A light's "integer nsamples" (alias "samples"), pbrt-v3's nSamples: the samples it takes
+ * per camera sample under directlighting's strategy "all" (pbrt-v3 clamps it below at 1;
+ * every sampler's RoundCount keeps it as it is but 02sequence's, whose power of two the
+ * Sobol sampler does not need). Other integrators take one light sample per vertex and
+ * ignore it, as pbrt-v3's do: *out is 0 (the integrator's count) there and where it is 1. */
+static ts_status light_samples(imp *im, ts_pbrt_params *ps, uint32_t *out)
+{
+    int32_t ns;
+    *out = 0;
+    TRY(ts_pbrt_find_int(ps, "nsamples", 1, &ns, im->err));
+    TRY(ts_pbrt_find_int(ps, "samples", ns, &ns, im->err));
+    if (!im->direct_all || ns <= 1) return TS_OK;
+    if (ns > 4096) {
+        ts_pbrt_param *p = ts_pbrt_params_get(ps, "samples");
+        if (!p) p = ts_pbrt_params_get(ps, "nsamples");
+        return ts_pbrt_param_error(ps, p, im->err, TS_ERR_LIMIT, "%d samples per light is above the limit of 4096",
+                                   (int)ns);
+    }
+    *out = (uint32_t)ns;
+    return TS_OK;
+}
+
 static ts_status get_rgb(imp *im, ts_pbrt_params *ps, const char *name, ts_rgb def, ts_rgb *out)
 {
     ts_pbrt_param *p = ts_pbrt_params_get(ps, name);
@@ -1271,15 +1293,7 @@ static ts_status map_shape(imp *im, size_t si)
         TRY(get_rgb(im, &al->params, "L", ts_rgb_gray(1), &L));
         TRY(get_rgb(im, &al->params, "scale", ts_rgb_gray(1), &scale));
         TRY(ts_pbrt_find_bool(&al->params, "twosided", false, &d.two_sided, im->err));
-        int32_t ns;
-        TRY(ts_pbrt_find_int(&al->params, "nsamples", 1, &ns, im->err));
-        TRY(ts_pbrt_find_int(&al->params, "samples", ns, &ns, im->err));
-        if (ns != 1 && im->direct_all)
-            dwarn(im, &al->params, al->loc,
-                  "\"integer nsamples\" %d is not honoured: the integrator's one sample per light and pixel "
-                  "sample "
-                  "is taken (the image converges to the same values)",
-                  ns);
+        TRY(light_samples(im, &al->params, &d.light_samples));
         d.emission = (ts_rgb){L.r * scale.r, L.g * scale.g, L.b * scale.b};
     }
     bool emits = d.emission.r > 0 || d.emission.g > 0 || d.emission.b > 0;
@@ -1442,7 +1456,8 @@ static ts_status map_shape(imp *im, size_t si)
         mname = name;
         jok = jok && jstring(j, "material", mname) && jadd(j, "transform", jtransform(sh->object_to_world));
         if (jok && emits)
-            jok = jrgb(j, "emission", d.emission) && (!d.two_sided || jbool(j, "two_sided", true));
+            jok = jrgb(j, "emission", d.emission) && (!d.two_sided || jbool(j, "two_sided", true)) &&
+                  (!d.light_samples || jnumber(j, "light_samples", d.light_samples));
         if (!jok || !cJSON_AddItemToArray(im->jtarget, j))
             st = nomem(im);
         else
@@ -1538,14 +1553,7 @@ static ts_status map_light(imp *im, size_t li)
         TRY(get_rgb(im, ps, "L", ts_rgb_gray(1), &L));
         const char *map;
         TRY(ts_pbrt_find_string(ps, "mapname", "", &map, im->err));
-        int32_t ns;
-        TRY(ts_pbrt_find_int(ps, "nsamples", 1, &ns, im->err));
-        TRY(ts_pbrt_find_int(ps, "samples", ns, &ns, im->err));
-        if (ns != 1 && im->direct_all)
-            dwarn(im, ps, l->loc,
-                  "\"integer nsamples\" %d is not honoured: one sample per pixel sample is taken (the image "
-                  "converges to the same values)",
-                  ns);
+        TRY(light_samples(im, ps, &d.samples));
         d.type = TS_LIGHT_INFINITE;
         d.color = (ts_rgb){L.r * scale.r, L.g * scale.g, L.b * scale.b};
         if (!user_xform(l->light_to_world, &d.to_world)) {
@@ -1564,7 +1572,8 @@ static ts_status map_light(imp *im, size_t li)
             jok = jstring(j, "type", "infinite") &&
                   (map[0] ? jstring(j, "map", map) && jrgb(j, "scale", d.color)
                           : jrgb(j, "radiance", d.color)) &&
-                  jadd(j, "transform", jtransform(l->light_to_world));
+                  jadd(j, "transform", jtransform(l->light_to_world)) &&
+                  (!d.samples || jnumber(j, "samples", d.samples));
         }
     } else {
         cJSON_Delete(j);

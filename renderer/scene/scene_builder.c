@@ -735,6 +735,8 @@ static ts_status check_shape(const ts_scene_builder *b, const ts_shape_desc *d, 
                             d->material, b->n_materials);
     /* Infinite channels are ts_lights_prepare's to refuse, as every light's colour. */
     if (!rgb_nonneg(d->emission)) return bad_rgb(err, "emission", "RGB ≥ 0", d->emission);
+    if (d->light_samples > 4096)
+        return ts_error_set(err, TS_ERR_INVALID, "light_samples: %u is not in [1, 4096]", d->light_samples);
     /* Sizes and transforms too large for float are refused at finish, with the scene's
      * bounds ("shapes: the scene reaches beyond ±1e15 units …"). */
     switch (d->type) {
@@ -842,6 +844,7 @@ ts_status ts_scene_builder_add_shape(ts_scene_builder *b, const ts_shape_desc *d
     sh.emission = d->emission;
     sh.emissive = !ts_rgb_is_black(d->emission);
     sh.two_sided = d->two_sided;
+    sh.light_samples = d->light_samples;
     if (d->type == TS_SHAPE_MESH) {
         TRY(place_mesh(b, &d->mesh, &d->to_world, d->reverse_orientation, &sh.mesh, err));
         sh.to_world = ts_xform_identity();
@@ -991,6 +994,8 @@ ts_status ts_scene_builder_add_light(ts_scene_builder *b, const ts_light_desc *d
     default:
         return ts_error_set(err, TS_ERR_INVALID, "type: unknown light type %d", (int)d->type);
     }
+    if (d->samples > 4096) return ts_error_set(err, TS_ERR_INVALID, "samples: %u is not in [1, 4096]", d->samples);
+    l.samples = d->samples;
     if (!grow((void **)&b->lights, &b->cap_lights, (size_t)b->n_lights + 1, sizeof *b->lights))
         return nomem(err, "the lights");
     b->lights[b->n_lights++] = l;
@@ -1061,6 +1066,7 @@ static ts_status lay_out(ts_scene_builder *b, ts_error *err)
             l->shape = k;
             l->prim = sh->type == TS_SHAPE_MESH ? t : 0;
             l->two_sided = sh->two_sided;
+            l->samples = sh->light_samples;
             l->to_world = ts_xform_identity();
         }
     }

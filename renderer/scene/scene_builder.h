@@ -214,6 +214,8 @@ typedef struct ts_shape_desc {
     ts_xform to_world; /* object → world (shape.h's object spaces) */
     ts_rgb emission;   /* radiance, each channel ≥ 0; not black: a diffuse area light */
     bool two_sided;    /* an emitter emits on both sides */
+    uint32_t light_samples; /* an emitter: its samples per camera sample under direct's strategy all
+                               (pbrt-v3's nsamples), in [1, 4096]; 0: the integrator's samples_per_light */
     /* pbrt-v3's ReverseOrientation: the front side (where a one-sided emitter emits, where
      * the normal points) becomes the other side. The builder applies exactly this flag; a
      * front end gives it as pbrt-v3's graphics state holds it (ReverseOrientation toggled
@@ -278,6 +280,9 @@ typedef struct ts_light_desc {
     double cone_delta_deg;       /* spot: in [0, cone_angle_deg] */
     const struct ts_envmap *map; /* infinite: from ts_scene_builder_load_envmap, or NULL */
     ts_xform to_world;           /* infinite: map space → world */
+    uint32_t samples;            /* its samples per camera sample under direct's strategy all
+                                    (pbrt-v3's nsamples), in [1, 4096]; 0: the integrator's
+                                    samples_per_light */
 } ts_light_desc;
 
 /* Adds a light (with the area lights of the shapes added so far, at most

@@ -737,7 +737,7 @@ static ts_status parse_shape(loader *ld, const cJSON *sh, const char *path, ts_s
     if (!cJSON_IsObject(sh)) return ts_json_check_object(sh, path, types, ld->err);
     int type = 0;
     TRY(ts_json_enum(sh, path, "type", true, types, &type, ld->err));
-#define COMMON "type", "material", "transform", "emission", "two_sided", "reverse_orientation"
+#define COMMON "type", "material", "transform", "emission", "two_sided", "light_samples", "reverse_orientation"
     static const char *const k_sphere[] = {COMMON, "center", "radius", "z_min", "z_max", "phi_max", NULL};
     static const char *const k_disk[] = {COMMON, "center", "normal", "radius", "inner_radius", "phi_max", NULL};
     static const char *const k_cyl[] = {COMMON, "p0", "p1", "radius", "phi_max", NULL};
@@ -760,6 +760,9 @@ static ts_status parse_shape(loader *ld, const cJSON *sh, const char *path, ts_s
     d->emission = ts_rgb_gray(0);
     TRY(ts_json_rgb(sh, path, "emission", false, TS_J_NONNEG, &d->emission, ld->err));
     TRY(ts_json_bool(sh, path, "two_sided", false, &d->two_sided, ld->err));
+    int64_t light_samples = 0; /* absent: the integrator's samples_per_light */
+    TRY(ts_json_int(sh, path, "light_samples", false, 1, 4096, &light_samples, ld->err));
+    d->light_samples = (uint32_t)light_samples;
     TRY(ts_json_bool(sh, path, "reverse_orientation", false, &d->reverse_orientation, ld->err));
     ts_xform user;
     TRY(parse_transform(ld, sh, path, &user));
@@ -914,7 +917,7 @@ static ts_status parse_light(loader *ld, const cJSON *l, const char *path, ts_li
     static const char *const k_point[] = {"type", "position", "intensity", NULL};
     static const char *const k_spot[] = {"type", "from", "to", "intensity", "cone_angle", "cone_delta", NULL};
     static const char *const k_distant[] = {"type", "from", "to", "irradiance", NULL};
-    static const char *const k_inf[] = {"type", "radiance", "map", "scale", "transform", NULL};
+    static const char *const k_inf[] = {"type", "radiance", "map", "scale", "transform", "samples", NULL};
     const char *const *keys[] = {k_point, k_spot, k_distant, k_inf};
     TRY(ts_json_check_object(l, path, keys[type], ld->err));
     *out = (ts_light_desc){0};
@@ -976,6 +979,9 @@ static ts_status parse_light(loader *ld, const cJSON *l, const char *path, ts_li
             TRY(at(ts_scene_builder_load_envmap(ld->b, map, &out->map, ld->err), mp.s, ld->err));
         }
         TRY(parse_transform(ld, l, path, &out->to_world));
+        int64_t samples = 0; /* absent: the integrator's samples_per_light */
+        TRY(ts_json_int(l, path, "samples", false, 1, 4096, &samples, ld->err));
+        out->samples = (uint32_t)samples;
         break;
     }
     }

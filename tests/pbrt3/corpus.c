@@ -39,6 +39,9 @@
  *     value (plus 1e-5 absolute) pass whatever the spread: the bound for float-rounding
  *     differences where both estimators have no variance (the direct view of an
  *     environment map, a black background), where s² = 0 would demand bit equality.
+ *     Where a scene asks directlighting for many samples per light (nsamples), the K
+ *     renders take fewer (compare_scene): pbrt-v3's per-sample noise
+ *     is then lower than tessera's, so the bound c·s²·n/S on it still holds, more loosely.
  *
  * Calibration (--reference): veach-mis against an independent tessera render at 256 spp
  * (seed 1000) passes every block (worst p 1.2e-3 against the bound 3.4e-7) with image means
@@ -72,6 +75,7 @@ typedef struct corpus_scene {
     const char *name;
     int spp;              /* per render; K renders */
     const char *expected; /* the missing feature it needs, or NULL: must pass */
+    uint32_t light_cap;   /* the K renders' samples per light at most (0: 1), see compare_scene */
 } corpus_scene;
 
 static const corpus_scene scenes[] = {
@@ -79,7 +83,7 @@ static const corpus_scene scenes[] = {
     {"veach-mis", 32,
      "3 of 2916 block channels differ (t −92 at the bottom right, image means within 0.3 %): not explained "
      "yet"},
-    {"f7-19a", 64, NULL},
+    {"f7-19a", 64, NULL, 4},
     {"teapot-area-light", 32, NULL},
     {"f10-1ac", 16, NULL},
     {"checkerboard", 32, NULL},
@@ -191,6 +195,17 @@ static void compare_scene(const char *dir, const corpus_scene *cs, bool bench, i
      * textures are filtered as in pbrt-v3's image. Each render still stops at spp samples
      * (the request's sample range). */
     s->spp = (uint32_t)ref_spp;
+    /* The comparison's K renders take at most cs->light_cap samples per light where the
+     * scene asks for more (pbrt-v3's nsamples under directlighting: f10-1ac's 512, f7-19a's
+     * 32, teapot-area-light's 16): 1 but for f7-19a's 4, which keeps the per-light arrays
+     * in the comparison. The image's expectation does not depend on the count
+     * (test_integrator's test_light_samples checks that), only its noise, which the K
+     * renders measure as they are; at the full counts they would take hours (f10-1ac:
+     * ~360 CPU s per spp). --bench renders with the scene's counts. */
+    uint32_t cap = cs->light_cap ? cs->light_cap : 1;
+    if (!bench)
+        for (uint32_t i = 0; i < s->n_lights; i++)
+            if (s->lights[i].samples > cap) s->lights[i].samples = cap;
     int bx = (w + BLOCK - 1) / BLOCK, by = (h + BLOCK - 1) / BLOCK;
     /* block means per render and channel, and the image means */
     double *bm = calloc((size_t)renders * bx * by * 3, sizeof *bm), img[3] = {0, 0, 0},
