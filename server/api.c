@@ -269,10 +269,13 @@ static bool origin_allowed(srv_request *r)
 
 /* ---------------------------------------------------------------- images (deferred) */
 
+/* A deferred request's state (r->task, freed by request_done): an image's, or a bundle's
+ * (job NULL, spp its ?spp=). */
 typedef struct image_task {
     srv_job *job;
     bool tile, png;
     int tx, ty;
+    uint32_t spp;
 } image_task;
 
 
@@ -430,8 +433,12 @@ static int get_events(srv_request *r, srv_job *j)
 
 /* ---------------------------------------------------------------- jobs */
 
+static bool parse_decimal(const char *s, size_t n, uint64_t *out);
+
 static int post_job(srv_request *r)
 {
+    if (MHD_lookup_connection_value(r->conn, MHD_GET_ARGUMENT_KIND, "spp"))
+        return srv_http_error(r, 400, "spp: the query parameter is for bundles; a JSON scene sets job.spp");
     if (!r->body_len) return srv_http_error(r, 400, "the request body is empty: send a scene document (JSON)");
     ts_error err = {0};
     int status = 500;
@@ -564,11 +571,16 @@ static void bundle_task(void *arg)
         srv_http_set_error(r, 500, "the bundle's %s cannot be read back: %s", info.scene_file, strerror(errno));
         goto done;
     }
-    srv_submit_files files = {!strcmp(info.scene_file, "scene.pbrt"), staging, root};
+    srv_submit_files files = {!strcmp(info.scene_file, "scene.pbrt"), staging, root,
+                              r->task ? ((image_task *)r->task)->spp : 0};
     srv_job *j = srv_store_submit_files(a->store, text, len, &files, &status, &err);
     free(text);
     if (!j) {
-        srv_http_set_error(r, (unsigned)status, "%s: %s", info.scene_file, err.message);
+        /* The sentence names the scene file: scene.json then the JSON path, or the pbrt-v3
+         * position (scene.pbrt:LINE:COLUMN, or an included file's) when it has one. */
+        size_t n = strlen(info.scene_file);
+        bool named = !strncmp(err.message, info.scene_file, n) && err.message[n] == ':';
+        srv_http_set_error(r, (unsigned)status, "%s%s%s", named ? "" : info.scene_file, named ? "" : ": ", err.message);
         goto done;
     }
     staging[0] = '\0'; /* the job's now */
@@ -589,6 +601,18 @@ static int post_bundle(srv_request *r)
     if (enc && strcasecmp(enc, "gzip") && strcasecmp(enc, "x-gzip") && strcasecmp(enc, "identity"))
         return srv_http_error(r, 415, "a bundle may be gzip-compressed, not '%s' (Content-Encoding)", enc);
     if (!r->body_len) return srv_http_error(r, 400, "the request body is empty: send a tar of scene.json or scene.pbrt and its files");
+    /* ?spp=N: the job's spp target, the job.spp a scene.pbrt has no place for (its
+     * sampler's spp, which scales ray differentials, stays the file's). */
+    const char *spp = MHD_lookup_connection_value(r->conn, MHD_GET_ARGUMENT_KIND, "spp");
+    if (spp) {
+        uint64_t v = 0;
+        if (!parse_decimal(spp, strlen(spp), &v) || v < 1 || v > UINT32_MAX)
+            return srv_http_error(r, 400, "spp: expected a whole number of samples per pixel from 1 (canonical decimal)");
+        image_task *t = calloc(1, sizeof *t);
+        if (!t) return srv_http_error(r, 500, "out of memory");
+        t->spp = (uint32_t)v;
+        r->task = t;
+    }
     return srv_http_defer(r, bundle_task);
 }
 

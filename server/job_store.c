@@ -31,6 +31,27 @@ srv_store *srv_store_create(const srv_store_config *cfg)
     return st;
 }
 
+void srv_warnings_collect(void *ctx, const char *msg)
+{
+    srv_warnings *w = ctx;
+    char *copy = w->n < SRV_WARNINGS_MAX ? strdup(msg) : NULL;
+    char **items = copy ? realloc(w->items, (size_t)(w->n + 1) * sizeof *items) : NULL;
+    if (!items) {
+        free(copy);
+        w->dropped++;
+        return;
+    }
+    items[w->n++] = copy;
+    w->items = items;
+}
+
+void srv_warnings_fini(srv_warnings *w)
+{
+    for (int i = 0; i < w->n; i++) free(w->items[i]);
+    free(w->items);
+    *w = (srv_warnings){0};
+}
+
 static void job_free(srv_job *j)
 {
     srv_display_destroy(j->display); /* finished by on_done: returns at once */
@@ -43,6 +64,7 @@ static void job_free(srv_job *j)
     free(j->name);
     free(j->scene_text);
     free(j->files_dir);
+    srv_warnings_fini(&j->warnings);
     free(j);
 }
 
@@ -466,6 +488,20 @@ static bool move_files(const srv_submit_files *files, const char *id, char **out
     return true;
 }
 
+/* One `job.warning` line (level warn) per import warning of j, and one counting those not kept. */
+static void log_warnings(srv_log *log, const srv_job *j)
+{
+    if (!srv_log_enabled(log, SRV_LOG_WARN)) return;
+    for (int i = 0; i < j->warnings.n; i++) {
+        srv_log_field f[] = {SRV_LOG_STR("id", j->id), SRV_LOG_STR("message", j->warnings.items[i])};
+        srv_log_event(log, SRV_LOG_WARN, "job.warning", f, 2);
+    }
+    if (j->warnings.dropped) {
+        srv_log_field f[] = {SRV_LOG_STR("id", j->id), SRV_LOG_NUM("more_warnings", j->warnings.dropped)};
+        srv_log_event(log, SRV_LOG_WARN, "job.warning", f, 2);
+    }
+}
+
 static srv_job *submit(srv_store *st, const char *text, size_t len, const srv_submit_files *files, int *http_status,
                        ts_error *err)
 {
@@ -480,16 +516,20 @@ static srv_job *submit(srv_store *st, const char *text, size_t len, const srv_su
     lim.max_width = def.max_width, lim.max_height = def.max_height;
     lim.max_pixels = def.max_pixels, lim.max_spp = def.max_spp;
     ts_scene *s = NULL;
+    srv_warnings warnings = {0}; /* the job's once it is made */
     ts_status stt = !files ? ts_scene_load_text(text, len, cfg->assets_dir, "scene", &lim, &s, err)
-                    : files->pbrt ? ts_scene_load_pbrt_text(text, len, files->staging_dir, "scene", &lim, NULL, NULL, &s, err)
+                    : files->pbrt ? ts_scene_load_pbrt_text(text, len, files->staging_dir, "scene.pbrt", &lim,
+                                                            srv_warnings_collect, &warnings, &s, err)
                                   : ts_scene_load_text(text, len, files->staging_dir, "scene", &lim, &s, err);
     if (stt) {
         *http_status = stt == TS_ERR_LIMIT ? 413 : stt == TS_ERR_NOMEM ? 500 : 400;
+        srv_warnings_fini(&warnings);
         return NULL;
     }
     uint64_t pixels = (uint64_t)(s->crop_x1 - s->crop_x0) * (uint64_t)(s->crop_y1 - s->crop_y0);
     ts_job_settings js;
     ts_job_settings_from_scene(s, &js);
+    if (files && files->spp) js.spp = files->spp;
     uint32_t spp = js.spp;
     *http_status = 422;
     if (s->width > (int)cfg->limits.max_width || s->height > (int)cfg->limits.max_height ||
@@ -502,7 +542,8 @@ static srv_job *submit(srv_store *st, const char *text, size_t len, const srv_su
     }
     if (spp > cfg->limits.max_spp) {
         ts_error_set(err, TS_ERR_LIMIT, "%s: %u samples per pixel is more than this server accepts (%u)",
-                     s->job.spp ? "job.spp" : "sampler.spp", spp, cfg->limits.max_spp);
+                     files && files->spp ? "the spp query parameter" : s->job.spp ? "job.spp" : "sampler.spp", spp,
+                     cfg->limits.max_spp);
         goto fail_scene;
     }
     if (!ts_integrator_available(s->integrator.type)) {
@@ -553,6 +594,8 @@ static srv_job *submit(srv_store *st, const char *text, size_t len, const srv_su
         }
     }
     j->settings = js;
+    j->warnings = warnings;
+    warnings = (srv_warnings){0};
     srv_events_set_items(j->events, j->nx * j->ny);
     struct timespec now;
     clock_gettime(CLOCK_REALTIME, &now);
@@ -583,8 +626,10 @@ static srv_job *submit(srv_store *st, const char *text, size_t len, const srv_su
                              SRV_LOG_NUM("priority", js.priority)};
         srv_log_event(cfg->log, SRV_LOG_INFO, "job.submitted", f, sizeof f / sizeof *f);
     }
+    log_warnings(cfg->log, j);
     return j;
 fail_scene:
+    srv_warnings_fini(&warnings);
     ts_scene_destroy(s);
     return NULL;
 }
@@ -604,6 +649,10 @@ srv_job *srv_store_restore(srv_store *st, const srv_restore *r, ts_error *err)
         return NULL;
     }
     j->scene_pbrt = r->scene_pbrt;
+    if (r->warnings) {
+        j->warnings = *r->warnings;
+        *r->warnings = (srv_warnings){0};
+    }
     if (r->files_dir && !(j->files_dir = strdup(r->files_dir))) {
         job_free(j);
         ts_error_set(err, TS_ERR_NOMEM, "out of memory for a job");
@@ -740,6 +789,9 @@ cJSON *srv_job_status_json(srv_job *j)
     add_number_or_null(o, "time_limit_s", j->settings.time_limit_s, j->settings.time_limit_s > 0);
     add_number_or_null(o, "target_error", j->settings.target_error, j->settings.target_error > 0);
     cJSON_AddStringToObject(o, "integrator", j->integrator);
+    cJSON *warn = cJSON_AddArrayToObject(o, "warnings");
+    for (int i = 0; warn && i < j->warnings.n; i++) cJSON_AddItemToArray(warn, cJSON_CreateString(j->warnings.items[i]));
+    if (j->warnings.dropped) cJSON_AddNumberToObject(o, "warnings_dropped", j->warnings.dropped);
     cJSON *fx = cJSON_AddArrayToObject(o, "effects");
     for (uint32_t b = 1; b < (1u << TS_EFFECT_COUNT); b <<= 1) {
         const char *k = ts_effect_key(b);

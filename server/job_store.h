@@ -21,6 +21,20 @@
 #include "log.h"
 #include "tessera.h"
 
+/* The warnings of a scene's import (the pbrt-v3 importer's: "Integrator \"bdpt\": rendered
+ * with the path integrator…"), each one sentence; at most SRV_WARNINGS_MAX are kept, the
+ * rest only counted. Filled by srv_warnings_collect (a ts_warning_fn) while the scene loads,
+ * immutable once the job is in the store. */
+#define SRV_WARNINGS_MAX 64
+typedef struct srv_warnings {
+    char **items;
+    int n;
+    int dropped; /* beyond SRV_WARNINGS_MAX, or not kept for want of memory */
+} srv_warnings;
+/* Appends msg to the srv_warnings ctx (a ts_warning_fn, for ts_scene_load_pbrt_text). */
+void srv_warnings_collect(void *ctx, const char *msg);
+void srv_warnings_fini(srv_warnings *w);
+
 typedef struct srv_job {
     atomic_int refs;
     /* immutable once the job is in the store */
@@ -30,6 +44,7 @@ typedef struct srv_job {
     size_t scene_len;
     char *files_dir;             /* a bundle's folder (ROOT/jobs/<id>/files, bundle.h), or NULL */
     bool scene_pbrt;             /* scene_text is pbrt-v3 text (a bundle's scene.pbrt) */
+    srv_warnings warnings;       /* what the scene's import warned about (a bundle's scene.pbrt) */
     srv_display *display;        /* streaming to a tev display server, or NULL (thread-safe itself) */
     char integrator[16];
     char effects[256];           /* "diffuse, area_lights, …" */
@@ -104,6 +119,8 @@ typedef struct srv_submit_files {
     bool pbrt;                /* the scene file is scene.pbrt; else scene.json */
     const char *staging_dir;  /* where the bundle was unpacked */
     const char *files_root;   /* --data DIR, or the server's temporary folder */
+    uint32_t spp;             /* the job's spp target (POST …?spp=N, the job.spp a scene.pbrt
+                               * cannot hold; the sampler's spp stays the scene's), 0: the scene's */
 } srv_submit_files;
 srv_job *srv_store_submit_files(srv_store *st, const char *text, size_t len, const srv_submit_files *files,
                                 int *http_status, ts_error *err);
@@ -127,6 +144,7 @@ typedef struct srv_restore {
     const cJSON *history;        /* the checkpoint's "history" array, or NULL */
     const char *files_dir;       /* a bundle job's folder (copied), or NULL */
     bool scene_pbrt;             /* scene_text is a bundle's scene.pbrt */
+    srv_warnings *warnings;      /* the reloaded scene's import warnings (moved into the job), or NULL */
 } srv_restore;
 srv_job *srv_store_restore(srv_store *st, const srv_restore *r, ts_error *err);
 

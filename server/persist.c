@@ -424,6 +424,8 @@ static void restore_one(const char *dir, const char *id, srv_store *st, const ts
     cJSON *meta = jtext ? cJSON_ParseWithLength(jtext, jlen) : NULL;
     ts_error err = {0};
     srv_restore r = {0};
+    srv_warnings warnings = {0}; /* the reloaded scene.pbrt's, moved into the job */
+    r.warnings = &warnings;
     r.id = id;
     r.scene_text = stext;
     r.scene_len = slen;
@@ -460,7 +462,7 @@ static void restore_one(const char *dir, const char *id, srv_store *st, const ts
     if (r.state == TS_JOB_FAILED) {
         snprintf(failure, sizeof failure, "%s", cJSON_IsString(fail) ? fail->valuestring : "failed");
     }
-    if (pbrt ? ts_scene_load_pbrt_text(stext, slen, files, "scene", limits, NULL, NULL, &scene, &err)
+    if (pbrt ? ts_scene_load_pbrt_text(stext, slen, files, "scene.pbrt", limits, srv_warnings_collect, &warnings, &scene, &err)
              : ts_scene_load_text(stext, slen, bundle ? files : assets_dir, "scene", limits, &scene, &err)) {
         snprintf(failure, sizeof failure, "the checkpointed scene no longer loads: %s", err.message);
         goto add;
@@ -506,6 +508,7 @@ add:
         }
     }
     srv_job_release(j);
+    srv_warnings_fini(&warnings);
     ts_scene_destroy(scene);
     ts_film_destroy(film);
     free(tile_spp);

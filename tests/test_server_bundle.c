@@ -6,7 +6,8 @@
  * 4xx sentence naming the entry, and after each refusal nothing is left on disk (the
  * server's incoming/ and jobs/ folders are empty). The tars are written by libarchive in
  * the test, so every refused kind (links, devices, FIFOs, absolute paths, '..') is what a
- * real tar would hold. */
+ * real tar would hold. A scene.pbrt's import warnings are in the job's status (after a
+ * restart too) and in the log; a bundle's ?spp= is its target, bad values refused. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -149,13 +150,14 @@ static size_t on_data(char *d, size_t size, size_t nmemb, void *user)
     return n;
 }
 
-/* POSTs body as type (with Content-Encoding enc unless NULL); returns the status, *out the
- * body (caller frees). */
-static long post(const test_server *s, const void *body, size_t len, const char *type, const char *enc, char **out)
+/* POSTs body to path as type (with Content-Encoding enc unless NULL); returns the status,
+ * *out the body (caller frees). */
+static long post_to(const test_server *s, const char *path, const void *body, size_t len, const char *type,
+                    const char *enc, char **out)
 {
     CURL *c = curl_easy_init();
-    char url[160], h1[160], h2[160];
-    snprintf(url, sizeof url, "%s/api/v1/jobs", s->base);
+    char url[300], h1[160], h2[160];
+    snprintf(url, sizeof url, "%s%s", s->base, path);
     snprintf(h1, sizeof h1, "Content-Type: %s", type);
     struct curl_slist *h = curl_slist_append(NULL, h1);
     h = curl_slist_append(h, "Expect:");
@@ -180,6 +182,11 @@ static long post(const test_server *s, const void *body, size_t len, const char 
     curl_easy_cleanup(c);
     *out = b.p ? b.p : calloc(1, 1);
     return status;
+}
+
+static long post(const test_server *s, const void *body, size_t len, const char *type, const char *enc, char **out)
+{
+    return post_to(s, "/api/v1/jobs", body, len, type, enc, out);
 }
 
 /* ---------------------------------------------------------------- disk */
@@ -381,6 +388,101 @@ static void test_good_bundles(void **state)
     rm_rf(tmp);
 }
 
+/* ---------------------------------------------------------------- warnings, ?spp= */
+
+/* pbrt-v3 text whose import warns twice: bdpt is rendered with the path integrator, halton
+ * is mapped to Sobol. */
+static const char scene_pbrt_warns[] = "LookAt 0 1.5 5  0 0.6 0  0 1 0\nCamera \"perspective\" \"float fov\" [35]\n"
+                                       "Film \"image\" \"integer xresolution\" [16] \"integer yresolution\" [12]\n"
+                                       "Sampler \"halton\" \"integer pixelsamples\" [64]\nIntegrator \"bdpt\"\n"
+                                       "WorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\nMaterial \"matte\"\n"
+                                       "Shape \"plymesh\" \"string filename\" \"meshes/quad.ply\"\nWorldEnd\n";
+
+/* The status's warnings: two, naming scene.pbrt's lines 5 (bdpt) and 4 (halton). */
+static void assert_two_warnings(const cJSON *status, const char *when)
+{
+    const cJSON *w = cJSON_GetObjectItemCaseSensitive(status, "warnings");
+    const cJSON *w0 = cJSON_GetArrayItem(w, 0), *w1 = cJSON_GetArrayItem(w, 1);
+    bool bdpt = false, halton = false;
+    for (const cJSON *x = w0; x && cJSON_IsString(x); x = x == w0 ? w1 : NULL) {
+        bdpt |= !strncmp(x->valuestring, "scene.pbrt:5:", 13) && strstr(x->valuestring, "bdpt") &&
+                strstr(x->valuestring, "path integrator");
+        halton |= !strncmp(x->valuestring, "scene.pbrt:4:", 13) && strstr(x->valuestring, "halton");
+    }
+    if (cJSON_GetArraySize(w) != 2 || !bdpt || !halton)
+        fail_msg("%s: expected the bdpt and halton warnings, got %s", when, cJSON_PrintUnformatted(w));
+}
+
+static void test_pbrt_warnings_and_spp(void **state)
+{
+    (void)state;
+    char data[256], tmp[256], root[600];
+    make_tmp(data, sizeof data, "data");
+    make_tmp(tmp, sizeof tmp, "tmp");
+    const char *args[] = {"--threads", "1", "--data", data, "--max-spp", "64", NULL};
+    test_server s;
+    start_with_tmpdir(&s, tmp, args);
+    files_root(data, tmp, root, sizeof root);
+    tar_entry pe[] = {{"scene.pbrt", 'f', scene_pbrt_warns, strlen(scene_pbrt_warns)},
+                      {"meshes/quad.ply", 'f', quad_ply, strlen(quad_ply)}};
+    size_t len;
+    unsigned char *tar = make_tar(pe, 2, false, &len);
+    char *body;
+    /* ?spp= is the job's target; the file's pixelsamples (64) stay the sampler's. */
+    long st = post_to(&s, "/api/v1/jobs?spp=2", tar, len, "application/x-tar", NULL, &body);
+    if (st != 201) fail_msg("?spp=2: %ld %s", st, body);
+    char id[32];
+    snprintf(id, sizeof id, "%s", job_id_of(body));
+    free(body);
+    cJSON *done = ts_wait_done(&s, id, 60);
+    assert_string_equal(ts_json_str(done, "state"), "done");
+    assert_int_equal((int)ts_json_num(done, "spp_done"), 2);
+    assert_int_equal((int)ts_json_num(done, "spp_target"), 2);
+    assert_two_warnings(done, "the status");
+    cJSON_Delete(done);
+    /* Logged: one job.warning line (level warn) each. */
+    FILE *f = fopen(s.log, "r");
+    assert_non_null(f);
+    char line[2048];
+    int logged = 0;
+    while (fgets(line, sizeof line, f))
+        logged += strstr(line, " warn job.warning ") && strstr(line, id) && strstr(line, "scene.pbrt:");
+    fclose(f);
+    assert_int_equal(logged, 2);
+    /* Bad values: 400 (or 422 over --max-spp, naming the parameter); refused before anything is unpacked. */
+    static const struct { const char *query; long status; const char *says; } bad[] = {
+        {"?spp=0", 400, "spp: expected a whole number"},   {"?spp=007", 400, "spp: expected a whole number"},
+        {"?spp=two", 400, "spp: expected a whole number"}, {"?spp=", 400, "spp: expected a whole number"},
+        {"?spp=65", 422, "the spp query parameter: 65 samples per pixel is more than this server accepts (64)"},
+    };
+    for (size_t b = 0; b < sizeof bad / sizeof *bad; b++) {
+        char path[64];
+        snprintf(path, sizeof path, "/api/v1/jobs%s", bad[b].query);
+        st = post_to(&s, path, tar, len, "application/x-tar", NULL, &body);
+        if (st != bad[b].status || !strstr(body, bad[b].says))
+            fail_msg("%s: %ld %s; expected %ld and '%s'", bad[b].query, st, body, bad[b].status, bad[b].says);
+        free(body);
+        assert_nothing_left(root, 1, bad[b].query);
+    }
+    /* A JSON scene sets job.spp: the query parameter is refused there. */
+    st = post_to(&s, "/api/v1/jobs?spp=2", scene_json, strlen(scene_json), "application/json", NULL, &body);
+    if (st != 400 || !strstr(body, "a JSON scene sets job.spp")) fail_msg("JSON with ?spp=2: %ld %s", st, body);
+    free(body);
+    free(tar);
+    /* Restored from --data: the warnings again (the scene is loaded again), the target kept. */
+    assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
+    start_with_tmpdir(&s, tmp, args);
+    char p[64];
+    snprintf(p, sizeof p, "/api/v1/jobs/%s", id);
+    cJSON *o = ts_http_json(&s, p, 200);
+    assert_int_equal((int)ts_json_num(o, "spp_target"), 2);
+    assert_two_warnings(o, "after the restart");
+    cJSON_Delete(o);
+    assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
+    rm_rf(data);
+    rm_rf(tmp);
+}
+
 /* ---------------------------------------------------------------- bad bundles */
 
 typedef struct bad_case {
@@ -553,6 +655,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_good_bundles),
+        cmocka_unit_test(test_pbrt_warnings_and_spp),
         cmocka_unit_test(test_bad_entries),
         cmocka_unit_test(test_limits),
     };

@@ -55,6 +55,14 @@ static ts_status load_pbrt(const char *path, const char *text, size_t len, const
     ts_status st = path ? ts_pbrt_parse_file(path, NULL, &pl, &ps, err)
                         : ts_pbrt_parse_text(text, len, name, base_dir, &pl, &ps, err);
     if (st) return st;
+    /* Text called "scene.pbrt" in positions is the scene "scene", as a file's stem names it. */
+    char stem[256];
+    size_t n = strlen(name);
+    if (!path && n > 5 && n - 5 < sizeof stem && ends_with(name, ".pbrt")) {
+        memcpy(stem, name, n - 5);
+        stem[n - 5] = '\0';
+        name = stem;
+    }
     ts_scene_builder *b = NULL;
     st = ts_scene_builder_create(limits, ps->base_dir, &b, err);
     if (!st) st = ts_pbrt_import(ps, b, doc, warn, warn_ctx, err);

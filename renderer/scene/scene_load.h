@@ -35,8 +35,9 @@ ts_scene_format ts_scene_format_of(const char *path, const char *text, size_t le
 ts_status ts_scene_load_path(const char *path, const ts_scene_limits *limits, ts_warning_fn warn,
                              void *warn_ctx, ts_scene **out, ts_error *err);
 
-/* Loads pbrt-v3 scene text held in memory, called name in positions and as the scene's
- * name (NULL: "scene"). base_dir: the folder every file it names resolves against and is
+/* Loads pbrt-v3 scene text held in memory, called name in positions (NULL: "scene"); the
+ * scene's name is name without a final ".pbrt" (a bundle's "scene.pbrt" is the scene
+ * "scene"). base_dir: the folder every file it names resolves against and is
  * confined to, or NULL to refuse every file reference (a scene posted to a server without
  * an asset folder). */
 ts_status ts_scene_load_pbrt_text(const char *text, size_t len, const char *base_dir, const char *name,
