@@ -4,10 +4,6 @@
  * raster → screen → camera chain, filters against their formulas, spectra against the
  * CIE's normalisation — or against the JSON v1 document it is equivalent to; and the
  * error sentences, exactly. */
-#ifndef _XOPEN_SOURCE
-#define _XOPEN_SOURCE 700 /* mkdtemp, nftw */
-#endif
-
 // clang-format off
 #include <setjmp.h>
 #include <stdarg.h>
@@ -15,12 +11,10 @@
 #include <cmocka.h>
 // clang-format on
 
-#include <ftw.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cjson/cJSON.h>
@@ -30,38 +24,11 @@
 #include "scene/scene_json.h"
 #include "scene/scene_load.h"
 #include "scene/spectrum.h"
-
-static char tmp_dir[256];
-
-static int rm_entry(const char *path, const struct stat *sb, int flag, struct FTW *ftw)
-{
-    (void)sb, (void)flag, (void)ftw;
-    return remove(path);
-}
-
-static int group_setup(void **state)
-{
-    (void)state;
-    const char *t = getenv("TMPDIR");
-    snprintf(tmp_dir, sizeof tmp_dir, "%s/ts_test_pbrt_import_XXXXXX",
-             t && *t && strlen(t) < 200 ? t : "/tmp");
-    return mkdtemp(tmp_dir) ? 0 : -1;
-}
-
-static int group_teardown(void **state)
-{
-    (void)state;
-    nftw(tmp_dir, rm_entry, 16, FTW_DEPTH | FTW_PHYS);
-    return 0;
-}
+#include "tmp_folder.h"
 
 static void write_file(const char *rel, const char *text, char *path, size_t len)
 {
-    snprintf(path, len, "%s/%s", tmp_dir, rel);
-    FILE *f = fopen(path, "wb");
-    assert_non_null(f);
-    assert_int_equal(fwrite(text, 1, strlen(text), f), strlen(text));
-    assert_int_equal(fclose(f), 0);
+    ts_tmp_write(rel, text, strlen(text), path, len);
 }
 
 typedef struct warnings {
@@ -659,7 +626,7 @@ static void convert_round_trip(void **state)
     assert_int_equal(ts_scene_convert_pbrt_path(path, NULL, on_warning, &w, &json, &len, &err), TS_OK);
     ts_scene *a = NULL, *b = NULL;
     assert_int_equal(ts_scene_load_path(path, NULL, NULL, NULL, &a, &err), TS_OK);
-    if (ts_scene_load_text(json, len, tmp_dir, "every", NULL, &b, &err)) fail_msg("%s", err.message);
+    if (ts_scene_load_text(json, len, ts_tmp_dir, "every", NULL, &b, &err)) fail_msg("%s", err.message);
     assert_string_equal(a->name, b->name);
     assert_int_equal(a->n_shapes, b->n_shapes);
     assert_int_equal(a->n_lights, b->n_lights);
@@ -681,11 +648,11 @@ static void cli_convert_and_render(void **state)
     snprintf(cmd, sizeof cmd,
              "'%s' convert '%s' -o '%s/cli.json' --quiet && '%s' render '%s' --spp 2 --threads 2 --quiet -o "
              "'%s/a.exr' 2>/dev/null && '%s' render '%s/cli.json' --spp 2 --threads 1 --quiet -o '%s/b.exr'",
-             bin, pbrt, tmp_dir, bin, pbrt, tmp_dir, bin, tmp_dir, tmp_dir);
+             bin, pbrt, ts_tmp_dir, bin, pbrt, ts_tmp_dir, bin, ts_tmp_dir, ts_tmp_dir);
     assert_int_equal(system(cmd), 0);
     char pa[512], pb[512];
-    snprintf(pa, sizeof pa, "%s/a.exr", tmp_dir);
-    snprintf(pb, sizeof pb, "%s/b.exr", tmp_dir);
+    snprintf(pa, sizeof pa, "%s/a.exr", ts_tmp_dir);
+    snprintf(pb, sizeof pb, "%s/b.exr", ts_tmp_dir);
     ts_image ia = {0}, ib = {0};
     ts_error err = {0};
     assert_int_equal(ts_exr_read(pa, &ia, &err), TS_OK);
@@ -698,13 +665,13 @@ static void cli_convert_and_render(void **state)
     /* A refused scene: exit 1, the sentence with its position, nothing written. */
     write_file("bad.pbrt", "WorldBegin\nShape \"sphere\" \"float radius\" [1 2]\nWorldEnd\n", pbrt,
                sizeof pbrt);
-    snprintf(cmd, sizeof cmd, "'%s' convert '%s' -o '%s/bad.json' 2>'%s/err.txt'", bin, pbrt, tmp_dir,
-             tmp_dir);
+    snprintf(cmd, sizeof cmd, "'%s' convert '%s' -o '%s/bad.json' 2>'%s/err.txt'", bin, pbrt, ts_tmp_dir,
+             ts_tmp_dir);
     int rc = system(cmd);
     assert_true(WIFEXITED(rc) && WEXITSTATUS(rc) == 1);
-    snprintf(pa, sizeof pa, "%s/bad.json", tmp_dir);
+    snprintf(pa, sizeof pa, "%s/bad.json", ts_tmp_dir);
     assert_int_not_equal(access(pa, F_OK), 0);
-    snprintf(pa, sizeof pa, "%s/err.txt", tmp_dir);
+    snprintf(pa, sizeof pa, "%s/err.txt", ts_tmp_dir);
     FILE *f = fopen(pa, "r");
     char line[1024] = "";
     assert_non_null(fgets(line, sizeof line, f));
@@ -780,7 +747,7 @@ static void convert_textures_round_trip(void **state)
     (void)state;
     /* A 4 × 3 RGB PFM (bottom row first) of distinct values. */
     char pfm[512];
-    snprintf(pfm, sizeof pfm, "%s/img.pfm", tmp_dir);
+    snprintf(pfm, sizeof pfm, "%s/img.pfm", ts_tmp_dir);
     FILE *f = fopen(pfm, "wb");
     assert_non_null(f);
     fprintf(f, "PF\n4 3\n-1.0\n");
@@ -809,7 +776,7 @@ static void convert_textures_round_trip(void **state)
     cJSON_Delete(doc);
     ts_scene *sa = NULL, *sb = NULL;
     if (ts_scene_load_path(path, NULL, NULL, NULL, &sa, &err)) fail_msg("%s", err.message);
-    if (ts_scene_load_text(json, len, tmp_dir, "tex", NULL, &sb, &err)) fail_msg("%s", err.message);
+    if (ts_scene_load_text(json, len, ts_tmp_dir, "tex", NULL, &sb, &err)) fail_msg("%s", err.message);
     assert_true(sa->textured && sb->textured);
     assert_same_pixels(sa, sb, 4);
     free(json);
@@ -872,5 +839,5 @@ int main(void)
         cmocka_unit_test(convert_textures_round_trip),
         cmocka_unit_test(digest_of_bytes),
     };
-    return cmocka_run_group_tests(tests, group_setup, group_teardown);
+    return cmocka_run_group_tests(tests, ts_tmp_group_setup, ts_tmp_group_teardown);
 }

@@ -6,71 +6,32 @@
  * published pbrt-v3 scenes of the shared scene collection beside the source tree (found
  * through TS_SOURCE_DIR; skipped where it is absent; never copied into the repository).
  * Scenes are written inline; the files Include and .spd need go to a temporary folder. */
-#ifndef _XOPEN_SOURCE
-#define _XOPEN_SOURCE 700 /* mkdtemp, nftw */
-#endif
-
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <cmocka.h>
 
 #include <dirent.h>
-#include <ftw.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include "scene/pbrt_parser.h"
+#include "tmp_folder.h"
 
-static char tmp_dir[256];
-
-static int rm_entry(const char *path, const struct stat *sb, int flag, struct FTW *ftw)
-{
-    (void)sb, (void)flag, (void)ftw;
-    return remove(path);
-}
-
-static int group_setup(void **state)
-{
-    (void)state;
-    const char *t = getenv("TMPDIR");
-    snprintf(tmp_dir, sizeof tmp_dir, "%s/ts_test_pbrt_XXXXXX", t && *t && strlen(t) < 200 ? t : "/tmp");
-    return mkdtemp(tmp_dir) ? 0 : -1;
-}
-
-static int group_teardown(void **state)
-{
-    (void)state;
-    nftw(tmp_dir, rm_entry, 16, FTW_DEPTH | FTW_PHYS);
-    return 0;
-}
-
-/* Writes tmp_dir/rel (folders made as needed). */
+/* Writes ts_tmp_dir/rel (folders made as needed). */
 static void write_file(const char *rel, const char *text)
 {
-    char path[512];
-    snprintf(path, sizeof path, "%s/%s", tmp_dir, rel);
-    for (char *s = path + strlen(tmp_dir) + 1; *s; s++)
-        if (*s == '/') {
-            *s = '\0';
-            mkdir(path, 0755);
-            *s = '/';
-        }
-    FILE *f = fopen(path, "w");
-    assert_non_null(f);
-    fputs(text, f);
-    assert_int_equal(fclose(f), 0);
+    ts_tmp_write(rel, text, strlen(text), NULL, 0);
 }
 
 static ts_pbrt_scene *parse_ok(const char *text)
 {
     ts_pbrt_scene *s = NULL;
     ts_error err = {0};
-    ts_status st = ts_pbrt_parse_text(text, strlen(text), "t.pbrt", tmp_dir, NULL, &s, &err);
+    ts_status st = ts_pbrt_parse_text(text, strlen(text), "t.pbrt", ts_tmp_dir, NULL, &s, &err);
     if (st) fail_msg("parse failed: %s", err.message);
     assert_non_null(s);
     return s;
@@ -81,7 +42,7 @@ static void expect_error_status(const char *text, ts_status status, const char *
 {
     ts_pbrt_scene *s = NULL;
     ts_error err = {0};
-    ts_status st = ts_pbrt_parse_text(text, strlen(text), "t.pbrt", tmp_dir, NULL, &s, &err);
+    ts_status st = ts_pbrt_parse_text(text, strlen(text), "t.pbrt", ts_tmp_dir, NULL, &s, &err);
     if (st == TS_OK) fail_msg("parsed, but should fail with \"%s\":\n%s", want, text);
     assert_null(s);
     assert_int_equal(err.status, st);
@@ -214,7 +175,7 @@ static void test_lexer_streaming_file(void **state)
 {
     (void)state;
     char path[512];
-    snprintf(path, sizeof path, "%s/big.pbrt", tmp_dir);
+    snprintf(path, sizeof path, "%s/big.pbrt", ts_tmp_dir);
     FILE *f = fopen(path, "w");
     assert_non_null(f);
     const int n = 400000; /* ~3.5 MB of numbers, 10 a line */
@@ -608,7 +569,7 @@ static void test_object_instancing(void **state)
 static ts_status parse_file(const char *rel, const ts_pbrt_limits *lim, ts_pbrt_scene **s, ts_error *err)
 {
     char path[512];
-    snprintf(path, sizeof path, "%s/%s", tmp_dir, rel);
+    snprintf(path, sizeof path, "%s/%s", ts_tmp_dir, rel);
     return ts_pbrt_parse_file(path, NULL, lim, s, err);
 }
 
@@ -639,8 +600,8 @@ static void test_include(void **state)
      * is the target's (pbrt-v3 takes the folder of the file's real path); a missing file
      * is named as given */
     char target[512], link[512];
-    snprintf(target, sizeof target, "%s/inc/main.pbrt", tmp_dir);
-    snprintf(link, sizeof link, "%s/link.pbrt", tmp_dir);
+    snprintf(target, sizeof target, "%s/inc/main.pbrt", ts_tmp_dir);
+    snprintf(link, sizeof link, "%s/link.pbrt", ts_tmp_dir);
     assert_int_equal(symlink(target, link), 0);
     assert_int_equal(parse_file("link.pbrt", NULL, &s, &err), TS_OK);
     assert_int_equal(s->shape_count, 3); /* its Includes resolve in inc/, the target's folder */
@@ -690,7 +651,7 @@ static void test_include(void **state)
     assert_int_not_equal(ts_pbrt_parse_text(text, strlen(text), "posted", NULL, NULL, &s, &err), TS_OK);
     assert_string_equal(err.message, "posted:2:9: Include: 'inc/geo/b.pbrt': this scene may not refer to files (no "
                                      "asset folder is configured)");
-    assert_int_equal(ts_pbrt_parse_text(text, strlen(text), "posted", tmp_dir, NULL, &s, &err), TS_OK);
+    assert_int_equal(ts_pbrt_parse_text(text, strlen(text), "posted", ts_tmp_dir, NULL, &s, &err), TS_OK);
     assert_int_equal(s->shape_count, 1);
     ts_pbrt_scene_destroy(s);
 }
@@ -847,7 +808,7 @@ static void test_error_sentences(void **state)
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         ts_pbrt_scene *s = NULL;
         ts_error err = {0};
-        ts_status st = ts_pbrt_parse_text(cases[i].text, strlen(cases[i].text), "t.pbrt", tmp_dir, NULL, &s, &err);
+        ts_status st = ts_pbrt_parse_text(cases[i].text, strlen(cases[i].text), "t.pbrt", ts_tmp_dir, NULL, &s, &err);
         if (st == TS_OK || s || err.status != st || !strstr(err.message, cases[i].want)) {
             print_error("case %zu: status %d, message \"%s\"; expected \"%s\"\n", i, st, err.message, cases[i].want);
             failures++;
@@ -884,7 +845,7 @@ static void test_limits(void **state)
     write_file("big-include.pbrt", "Shape \"a\" \"float x\" [1 2 3 4 5 6 7 8 9 10]\n");
     lim.max_file_bytes = 16;
     const char *t2 = WORLD("Include \"big-include.pbrt\"\n");
-    assert_int_equal(ts_pbrt_parse_text(t2, strlen(t2), "t.pbrt", tmp_dir, &lim, &s, &err), TS_ERR_LIMIT);
+    assert_int_equal(ts_pbrt_parse_text(t2, strlen(t2), "t.pbrt", ts_tmp_dir, &lim, &s, &err), TS_ERR_LIMIT);
     assert_string_equal(err.message,
                         "t.pbrt:2:9: Include: 'big-include.pbrt': file is 43 bytes, more than the limit of 16");
 
@@ -893,7 +854,7 @@ static void test_limits(void **state)
     s = parse_ok(WORLD("CoordSysTransform \"a\" CoordSysTransform \"b\" CoordSysTransform \"c\"\n"));
     ts_pbrt_scene_destroy(s);
     const char *t3 = WORLD("CoordSysTransform \"a\" CoordSysTransform \"b\" CoordSysTransform \"c\"\n");
-    assert_int_equal(ts_pbrt_parse_text(t3, strlen(t3), "t.pbrt", tmp_dir, &lim, &s, &err), TS_OK);
+    assert_int_equal(ts_pbrt_parse_text(t3, strlen(t3), "t.pbrt", ts_tmp_dir, &lim, &s, &err), TS_OK);
     assert_int_equal(s->warning_count, 2);
     assert_int_equal(s->warnings_dropped, 1);
     ts_pbrt_scene_destroy(s);
@@ -1010,5 +971,5 @@ int main(void)
         cmocka_unit_test(test_shared_scenes),
         cmocka_unit_test(test_shared_scene_details),
     };
-    return cmocka_run_group_tests(tests, group_setup, group_teardown);
+    return cmocka_run_group_tests(tests, ts_tmp_group_setup, ts_tmp_group_teardown);
 }

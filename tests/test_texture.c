@@ -13,23 +13,17 @@
  * from pbrt-v3 scene text end to end, and the exact sentence of every refusal. Image
  * fixtures are written by the test into a temporary folder; nothing is read from
  * outside it. No statistics: every expectation is exact or has a derived bound. */
-#ifndef _XOPEN_SOURCE
-#define _XOPEN_SOURCE 700 /* mkdtemp, nftw */
-#endif
-
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
 
 #include <cmocka.h> /* after the three it needs */
 
-#include <ftw.h>
 #include <math.h>
 #include <png.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 
 #include "core/arena.h"
 #include "core/hash.h"
@@ -47,38 +41,11 @@
 #include "textures/texture_mapping.h"
 #include "textures/texture_pbrt.h"
 #include "textures/tga.h"
-
-static char tmp_dir[256];
-
-static int rm_entry(const char *path, const struct stat *sb, int flag, struct FTW *ftw)
-{
-    (void)sb, (void)flag, (void)ftw;
-    return remove(path);
-}
-
-static int group_setup(void **state)
-{
-    (void)state;
-    const char *t = getenv("TMPDIR");
-    snprintf(tmp_dir, sizeof tmp_dir, "%s/ts_test_texture_XXXXXX", t && *t && strlen(t) < 200 ? t : "/tmp");
-    return mkdtemp(tmp_dir) ? 0 : -1;
-}
-
-static int group_teardown(void **state)
-{
-    (void)state;
-    nftw(tmp_dir, rm_entry, 16, FTW_DEPTH | FTW_PHYS);
-    return 0;
-}
+#include "tmp_folder.h"
 
 static void write_bytes(const char *rel, const void *data, size_t len)
 {
-    char path[512];
-    snprintf(path, sizeof path, "%s/%s", tmp_dir, rel);
-    FILE *f = fopen(path, "wb");
-    assert_non_null(f);
-    if (len) assert_int_equal(fwrite(data, 1, len, f), len);
-    assert_int_equal(fclose(f), 0);
+    ts_tmp_write(rel, data, len, NULL, 0);
 }
 
 static void assert_close(double a, double b, double tol, const char *what)
@@ -916,7 +883,7 @@ static void write_png(const char *rel, int w, int h, int color_type, int bit_dep
                       const unsigned char *rows, size_t rowbytes, const png_color *palette, int n_palette)
 {
     char path[512];
-    snprintf(path, sizeof path, "%s/%s", tmp_dir, rel);
+    snprintf(path, sizeof path, "%s/%s", ts_tmp_dir, rel);
     FILE *f = fopen(path, "wb");
     assert_non_null(f);
     png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
@@ -943,7 +910,7 @@ static const ts_mipmap *cache_get(ts_texture_cache *c, const char *file, int nc,
     ts_texture_image_options opt = {.n_channels = nc, .gamma = gamma, .scale = scale, .wrap = wrap};
     const ts_mipmap *m = NULL;
     ts_error err = {0};
-    if (ts_texture_cache_get(c, tmp_dir, file, 0, &opt, &m, &err)) fail_msg("%s: %s", file, err.message);
+    if (ts_texture_cache_get(c, ts_tmp_dir, file, 0, &opt, &m, &err)) fail_msg("%s: %s", file, err.message);
     return m;
 }
 
@@ -1045,7 +1012,7 @@ static void test_exr(void **state)
     for (int i = 0; i < 18; i++)
         img.data[i] = (float)i * 0.37f - 1; /* negative values are kept */
     char path[512];
-    snprintf(path, sizeof path, "%s/rgb.exr", tmp_dir);
+    snprintf(path, sizeof path, "%s/rgb.exr", ts_tmp_dir);
     assert_int_equal(ts_exr_write(path, &img, &err), TS_OK);
     /* 2 × 3 is resampled to 2 × 4; read it flat (no gamma by default for EXR) and check
      * against a map made here from the same texels, flipped. */
@@ -1066,7 +1033,7 @@ static void test_exr(void **state)
     const char *yname[1] = {"Y"};
     assert_int_equal(ts_image_init(&img, 1, 1, 1, yname, &err), TS_OK);
     img.data[0] = 0.25f;
-    snprintf(path, sizeof path, "%s/y.exr", tmp_dir);
+    snprintf(path, sizeof path, "%s/y.exr", ts_tmp_dir);
     assert_int_equal(ts_exr_write(path, &img, &err), TS_OK);
     ts_image_fini(&img);
     m = cache_get(cache, "y.exr", 3, false, 1, TS_TEXTURE_WRAP_REPEAT);
@@ -1075,7 +1042,7 @@ static void test_exr(void **state)
     const char *gname[1] = {"G"};
     assert_int_equal(ts_image_init(&img, 1, 1, 1, gname, &err), TS_OK);
     img.data[0] = 0.5f;
-    snprintf(path, sizeof path, "%s/g.exr", tmp_dir);
+    snprintf(path, sizeof path, "%s/g.exr", ts_tmp_dir);
     assert_int_equal(ts_exr_write(path, &img, &err), TS_OK);
     ts_image_fini(&img);
     m = cache_get(cache, "g.exr", 3, false, 1, TS_TEXTURE_WRAP_REPEAT);
@@ -1339,9 +1306,9 @@ static ts_status build(const char *body, built *b, ts_error *err)
     memset(b, 0, sizeof *b);
     ts_arena_init(&b->arena, 0);
     b->cache = ts_texture_cache_create(0);
-    ts_status st = ts_pbrt_parse_text(text, strlen(text), "t.pbrt", tmp_dir, NULL, &b->scene, err);
+    ts_status st = ts_pbrt_parse_text(text, strlen(text), "t.pbrt", ts_tmp_dir, NULL, &b->scene, err);
     if (st) return st;
-    return ts_texture_pbrt_build(&b->tp, b->scene, &b->arena, b->cache, tmp_dir, 0, err);
+    return ts_texture_pbrt_build(&b->tp, b->scene, &b->arena, b->cache, ts_tmp_dir, 0, err);
 }
 
 static void unbuild(built *b)
@@ -1550,7 +1517,7 @@ static void test_cache_budget(void **state)
         .n_channels = 3, .gamma = true, .scale = 1, .wrap = TS_TEXTURE_WRAP_REPEAT};
     const ts_mipmap *m = NULL;
     ts_error err = {0};
-    assert_int_equal(ts_texture_cache_get(c, tmp_dir, "small.png", 0, &opt, &m, &err), TS_ERR_LIMIT);
+    assert_int_equal(ts_texture_cache_get(c, ts_tmp_dir, "small.png", 0, &opt, &m, &err), TS_ERR_LIMIT);
     assert_message(
         &err, "texture image 'small.png': its MIP map (2 × 2, 3 channels) needs 60 bytes, more than the 40 "
               "left of the textures' 100");
@@ -1561,7 +1528,7 @@ static void test_cache_budget(void **state)
     assert_message(
         &err, "texture image 'small.png': this scene may not refer to files (no asset folder is configured)");
     /* The file-size limit. */
-    assert_int_equal(ts_texture_cache_get(c, tmp_dir, "small.png", 10, &opt, &m, &err), TS_ERR_LIMIT);
+    assert_int_equal(ts_texture_cache_get(c, ts_tmp_dir, "small.png", 10, &opt, &m, &err), TS_ERR_LIMIT);
     ts_texture_cache_destroy(c);
 }
 
@@ -1622,5 +1589,5 @@ int main(void)
         cmocka_unit_test(test_cache_budget),
         cmocka_unit_test_setup_teardown(test_make_refusals, setup_arena, teardown_arena),
     };
-    return cmocka_run_group_tests(tests, group_setup, group_teardown);
+    return cmocka_run_group_tests(tests, ts_tmp_group_setup, ts_tmp_group_teardown);
 }
