@@ -7,6 +7,10 @@
  *   … --only NAME               just that scene
  *   … --blocks                  also list every block channel over the bound: its pixel
  *                               corner, channel, tessera's and pbrt-v3's means and t
+ *   … --dump OUT                --blocks, and writes OUT/NAME-tessera.exr (the K renders'
+ *                               mean), OUT/NAME-diff.exr (tessera − pbrt-v3) and
+ *                               OUT/NAME-t.exr (each block's t per channel, 0 where it
+ *                               passes the floor)
  *   … --only NAME --reference R.exr --reference-spp S
  *                               calibration: that scene against another reference (e.g.
  *                               a tessera render at S spp with another seed), to see the
@@ -156,6 +160,23 @@ static ts_film *render_once(ts_scene *s, uint32_t seed, uint32_t spp, double *se
 
 static const char *ref_override; /* --reference */
 static bool list_blocks;         /* --blocks */
+static const char *dump_dir;     /* --dump */
+
+/* Writes a w × h R, G, B image of data (3 floats a pixel) to dump_dir/name-suffix.exr. */
+static void dump_image(const char *name, const char *suffix, int w, int h, const float *data)
+{
+    static const char *const names[3] = {"R", "G", "B"};
+    char path[4096];
+    ts_error err = {0};
+    ts_image img = {0};
+    snprintf(path, sizeof path, "%s/%s-%s.exr", dump_dir, name, suffix);
+    if (ts_image_init(&img, w, h, 3, names, &err) == TS_OK) {
+        memcpy(img.data, data, (size_t)w * h * 3 * sizeof *data);
+        if (ts_exr_write(path, &img, &err) == TS_OK) printf("  wrote %s\n", path);
+    }
+    if (err.message[0]) printf("  %s: %s\n", path, err.message);
+    ts_image_fini(&img);
+}
 
 static void compare_scene(const char *dir, const corpus_scene *cs, bool bench, int ref_spp, result *r)
 {
@@ -210,15 +231,19 @@ static void compare_scene(const char *dir, const corpus_scene *cs, bool bench, i
     /* block means per render and channel, and the image means */
     double *bm = calloc((size_t)renders * bx * by * 3, sizeof *bm), img[3] = {0, 0, 0},
            ref_img[3] = {0, 0, 0};
-    if (!bm) {
+    /* --dump: the K renders' pixel sums and each block's t, 3 floats a pixel */
+    float *pix = dump_dir ? calloc((size_t)w * h * 3, sizeof *pix) : NULL,
+          *tmap = dump_dir ? calloc((size_t)w * h * 3, sizeof *tmap) : NULL;
+    if (!bm || (dump_dir && (!pix || !tmap))) {
         snprintf(r->why, sizeof r->why, "out of memory");
+        free(bm), free(pix), free(tmap);
         goto done;
     }
     for (int k = 0; k < renders; k++) {
         ts_film *f = render_once(s, (uint32_t)k, spp, &r->seconds, &r->cpu_seconds, &err);
         if (!f) {
             snprintf(r->why, sizeof r->why, "render: %s", err.message);
-            free(bm);
+            free(bm), free(pix), free(tmap);
             goto done;
         }
         for (int y = 0; y < h; y++)
@@ -229,6 +254,7 @@ static void compare_scene(const char *dir, const corpus_scene *cs, bool bench, i
                 for (int c3 = 0; c3 < 3; c3++) {
                     bm[((size_t)k * bx * by + b) * 3 + c3] += v[c3];
                     img[c3] += v[c3];
+                    if (pix) pix[((size_t)y * w + x) * 3 + c3] += (float)(v[c3] / renders);
                 }
             }
         ts_film_destroy(f);
@@ -237,7 +263,7 @@ static void compare_scene(const char *dir, const corpus_scene *cs, bool bench, i
     int *count = calloc((size_t)bx * by, sizeof *count);
     if (!rb || !count) {
         snprintf(r->why, sizeof r->why, "out of memory");
-        free(bm), free(rb), free(count);
+        free(bm), free(rb), free(count), free(pix), free(tmap);
         goto done;
     }
     for (int y = 0; y < h; y++)
@@ -281,6 +307,10 @@ static void compare_scene(const char *dir, const corpus_scene *cs, bool bench, i
                         printf("  block (%d, %d) %c: tessera %.5g, pbrt-v3 %.5g, t = %.2f\n", (b % bx) * BLOCK,
                                (b / bx) * BLOCK, "RGB"[c3], mean, ref_v, t);
                 }
+                if (tmap)
+                    for (int y = (b / bx) * BLOCK; y < (b / bx + 1) * BLOCK && y < h; y++)
+                        for (int x = (b % bx) * BLOCK; x < (b % bx + 1) * BLOCK && x < w; x++)
+                            tmap[((size_t)y * w + x) * 3 + c3] = (float)t;
                 if (p < r->worst_p || (p == r->worst_p && fabs(t) > fabs(r->worst_t))) {
                     r->worst_p = p, r->worst_t = t;
                     r->worst_x = (b % bx) * BLOCK, r->worst_y = (b / bx) * BLOCK, r->worst_c = c3;
@@ -288,7 +318,16 @@ static void compare_scene(const char *dir, const corpus_scene *cs, bool bench, i
             }
         if (r->failed_blocks) r->passed = false;
     }
-    free(bm), free(rb), free(count);
+    if (dump_dir) {
+        dump_image(cs->name, "tessera", w, h, pix);
+        for (int y = 0; y < h; y++)
+            for (int x = 0; x < w; x++)
+                for (int c3 = 0; c3 < 3; c3++)
+                    pix[((size_t)y * w + x) * 3 + c3] -= ref.data[((size_t)y * w + x) * ref.n_channels + ch[c3]];
+        dump_image(cs->name, "diff", w, h, pix);
+        if (!bench) dump_image(cs->name, "t", w, h, tmap);
+    }
+    free(bm), free(rb), free(count), free(pix), free(tmap);
 done:
     ts_image_fini(&ref);
     ts_scene_destroy(s);
@@ -324,7 +363,7 @@ static bool reference_entry(const char *dir, const char *name, int *spp, double 
 int main(int argc, char **argv)
 {
     if (argc < 2) {
-        fprintf(stderr, "usage: %s DIR [--bench] [--blocks] [--only NAME [--reference R.exr --reference-spp S]]\n",
+        fprintf(stderr, "usage: %s DIR [--bench] [--blocks] [--dump OUT] [--only NAME [--reference R.exr --reference-spp S]]\n",
                 argv[0]);
         return 2;
     }
@@ -336,6 +375,8 @@ int main(int argc, char **argv)
             bench = true;
         else if (strcmp(argv[i], "--blocks") == 0)
             list_blocks = true;
+        else if (strcmp(argv[i], "--dump") == 0 && i + 1 < argc)
+            dump_dir = argv[++i], list_blocks = true;
         else if (strcmp(argv[i], "--only") == 0 && i + 1 < argc)
             only = argv[++i];
         else if (strcmp(argv[i], "--reference") == 0 && i + 1 < argc)
@@ -343,7 +384,7 @@ int main(int argc, char **argv)
         else if (strcmp(argv[i], "--reference-spp") == 0 && i + 1 < argc)
             override_spp = atoi(argv[++i]);
         else {
-            fprintf(stderr, "usage: %s DIR [--bench] [--blocks] [--only NAME [--reference R.exr --reference-spp S]]\n",
+            fprintf(stderr, "usage: %s DIR [--bench] [--blocks] [--dump OUT] [--only NAME [--reference R.exr --reference-spp S]]\n",
                     argv[0]);
             return 2;
         }
