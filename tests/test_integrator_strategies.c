@@ -165,6 +165,14 @@ static void test_closed_box_of_lights(void **state)
         {"direct, all lights, 4 samples each",
          "{\"type\":\"direct\",\"strategy\":\"all\",\"samples_per_light\":4}", 1},
         {"direct, one light", "{\"type\":\"direct\",\"strategy\":\"one\"}", 1},
+        /* pbrt-v3's spatial selection: each voxel's pmf in NEE and in the MIS weight of the
+         * emission the BSDF ray finds (the voxel of the vertex it left) */
+        {"path MIS, spatial selection",
+         "{\"type\":\"path\",\"max_depth\":3,\"rr_depth\":1000,\"light_sampling\":\"spatial\"}", 0},
+        {"path light sampling, spatial selection",
+         "{\"type\":\"path\",\"max_depth\":3,\"rr_depth\":1000,\"light_sampling\":\"spatial\","
+         "\"sampling\":\"light\"}",
+         0},
     };
     const int nc = sizeof cases / sizeof *cases;
     bool ok = true;

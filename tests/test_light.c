@@ -428,7 +428,7 @@ static void test_selection(void **state)
     for (int mode = 0; mode < 2; mode++) {
         ts_light_distribution d;
         ts_error err = {0};
-        assert_int_equal(ts_light_distribution_init(&d, lights, 5, shapes, (ts_light_sampling)mode, &arena, &err), TS_OK);
+        assert_int_equal(ts_light_distribution_init(&d, lights, 5, shapes, (ts_light_sampling)mode, (ts_bounds3){{0, 0, 0}, {1, 1, 1}}, &arena, &err), TS_OK);
         double sum = 0, wsum = 0, w[5];
         for (int i = 0; i < 5; i++) {
             w[i] = mode == TS_LIGHT_SAMPLING_POWER ? ts_rgb_luminance(ts_light_power(&lights[i], shapes))
@@ -436,7 +436,7 @@ static void test_selection(void **state)
             wsum += w[i];
         }
         for (int i = 0; i < 5; i++) {
-            float p = ts_light_distribution_pmf(&d, (uint32_t)i);
+            float p = ts_light_distribution_pmf(&d, (ts_vec3){0, 0, 0}, (uint32_t)i);
             sum += p;
             assert_rel(p + 1e-30, w[i] / wsum + 1e-30, 1e-6, "pmf exact");
             if (i != 3) assert_true(p > 0);
@@ -450,9 +450,9 @@ static void test_selection(void **state)
         for (int a = 0; a < nx; a++)
             for (int b = 0; b < ny; b++) {
                 float pmf;
-                uint32_t i = ts_light_distribution_sample(&d, (ts_vec2){(a + 0.5f) / nx, (b + 0.5f) / ny}, &pmf);
+                uint32_t i = ts_light_distribution_sample(&d, (ts_vec3){0, 0, 0}, (ts_vec2){(a + 0.5f) / nx, (b + 0.5f) / ny}, &pmf);
                 assert_true(i < 5);
-                assert_true(pmf == ts_light_distribution_pmf(&d, i));
+                assert_true(pmf == ts_light_distribution_pmf(&d, (ts_vec3){0, 0, 0}, i));
                 count[i]++;
             }
         const double n = (double)nx * ny;
@@ -463,9 +463,9 @@ static void test_selection(void **state)
     }
     ts_light_distribution empty;
     ts_error err = {0};
-    assert_int_equal(ts_light_distribution_init(&empty, lights, 0, shapes, TS_LIGHT_SAMPLING_POWER, &arena, &err), TS_OK);
+    assert_int_equal(ts_light_distribution_init(&empty, lights, 0, shapes, TS_LIGHT_SAMPLING_POWER, (ts_bounds3){{0, 0, 0}, {1, 1, 1}}, &arena, &err), TS_OK);
     float pmf = 1;
-    assert_true(ts_light_distribution_sample(&empty, (ts_vec2){0.5f, 0.5f}, &pmf) == TS_NONE && pmf == 0);
+    assert_true(ts_light_distribution_sample(&empty, (ts_vec3){0, 0, 0}, (ts_vec2){0.5f, 0.5f}, &pmf) == TS_NONE && pmf == 0);
     ts_arena_fini(&arena);
 }
 
@@ -510,12 +510,114 @@ static void test_edge_cases(void **state)
     assert_false(ts_light_sample_li(&lights[2], shapes, &refs[2], (ts_vec2){0.5f, 0.5f}, &s));
 }
 
+/* Spatial selection (pbrt-v3's SpatialLightDistribution, lights/light.h): in the bounds
+ * [0, 1]³ (64³ voxels), a voxel's pmf is ∝ each light's Σ luminance(L)/pdf over 128 points,
+ * here with closed forms: a distant light E (E per point), a point light I at distance d
+ * (I/d²), a sphere light L of radius r at distance d (cone sampling: L·2π(1 − √(1 − r²/d²)),
+ * whatever the sample), and a spot pointing away (0, so pbrt-v3's floor). The voxels are 1/64 wide: 1/d² varies by ±0.03 % (point) and the
+ * sphere's solid angle by ±0.5 % across one, linearly to first order, and the 128 Halton
+ * points average it to well within 2e-3 of the value at the voxel's centre. */
+static void test_spatial_selection(void **state)
+{
+    (void)state;
+    ts_shape shapes[1] = {0};
+    shapes[0] = sphere_shape((ts_vec3){0.5f, 0.5f, -3}, 0.5);
+    ts_light lights[4] = {0};
+    lights[0].type = TS_LIGHT_DISTANT;
+    lights[0].color = ts_rgb_gray(1);
+    lights[0].direction = (ts_vec3){0, 0, -1};
+    lights[1].type = TS_LIGHT_POINT;
+    lights[1].color = ts_rgb_gray(2500);
+    lights[1].position = (ts_vec3){0.5f, 0.5f, 50};
+    lights[2] = area_light(0, 0, 4);
+    lights[3].type = TS_LIGHT_SPOT;
+    lights[3].color = ts_rgb_gray(100);
+    lights[3].position = (ts_vec3){0.5f, 0.5f, 5};
+    lights[3].direction = (ts_vec3){0, 0, 1};
+    lights[3].cos_total = cosf(ts_radians(30)), lights[3].cos_falloff_start = cosf(ts_radians(25));
+    prepare(lights, 4, shapes);
+    ts_arena arena;
+    ts_arena_init(&arena, 0);
+    ts_light_distribution d;
+    ts_error err = {0};
+    ts_bounds3 b = {{0, 0, 0}, {1, 1, 1}};
+    assert_int_equal(ts_light_distribution_init(&d, lights, 4, shapes, TS_LIGHT_SAMPLING_SPATIAL, b, &arena, &err),
+                     TS_OK);
+    assert_true(d.spatial && d.voxels[0] == 64 && d.voxels[1] == 64 && d.voxels[2] == 64);
+    /* voxels apart along one axis each (the sphere's solid angle tells x and y apart by
+     * ~2 %, the point light's distance z by 4 %), so a cache slot shared by two voxels fails */
+    const ts_vec3 at[5] = {
+        {0.5f, 0.5f, 0.5f}, {0.5f, 0.5f, 0.99f}, {0.5f, 0.99f, 0.5f}, {0.01f, 0.5f, 0.5f}, {0.7f, 0.2f, 0.999f}};
+    for (int k = 0; k < 5; k++) {
+        /* the voxel's centre */
+        ts_vec3 c = {(floorf(at[k].x * 64) + 0.5f) / 64, (floorf(at[k].y * 64) + 0.5f) / 64,
+                     (floorf(at[k].z * 64) + 0.5f) / 64};
+        double d_point = ts_vec3_distance(c, lights[1].position), d_sphere = ts_vec3_distance(c, (ts_vec3){0.5f, 0.5f, -3});
+        double w[4] = {1, 2500 / (d_point * d_point),
+                       4 * 2 * TS_PI_D * (1 - sqrt(1 - 0.25 / (d_sphere * d_sphere))), 0};
+        /* pbrt-v3's floor is 10⁻³ of the mean per point and light, set against sums over
+         * the 128 points: 10⁻³/128 of the mean in these per-point units */
+        w[3] = 1e-3 * (w[0] + w[1] + w[2]) / (4 * 128.0);
+        double wsum = w[0] + w[1] + w[2] + w[3], sum = 0;
+        float pmf[4];
+        for (uint32_t i = 0; i < 4; i++) {
+            pmf[i] = ts_light_distribution_pmf(&d, at[k], i);
+            sum += pmf[i];
+            /* a pmf is a difference of the float cdf, exact to 2^-23 (two of its steps
+             * below 1), which is 6 % of the spot's floor: that much more absolute slack */
+            if (!(fabs(pmf[i] - w[i] / wsum) <= 2e-3 * w[i] / wsum + 0x1p-23))
+                fail_msg("point %d light %u: spatial pmf %.9g, expected %.9g", k, i, (double)pmf[i], w[i] / wsum);
+        }
+        assert_rel(sum, 1, 1e-6, "pmfs sum to 1");
+        assert_true(ts_light_distribution_pmf(&d, at[k], 4) == 0);
+        /* inverting the cdf: frequencies of u.x on a grid of 10⁶ match the pmf to 1e-6 */
+        int count[4] = {0};
+        const int nu = 1000000;
+        for (int a = 0; a < nu; a++) {
+            float p;
+            uint32_t i = ts_light_distribution_sample(&d, at[k], (ts_vec2){(a + 0.5f) / nu, 0.5f}, &p);
+            assert_true(i < 4 && p == pmf[i]);
+            count[i]++;
+        }
+        for (int i = 0; i < 4; i++)
+            if (fabs(count[i] / (double)nu - pmf[i]) > 2e-6)
+                fail_msg("point %d light %d: frequency %g, pmf %g", k, i, count[i] / (double)nu, (double)pmf[i]);
+    }
+    /* Points outside the bounds (and NaN) fall into the nearest voxel (pbrt-v3's clamp). */
+    assert_true(ts_light_distribution_pmf(&d, (ts_vec3){-5, 0.5f, 0.5f}, 1) ==
+                ts_light_distribution_pmf(&d, (ts_vec3){0, 0.5f, 0.5f}, 1));
+    assert_true(ts_light_distribution_pmf(&d, (ts_vec3){NAN, 2, 0.5f}, 1) ==
+                ts_light_distribution_pmf(&d, (ts_vec3){0, 1, 0.5f}, 1));
+    ts_light_distribution_fini(&d);
+    /* 100 lights: 64³ voxels of 101 floats and a state word (106 MB) exceed
+     * TS_LIGHT_SPATIAL_MAX_BYTES (64 MB), 32³ (13 MB) do not. Equal point lights at equal
+     * distances from a voxel's centre share it equally. */
+    static ts_light many[100];
+    for (int i = 0; i < 100; i++) {
+        many[i] = (ts_light){0};
+        many[i].type = TS_LIGHT_POINT;
+        many[i].color = ts_rgb_gray(1);
+        float a = 2 * TS_PI * (float)i / 100;
+        many[i].position = (ts_vec3){0.5f / 32 + 40 * cosf(a), 0.5f / 32 + 40 * sinf(a), 0.5f / 32};
+    }
+    prepare(many, 100, shapes);
+    assert_int_equal(ts_light_distribution_init(&d, many, 100, shapes, TS_LIGHT_SAMPLING_SPATIAL, b, &arena, &err),
+                     TS_OK);
+    assert_true(d.voxels[0] == 32 && d.voxels[1] == 32 && d.voxels[2] == 32);
+    for (uint32_t i = 0; i < 100; i++)
+        if (!(fabs(ts_light_distribution_pmf(&d, (ts_vec3){0.01f, 0.01f, 0.01f}, i) - 0.01) <= 2e-5))
+            fail_msg("light %u of 100: pmf %g", i, (double)ts_light_distribution_pmf(&d, (ts_vec3){0.01f, 0.01f, 0.01f}, i));
+    ts_light_distribution_fini(&d);
+    ts_arena_fini(&arena);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_delta_lights),  cmocka_unit_test(test_area_irradiance),
         cmocka_unit_test(test_infinite),      cmocka_unit_test(test_sample_vs_pdf),
         cmocka_unit_test(test_selection),     cmocka_unit_test(test_edge_cases),
+        cmocka_unit_test(test_spatial_selection),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

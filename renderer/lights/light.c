@@ -6,6 +6,8 @@
  * so Sample_Li and Pdf_Li stay consistent whatever transform the scene gives. */
 #include "lights/light.h"
 
+#include <sched.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -230,12 +232,138 @@ ts_rgb ts_light_power(const ts_light *l, const ts_shape *shapes)
     return ts_rgb_gray(0);
 }
 
+/* ---------------------------------------------------------------- light selection */
+
+/* Radical inverse of i in the prime base of dimension dim (2, 3, 5, 7, 11): the Halton
+ * sequence pbrt-v3's SpatialLightDistribution places its points and light samples with. */
+static float radical_inverse(int dim, uint32_t i)
+{
+    static const uint32_t primes[5] = {2, 3, 5, 7, 11};
+    uint32_t b = primes[dim];
+    double inv = 1.0 / b, f = inv, r = 0;
+    for (; i; i /= b, f *= inv)
+        r += (double)(i % b) * f;
+    return fminf((float)r, 0x1.fffffep-1f);
+}
+
+static float axis(ts_vec3 v, int k) { return k == 0 ? v.x : k == 1 ? v.y : v.z; }
+
+/* Makes voxel (ix, iy, iz)'s cdf (n + 1 floats) from the lights' estimated contributions. */
+static void spatial_make(const ts_light_distribution *d, const int vi[3], float *cdf)
+{
+    uint32_t n = d->n;
+    float lo[3], hi[3];
+    for (int k = 0; k < 3; k++) {
+        float b0 = axis(d->bounds.lo, k), b1 = axis(d->bounds.hi, k);
+        float t0 = (float)vi[k] / (float)d->voxels[k], t1 = (float)(vi[k] + 1) / (float)d->voxels[k];
+        lo[k] = (1 - t0) * b0 + t0 * b1;
+        hi[k] = (1 - t1) * b0 + t1 * b1;
+    }
+    for (uint32_t j = 0; j <= n; j++)
+        cdf[j] = 0;
+    for (uint32_t i = 0; i < TS_LIGHT_SPATIAL_SAMPLES; i++) {
+        ts_interaction ref;
+        memset(&ref, 0, sizeof ref);
+        float t[3] = {radical_inverse(0, i), radical_inverse(1, i), radical_inverse(2, i)};
+        ref.p = (ts_vec3){(1 - t[0]) * lo[0] + t[0] * hi[0], (1 - t[1]) * lo[1] + t[1] * hi[1],
+                          (1 - t[2]) * lo[2] + t[2] * hi[2]};
+        ref.shape = ref.prim = TS_NONE;
+        ts_vec2 u = {radical_inverse(3, i), radical_inverse(4, i)};
+        for (uint32_t j = 0; j < n; j++) {
+            ts_light_sample ls;
+            if (ts_light_sample_li(&d->lights[j], d->shapes, &ref, u, &ls) && ls.pdf > 0)
+                cdf[j + 1] += ts_rgb_luminance(ls.L) / ls.pdf;
+        }
+    }
+    /* No light may get probability 0: it may light points of the voxel the 128 missed. */
+    double sum = 0;
+    for (uint32_t j = 1; j <= n; j++)
+        sum += cdf[j];
+    double avg = sum / ((double)TS_LIGHT_SPATIAL_SAMPLES * n), min_c = avg > 0 ? 1e-3 * avg : 1;
+    double total = 0;
+    for (uint32_t j = 1; j <= n; j++) {
+        double c = cdf[j];
+        if (!(c >= min_c)) c = min_c; /* also a NaN or infinite sum's */
+        total += c;
+        cdf[j] = (float)c;
+    }
+    double run = 0;
+    for (uint32_t j = 1; j <= n; j++) {
+        run += cdf[j];
+        cdf[j] = (float)(run / total);
+    }
+    cdf[n] = 1;
+}
+
+/* The voxel of p (pbrt-v3's: the offset in the bounds, clamped to the grid). */
+static size_t spatial_voxel(const ts_light_distribution *d, ts_vec3 p, int vi[3])
+{
+    for (int k = 0; k < 3; k++) {
+        float b0 = axis(d->bounds.lo, k), b1 = axis(d->bounds.hi, k), o = axis(p, k) - b0;
+        if (b1 > b0) o /= b1 - b0;
+        float x = o * (float)d->voxels[k];
+        vi[k] = x >= 0 ? (x < (float)d->voxels[k] ? (int)x : d->voxels[k] - 1) : 0; /* NaN: 0 */
+    }
+    return ((size_t)vi[2] * (size_t)d->voxels[1] + (size_t)vi[1]) * (size_t)d->voxels[0] + (size_t)vi[0];
+}
+
+/* p's voxel's cdf, made on first use (light.h: the state word's protocol). */
+static const float *spatial_cdf(const ts_light_distribution *d, ts_vec3 p)
+{
+    int vi[3];
+    size_t v = spatial_voxel(d, p, vi);
+    float *cdf = d->cdf + v * ((size_t)d->n + 1);
+    uint32_t st = atomic_load_explicit(&d->state[v], memory_order_acquire);
+    if (st == 2) return cdf;
+    uint32_t empty = 0;
+    if (st == 0 && atomic_compare_exchange_strong_explicit(&d->state[v], &empty, 1, memory_order_acq_rel,
+                                                           memory_order_acquire)) {
+        spatial_make(d, vi, cdf);
+        atomic_store_explicit(&d->state[v], 2, memory_order_release);
+        return cdf;
+    }
+    while (atomic_load_explicit(&d->state[v], memory_order_acquire) != 2)
+        sched_yield(); /* another thread is making it: 128 × n light samples */
+    return cdf;
+}
+
 ts_status ts_light_distribution_init(ts_light_distribution *d, const ts_light *lights, uint32_t n,
-                                     const ts_shape *shapes, ts_light_sampling mode, ts_arena *arena,
-                                     ts_error *err)
+                                     const ts_shape *shapes, ts_light_sampling mode, ts_bounds3 bounds,
+                                     ts_arena *arena, ts_error *err)
 {
     memset(d, 0, sizeof *d);
     if (n == 0) return TS_OK;
+    if (mode == TS_LIGHT_SAMPLING_SPATIAL) {
+        ts_vec3 diag = ts_vec3_sub(bounds.hi, bounds.lo);
+        float bmax = fmaxf(diag.x, fmaxf(diag.y, diag.z));
+        bool usable = !ts_bounds3_is_empty(bounds) && ts_vec3_is_finite(diag) && bmax > 0;
+        size_t per_voxel = sizeof(uint32_t) + ((size_t)n + 1) * sizeof(float), count = 1;
+        for (int along = TS_LIGHT_SPATIAL_VOXELS; along >= 1; along /= 2) {
+            count = 1;
+            for (int k = 0; k < 3; k++) {
+                int m = usable ? (int)roundf(axis(diag, k) / bmax * (float)along) : 1;
+                d->voxels[k] = m > 1 ? m : 1;
+                count *= (size_t)d->voxels[k];
+            }
+            if (count * per_voxel <= TS_LIGHT_SPATIAL_MAX_BYTES) break;
+        }
+        if (count * per_voxel > TS_LIGHT_SPATIAL_MAX_BYTES)
+            return ts_error_set(err, TS_ERR_LIMIT, "light distribution: %u lights are too many for spatial selection",
+                                n);
+        d->state = calloc(count, sizeof *d->state);
+        d->cdf = calloc(count * ((size_t)n + 1), sizeof *d->cdf);
+        if (!d->state || !d->cdf) {
+            ts_light_distribution_fini(d);
+            return ts_error_set(err, TS_ERR_NOMEM, "light distribution: out of memory for %zu voxels of %u lights",
+                                count, n);
+        }
+        d->spatial = true;
+        d->lights = lights;
+        d->shapes = shapes;
+        d->bounds = bounds;
+        d->n = n;
+        return TS_OK;
+    }
     double *w = malloc((size_t)n * sizeof *w);
     if (!w) return ts_error_set(err, TS_ERR_NOMEM, "light distribution: out of memory for %u lights", n);
     for (uint32_t i = 0; i < n; i++) {
@@ -252,18 +380,39 @@ ts_status ts_light_distribution_init(ts_light_distribution *d, const ts_light *l
     return TS_OK;
 }
 
-uint32_t ts_light_distribution_sample(const ts_light_distribution *d, ts_vec2 u, float *pmf)
+void ts_light_distribution_fini(ts_light_distribution *d)
+{
+    free((void *)d->state);
+    free(d->cdf);
+    d->state = NULL;
+    d->cdf = NULL;
+}
+
+uint32_t ts_light_distribution_sample(const ts_light_distribution *d, ts_vec3 p, ts_vec2 u, float *pmf)
 {
     if (d->n == 0) {
         if (pmf) *pmf = 0;
         return TS_NONE;
     }
-    return ts_alias_table_sample(&d->table, u, pmf);
+    if (!d->spatial) return ts_alias_table_sample(&d->table, u, pmf);
+    const float *cdf = spatial_cdf(d, p);
+    /* the first i with cdf[i + 1] > u.x: cdf[i] ≤ u.x < cdf[i + 1], so its pmf is > 0 */
+    uint32_t lo = 0, hi = d->n - 1;
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (cdf[mid + 1] > u.x) hi = mid;
+        else lo = mid + 1;
+    }
+    if (pmf) *pmf = cdf[lo + 1] - cdf[lo];
+    return lo;
 }
 
-float ts_light_distribution_pmf(const ts_light_distribution *d, uint32_t i)
+float ts_light_distribution_pmf(const ts_light_distribution *d, ts_vec3 p, uint32_t i)
 {
-    return d->n == 0 ? 0.0f : ts_alias_table_pmf(&d->table, i);
+    if (d->n == 0 || i >= d->n) return 0.0f;
+    if (!d->spatial) return ts_alias_table_pmf(&d->table, i);
+    const float *cdf = spatial_cdf(d, p);
+    return cdf[i + 1] - cdf[i];
 }
 
 uint32_t ts_lights_set_triangle_sampling(ts_light *lights, uint32_t n, const ts_shape *shapes,

@@ -113,22 +113,55 @@ ts_rgb ts_light_power(const ts_light *l, const ts_shape *shapes);
 /* Light selection for the integrators (docs/design.md §4 `light_sampling`). */
 typedef enum ts_light_sampling {
     TS_LIGHT_SAMPLING_UNIFORM,
-    TS_LIGHT_SAMPLING_POWER, /* ∝ luminance of ts_light_power; uniform if all powers are 0 */
+    TS_LIGHT_SAMPLING_POWER,   /* ∝ luminance of ts_light_power; uniform if all powers are 0 */
+    TS_LIGHT_SAMPLING_SPATIAL, /* pbrt-v3's SpatialLightDistribution, below */
 } ts_light_sampling;
+
+/* Spatial selection (pbrt-v3's default for `path`): the scene's bounds are cut into voxels,
+ * TS_LIGHT_SPATIAL_VOXELS along the longest axis and round(extent / longest · that) (≥ 1)
+ * along the others. Each voxel has its own distribution, ∝ max(c_j, 10⁻³ · mean c) where
+ * c_j sums luminance(L)/pdf of light j's ts_light_sample_li from 128 Halton points of the
+ * voxel (bases 2, 3, 5 for the point, 7 and 11 for the light sample; no visibility, no
+ * normal), and all lights get 1 when every c_j is 0. A voxel's distribution is made the first
+ * time a point in it is looked up, by whichever thread gets there first, and never changes:
+ * it depends on the voxel alone, so images are the same whatever the thread count. Its
+ * state word is atomic (0 empty, 1 being made, 2 ready; a thread finding 1 waits on it —
+ * rare, and as short as making one voxel's distribution); the cdf words are written
+ * before the release store of 2 and read after an acquire load of it. Memory: one state
+ * word and n + 1 floats a voxel, calloc'd (pages only touched voxels use); when the grid
+ * would need more than TS_LIGHT_SPATIAL_MAX_BYTES the voxel count along the longest axis
+ * is halved until it fits (many-light scenes; pbrt-v3 keeps 64 and allocates per voxel). */
+#define TS_LIGHT_SPATIAL_VOXELS 64
+#define TS_LIGHT_SPATIAL_SAMPLES 128
+#define TS_LIGHT_SPATIAL_MAX_BYTES ((size_t)64 << 20)
 
 typedef struct ts_light_distribution {
     uint32_t n;            /* number of lights (0: nothing to sample) */
-    ts_alias_table table;  /* table.pmf[i] is the exact probability of light i */
+    ts_alias_table table;  /* uniform/power: table.pmf[i] is the exact probability of light i */
+    /* spatial (n > 0): immutable but for the per-voxel cache (state, cdf) described above */
+    bool spatial;
+    const ts_light *lights;
+    const ts_shape *shapes;
+    ts_bounds3 bounds;
+    int voxels[3];
+    _Atomic uint32_t *state; /* per voxel, x fastest */
+    float *cdf;              /* (n + 1) per voxel: cdf[0] = 0 ≤ … ≤ cdf[n] = 1 */
 } ts_light_distribution;
 
-/* Builds over lights[0..n) (prepared), memory from arena. n = 0 is allowed. */
+/* Builds over lights[0..n) (prepared), memory from arena (the spatial cache from calloc:
+ * ts_light_distribution_fini frees it). bounds: the scene's (spatial only). n = 0 is
+ * allowed. lights and shapes must outlive d when spatial. */
 ts_status ts_light_distribution_init(ts_light_distribution *d, const ts_light *lights, uint32_t n,
-                                     const ts_shape *shapes, ts_light_sampling mode, ts_arena *arena,
-                                     ts_error *err);
-/* Index of a light with probability *pmf; TS_NONE (pmf 0) when there are no lights. u is
- * one 2-D sample (ts_alias_table_sample: u.x the bin, u.y the coin). */
-uint32_t ts_light_distribution_sample(const ts_light_distribution *d, ts_vec2 u, float *pmf);
-/* Probability of selecting light i (0 if out of range). */
-float ts_light_distribution_pmf(const ts_light_distribution *d, uint32_t i);
+                                     const ts_shape *shapes, ts_light_sampling mode, ts_bounds3 bounds,
+                                     ts_arena *arena, ts_error *err);
+/* Frees the spatial cache; safe on a zeroed or non-spatial distribution. */
+void ts_light_distribution_fini(ts_light_distribution *d);
+/* Index of a light with probability *pmf for a shading point p (spatial: its voxel's
+ * distribution; else p is unused); TS_NONE (pmf 0) when there are no lights. u is one 2-D
+ * sample (uniform/power: ts_alias_table_sample, u.x the bin, u.y the coin; spatial: u.x
+ * inverts the voxel's cdf). Thread-safe. */
+uint32_t ts_light_distribution_sample(const ts_light_distribution *d, ts_vec3 p, ts_vec2 u, float *pmf);
+/* Probability of selecting light i at p (0 if out of range). Thread-safe. */
+float ts_light_distribution_pmf(const ts_light_distribution *d, ts_vec3 p, uint32_t i);
 
 #endif

@@ -673,13 +673,12 @@ static ts_status map_integrator(imp *im)
         TRY(ts_pbrt_find_string(ps, "lightsamplestrategy", "spatial", &strat, im->err));
         if (strcmp(strat, "uniform") == 0)
             d.light_sampling = TS_LIGHT_SELECT_UNIFORM;
-        else if (strcmp(strat, "power") != 0 && strcmp(strat, "spatial") != 0)
+        else if (strcmp(strat, "spatial") == 0)
+            d.light_sampling = TS_LIGHT_SELECT_SPATIAL;
+        else if (strcmp(strat, "power") != 0)
             return ts_pbrt_param_error(ps, ts_pbrt_params_get(ps, "lightsamplestrategy"), im->err,
                                        TS_ERR_INVALID, "must be uniform, power or spatial, got \"%s\"",
                                        strat);
-        else if (strcmp(strat, "spatial") == 0 && ts_pbrt_params_get(ps, "lightsamplestrategy"))
-            pwarn(im, ps, ts_pbrt_params_get(ps, "lightsamplestrategy"),
-                  "\"spatial\" is mapped to \"power\" (unbiased either way)");
         if (depth < 0 || depth > 65535)
             return derr(im, ps, o->loc, TS_ERR_INVALID, "\"integer maxdepth\" must be in [0, 65535], got %d",
                         depth);
@@ -723,7 +722,9 @@ static ts_status map_integrator(imp *im)
         if (ok && d.type == TS_INTEGRATOR_PATH)
             ok = jnumber(j, "rr_depth", d.rr_depth) &&
                  jstring(j, "light_sampling",
-                         d.light_sampling == TS_LIGHT_SELECT_UNIFORM ? "uniform" : "power");
+                         d.light_sampling == TS_LIGHT_SELECT_UNIFORM   ? "uniform"
+                         : d.light_sampling == TS_LIGHT_SELECT_SPATIAL ? "spatial"
+                                                                       : "power");
         if (ok && d.type == TS_INTEGRATOR_DIRECT)
             ok = jstring(j, "strategy", d.strategy == TS_LIGHTS_ONE ? "one" : "all");
         if (!ok || !jadd(im->doc, "integrator", j)) {

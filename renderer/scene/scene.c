@@ -16,6 +16,7 @@ void ts_scene_destroy(ts_scene *s)
     for (uint32_t i = 0; i < s->n_envmaps; i++)
         ts_envmap_destroy(s->envmaps[i]);
     ts_texture_cache_destroy(s->texture_cache);
+    ts_light_distribution_fini(&s->light_distribution);
     ts_arena_fini(&s->arena);
     free(s);
 }

@@ -30,7 +30,11 @@ typedef enum ts_integrator_type {
 } ts_integrator_type;
 
 typedef enum ts_light_strategy { TS_LIGHTS_ALL, TS_LIGHTS_ONE } ts_light_strategy;
-typedef enum ts_light_selection { TS_LIGHT_SELECT_UNIFORM, TS_LIGHT_SELECT_POWER } ts_light_selection;
+typedef enum ts_light_selection {
+    TS_LIGHT_SELECT_UNIFORM,
+    TS_LIGHT_SELECT_POWER,
+    TS_LIGHT_SELECT_SPATIAL, /* pbrt-v3's per-voxel distributions (lights/light.h) */
+} ts_light_selection;
 /* How direct light is estimated at a vertex: both strategies combined by the power
  * heuristic, light sampling only, or BSDF sampling only (delta lights are always light
  * sampled: no BSDF sample can hit them). The last two exist to compare strategies. */

@@ -286,7 +286,8 @@ ts_status ts_scene_builder_set_integrator(ts_scene_builder *b, const ts_integrat
          * specular chains and keeps a lower cap. */
         TRY(int_in(in->max_depth, 0, 65535, "max_depth", err));
         TRY(int_in(in->rr_depth, 0, 65535, "rr_depth", err));
-        if (in->light_sampling != TS_LIGHT_SELECT_UNIFORM && in->light_sampling != TS_LIGHT_SELECT_POWER)
+        if (in->light_sampling != TS_LIGHT_SELECT_UNIFORM && in->light_sampling != TS_LIGHT_SELECT_POWER &&
+            in->light_sampling != TS_LIGHT_SELECT_SPATIAL)
             return ts_error_set(err, TS_ERR_INVALID, "integrator.light_sampling: unknown selection %d",
                                 (int)in->light_sampling);
         if (!sampling_ok)
@@ -1103,12 +1104,13 @@ static ts_status build(ts_scene_builder *b, ts_error *err)
     if (!(fabsf(from.x) <= limit && fabsf(from.y) <= limit && fabsf(from.z) <= limit))
         return ts_error_set(err, TS_ERR_INVALID, "camera.from: farther than 1e15 units from the origin");
     TRY(ts_lights_prepare(s->lights, s->n_lights, s->shapes, s->bounds, err));
-    ts_light_sampling mode =
-        s->integrator.type == TS_INTEGRATOR_PATH && s->integrator.light_sampling == TS_LIGHT_SELECT_UNIFORM
-            ? TS_LIGHT_SAMPLING_UNIFORM
-            : TS_LIGHT_SAMPLING_POWER;
-    TRY(ts_light_distribution_init(&s->light_distribution, s->lights, s->n_lights, s->shapes, mode, &s->arena,
-                                   err));
+    ts_light_sampling mode = TS_LIGHT_SAMPLING_POWER;
+    if (s->integrator.type == TS_INTEGRATOR_PATH && s->integrator.light_sampling == TS_LIGHT_SELECT_UNIFORM)
+        mode = TS_LIGHT_SAMPLING_UNIFORM;
+    else if (s->integrator.type == TS_INTEGRATOR_PATH && s->integrator.light_sampling == TS_LIGHT_SELECT_SPATIAL)
+        mode = TS_LIGHT_SAMPLING_SPATIAL;
+    TRY(ts_light_distribution_init(&s->light_distribution, s->lights, s->n_lights, s->shapes, mode, s->bounds,
+                                   &s->arena, err));
     s->infinite_lights = ts_arena_calloc(&s->arena, (size_t)s->n_lights + 1, sizeof *s->infinite_lights);
     if (!s->infinite_lights) return nomem(err, "the lights");
     for (uint32_t i = 0; i < s->n_lights; i++)

@@ -324,7 +324,7 @@ static ts_status parse_integrator(loader *ld, const cJSON *doc)
         v = in->rr_depth;
         TRY(ts_json_int(it, "integrator", "rr_depth", false, 0, 65535, &v, ld->err));
         in->rr_depth = (int)v;
-        static const char *const sel[] = {"uniform", "power", NULL};
+        static const char *const sel[] = {"uniform", "power", "spatial", NULL};
         int k = 1;
         TRY(ts_json_enum(it, "integrator", "light_sampling", false, sel, &k, ld->err));
         in->light_sampling = (ts_light_selection)k;
