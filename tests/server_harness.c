@@ -122,18 +122,27 @@ static size_t header_cb(char *data, size_t size, size_t nmemb, void *user)
     return n;
 }
 
-void ts_http(const test_server *s, const char *method, const char *path, const char *body, size_t len,
-             const char *auth, http_resp *out)
+/* One request: Content-Type type unless NULL, Content-Encoding enc unless NULL; it fails
+ * the test after timeout_s seconds. */
+static void request(const test_server *s, const char *method, const char *path, const void *body, size_t len,
+                    const char *auth, const char *type, const char *enc, long timeout_s, http_resp *out)
 {
     memset(out, 0, sizeof *out);
     CURL *c = curl_easy_init();
     assert_non_null(c);
-    char url[512];
+    char url[512], h_type[160], h_enc[160];
     snprintf(url, sizeof url, "%s%s", s->base, path);
     buf b = {0};
     struct curl_slist *h = NULL;
     if (auth) h = curl_slist_append(h, auth);
-    if (body || !strcmp(method, "POST")) h = curl_slist_append(h, "Content-Type: application/json");
+    if (type) {
+        snprintf(h_type, sizeof h_type, "Content-Type: %s", type);
+        h = curl_slist_append(h, h_type);
+    }
+    if (enc) {
+        snprintf(h_enc, sizeof h_enc, "Content-Encoding: %s", enc);
+        h = curl_slist_append(h, h_enc);
+    }
     h = curl_slist_append(h, "Expect:");
     curl_easy_setopt(c, CURLOPT_URL, url);
     curl_easy_setopt(c, CURLOPT_CUSTOMREQUEST, method);
@@ -147,7 +156,7 @@ void ts_http(const test_server *s, const char *method, const char *path, const c
     curl_easy_setopt(c, CURLOPT_WRITEDATA, &b);
     curl_easy_setopt(c, CURLOPT_HEADERFUNCTION, header_cb);
     curl_easy_setopt(c, CURLOPT_HEADERDATA, out);
-    curl_easy_setopt(c, CURLOPT_TIMEOUT, 30L);
+    curl_easy_setopt(c, CURLOPT_TIMEOUT, timeout_s);
     CURLcode rc = curl_easy_perform(c);
     if (rc != CURLE_OK) fail_msg("%s %s: %s", method, path, curl_easy_strerror(rc));
     curl_easy_getinfo(c, CURLINFO_RESPONSE_CODE, &out->status);
@@ -155,6 +164,19 @@ void ts_http(const test_server *s, const char *method, const char *path, const c
     out->len = b.n;
     curl_slist_free_all(h);
     curl_easy_cleanup(c);
+}
+
+void ts_http(const test_server *s, const char *method, const char *path, const char *body, size_t len,
+             const char *auth, http_resp *out)
+{
+    request(s, method, path, body, len, auth, body || !strcmp(method, "POST") ? "application/json" : NULL, NULL, 30,
+            out);
+}
+
+void ts_http_post(const test_server *s, const char *path, const void *body, size_t len, const char *type,
+                  const char *enc, http_resp *out)
+{
+    request(s, "POST", path, body, len, NULL, type, enc, 60, out); /* a bundle is unpacked before the answer */
 }
 
 void ts_http_free(http_resp *r)

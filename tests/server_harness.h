@@ -33,6 +33,10 @@ typedef struct http_resp {
 /* One request; body may be NULL. auth: a full "Authorization: …" header line or NULL. */
 void ts_http(const test_server *s, const char *method, const char *path, const char *body, size_t len,
              const char *auth, http_resp *out);
+/* POSTs len bytes of body to path as Content-Type type (a bundle: application/x-tar, …),
+ * with Content-Encoding enc unless NULL. */
+void ts_http_post(const test_server *s, const char *path, const void *body, size_t len, const char *type,
+                  const char *enc, http_resp *out);
 void ts_http_free(http_resp *r);
 /* GET path and parse the JSON body (caller deletes); asserts the status. */
 cJSON *ts_http_json(const test_server *s, const char *path, long expect_status);

@@ -137,51 +137,15 @@ static int good_entries(tar_entry *e, bool dot)
 
 /* ---------------------------------------------------------------- HTTP */
 
-typedef struct buf { char *p; size_t n; } buf;
-
-static size_t on_data(char *d, size_t size, size_t nmemb, void *user)
-{
-    buf *b = user;
-    size_t n = size * nmemb;
-    char *q = realloc(b->p, b->n + n + 1);
-    if (!q) return 0;
-    memcpy(q + b->n, d, n);
-    b->p = q, b->n += n, q[b->n] = '\0';
-    return n;
-}
-
 /* POSTs body to path as type (with Content-Encoding enc unless NULL); returns the status,
  * *out the body (caller frees). */
 static long post_to(const test_server *s, const char *path, const void *body, size_t len, const char *type,
                     const char *enc, char **out)
 {
-    CURL *c = curl_easy_init();
-    char url[300], h1[160], h2[160];
-    snprintf(url, sizeof url, "%s%s", s->base, path);
-    snprintf(h1, sizeof h1, "Content-Type: %s", type);
-    struct curl_slist *h = curl_slist_append(NULL, h1);
-    h = curl_slist_append(h, "Expect:");
-    if (enc) {
-        snprintf(h2, sizeof h2, "Content-Encoding: %s", enc);
-        h = curl_slist_append(h, h2);
-    }
-    buf b = {0};
-    curl_easy_setopt(c, CURLOPT_URL, url);
-    curl_easy_setopt(c, CURLOPT_POST, 1L);
-    curl_easy_setopt(c, CURLOPT_POSTFIELDS, body);
-    curl_easy_setopt(c, CURLOPT_POSTFIELDSIZE_LARGE, (curl_off_t)len);
-    curl_easy_setopt(c, CURLOPT_HTTPHEADER, h);
-    curl_easy_setopt(c, CURLOPT_WRITEFUNCTION, on_data);
-    curl_easy_setopt(c, CURLOPT_WRITEDATA, &b);
-    curl_easy_setopt(c, CURLOPT_TIMEOUT, 60L);
-    CURLcode rc = curl_easy_perform(c);
-    if (rc != CURLE_OK) fail_msg("POST a bundle: %s", curl_easy_strerror(rc));
-    long status = 0;
-    curl_easy_getinfo(c, CURLINFO_RESPONSE_CODE, &status);
-    curl_slist_free_all(h);
-    curl_easy_cleanup(c);
-    *out = b.p ? b.p : calloc(1, 1);
-    return status;
+    http_resp r;
+    ts_http_post(s, path, body, len, type, enc, &r);
+    *out = r.body;
+    return r.status;
 }
 
 static long post(const test_server *s, const void *body, size_t len, const char *type, const char *enc, char **out)

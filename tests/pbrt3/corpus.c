@@ -17,13 +17,15 @@
  *                               bound pass where the estimators agree
  *
  * Textured scenes carry ray differentials scaled by 1/√(sampler spp) as pbrt-v3 does; each
- * render here takes the reference's spp as its sampler's, so its texture filtering is the
- * reference's whatever the test's own spp.
+ * render here takes the reference's spp as its sampler's (ts_corpus_load), so its texture
+ * filtering is the reference's whatever the test's own spp. pbrt3_corpus_http
+ * (tests/pbrt3/corpus_http.c) shows the HTTP bundle path renders the same pixels as these
+ * renders, so what is measured here holds for it too.
  *
  * DIR is ../shared/scenes/pbrt-v3 beside the source tree (CMake passes it); its scenes are
  * read in place, never copied. Each scene is rendered K = 8 times with seeds 0 … 7 at n
- * spp each (n per scene, below, so the whole test stays within about 4 minutes on 2
- * threads) and held to two rules, per channel R, G, B:
+ * spp each (n per scene in tests/pbrt3/corpus_scenes.c, so the whole test stays within
+ * about 4 minutes on 2 threads) and held to two rules, per channel R, G, B:
  *
  *  1. the image mean of tessera (over the K renders) is within 1 % of pbrt-v3's;
  *  2. every 8 × 8 block's mean agrees with pbrt-v3's within its noise. For block b let
@@ -58,20 +60,18 @@
  *
  * False failures: at most α = 1e-3 per passing scene and run (7e-3 over the collection),
  * as long as c bounds pbrt-v3's noise. A scene may need a feature that has not landed yet:
- * it is listed in `expected`, with the feature it needs, and is still rendered and
- * compared (or, if it does not load, its sentence shown) every run and reported XFAIL
- * with its figures; the test fails if a listed scene passes (keep the list current) or an
+ * it is listed in `expected` (tests/pbrt3/corpus_scenes.c), with the feature it needs,
+ * and is still rendered and compared (or, if it does not load, its sentence shown) every
+ * run and reported XFAIL with its figures; the test fails if a listed scene passes (keep the list current) or an
  * unlisted one fails. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/resource.h>
 #include <time.h>
 
+#include "corpus_scenes.h"
 #include "image/exr.h"
-#include "render/render.h"
-#include "scene/scene_load.h"
 
 double ts_rs_student_two_sided(double t, double dof); /* tests/render_stats.c */
 
@@ -79,23 +79,6 @@ double ts_rs_student_two_sided(double t, double dof); /* tests/render_stats.c */
 #define BLOCK 8
 #define C_REF 4.0
 #define ALPHA 1e-3
-
-typedef struct corpus_scene {
-    const char *name;
-    int spp;              /* per render; K renders */
-    const char *expected; /* the missing feature it needs, or NULL: must pass */
-    uint32_t light_cap;   /* the K renders' samples per light at most (0: 1), see compare_scene */
-} corpus_scene;
-
-static const corpus_scene scenes[] = {
-    {"killeroo-simple", 32, NULL},
-    {"veach-mis", 32, NULL},
-    {"f7-19a", 64, NULL, 4},
-    {"teapot-area-light", 32, NULL},
-    {"f10-1ac", 16, NULL},
-    {"checkerboard", 32, NULL},
-    {"spheres-texfilt", 32, NULL},
-};
 
 typedef struct result {
     bool loaded, passed;
@@ -117,48 +100,12 @@ static void count_warning(void *ctx, const char *msg)
     (*(int *)ctx)++;
 }
 
-static double now(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
-
-/* The process's CPU time so far (user + system, every thread). */
-static double cpu_now(void)
-{
-    struct rusage u;
-    getrusage(RUSAGE_SELF, &u);
-    return (double)u.ru_utime.tv_sec + 1e-6 * (double)u.ru_utime.tv_usec + (double)u.ru_stime.tv_sec +
-           1e-6 * (double)u.ru_stime.tv_usec;
-}
-
 /* The reference's pixel (x, y) channel c (R, G, B by name). */
 static int channel_index(const ts_image *img, const char *name)
 {
     for (int c = 0; c < img->n_channels; c++)
         if (strcmp(img->channel_names[c], name) == 0) return c;
     return -1;
-}
-
-/* Renders s at spp with seed into a new film (2 threads). */
-static ts_film *render_once(ts_scene *s, uint32_t seed, uint32_t spp, double *seconds, double *cpu_seconds,
-                            ts_error *err)
-{
-    ts_film *f = ts_film_create(s->width, s->height, s->crop_x0, s->crop_y0, s->crop_x1 - s->crop_x0,
-                                s->crop_y1 - s->crop_y0, err);
-    if (!f) return NULL;
-    s->sampler.seed = seed;
-    ts_render_stats stats = {0};
-    ts_render_request req = {s, s->integrator.type, f, 0, spp, 2, NULL, NULL, NULL};
-    double t0 = now(), c0 = cpu_now();
-    if (ts_render(&req, &stats, err)) {
-        ts_film_destroy(f);
-        return NULL;
-    }
-    *seconds += now() - t0;
-    *cpu_seconds += cpu_now() - c0;
-    return f;
 }
 
 static const char *ref_override; /* --reference */
@@ -183,8 +130,7 @@ static void dump_image(const char *name, const char *suffix, int w, int h, const
 
 static void compare_scene(const char *dir, const corpus_scene *cs, bool bench, int ref_spp, result *r)
 {
-    char path[4096], ref_path[4096];
-    snprintf(path, sizeof path, "%s/%s/%s.pbrt", dir, cs->name, cs->name);
+    char ref_path[4096];
     if (ref_override)
         snprintf(ref_path, sizeof ref_path, "%s", ref_override);
     else
@@ -192,12 +138,14 @@ static void compare_scene(const char *dir, const corpus_scene *cs, bool bench, i
     memset(r, 0, sizeof *r);
     ts_error err = {0};
     ts_scene *s = NULL;
-    double c0 = cpu_now();
-    if (ts_scene_load_path(path, NULL, count_warning, &r->warnings, &s, &err)) {
+    double c0 = ts_corpus_cpu_seconds();
+    /* The sampler's spp is the reference's (ts_corpus_load): textures are filtered as in
+     * pbrt-v3's image; each render still stops at its own spp. */
+    if (ts_corpus_load(dir, cs->name, ref_spp, count_warning, &r->warnings, &s, &err)) {
         snprintf(r->why, sizeof r->why, "does not load: %s", err.message);
         return;
     }
-    r->load_cpu = cpu_now() - c0;
+    r->load_cpu = ts_corpus_cpu_seconds() - c0;
     r->loaded = true;
     ts_image ref = {0};
     if (ts_exr_read(ref_path, &ref, &err)) {
@@ -214,22 +162,9 @@ static void compare_scene(const char *dir, const corpus_scene *cs, bool bench, i
     }
     int renders = bench ? 1 : K;
     uint32_t spp = (uint32_t)(bench ? ref_spp : cs->spp);
-    /* The sampler's spp is the reference's S, so the camera's ray differentials are scaled
-     * by pbrt-v3's 1/√S (render.c reads the scene's sampler spp, not the request's): the
-     * textures are filtered as in pbrt-v3's image. Each render still stops at spp samples
-     * (the request's sample range). */
-    s->spp = (uint32_t)ref_spp;
-    /* The comparison's K renders take at most cs->light_cap samples per light where the
-     * scene asks for more (pbrt-v3's nsamples under directlighting: f10-1ac's 512, f7-19a's
-     * 32, teapot-area-light's 16): 1 but for f7-19a's 4, which keeps the per-light arrays
-     * in the comparison. The image's expectation does not depend on the count
-     * (test_integrator's test_light_samples checks that), only its noise, which the K
-     * renders measure as they are; at the full counts they would take hours (f10-1ac:
-     * ~360 CPU s per spp). --bench renders with the scene's counts. */
-    uint32_t cap = cs->light_cap ? cs->light_cap : 1;
-    if (!bench)
-        for (uint32_t i = 0; i < s->n_lights; i++)
-            if (s->lights[i].samples > cap) s->lights[i].samples = cap;
+    /* The K renders take at most cs->light_cap samples per light (ts_corpus_cap_lights says
+     * why); --bench renders with the scene's counts. */
+    if (!bench) ts_corpus_cap_lights(s, cs);
     int bx = (w + BLOCK - 1) / BLOCK, by = (h + BLOCK - 1) / BLOCK;
     /* block means per render and channel, and the image means */
     double *bm = calloc((size_t)renders * bx * by * 3, sizeof *bm), img[3] = {0, 0, 0},
@@ -243,7 +178,7 @@ static void compare_scene(const char *dir, const corpus_scene *cs, bool bench, i
         goto done;
     }
     for (int k = 0; k < renders; k++) {
-        ts_film *f = render_once(s, (uint32_t)k, spp, &r->seconds, &r->cpu_seconds, &err);
+        ts_film *f = ts_corpus_render(s, (uint32_t)k, spp, &r->seconds, &r->cpu_seconds, &err);
         if (!f) {
             snprintf(r->why, sizeof r->why, "render: %s", err.message);
             free(bm), free(pix), free(tmap);
@@ -336,33 +271,6 @@ done:
     ts_scene_destroy(s);
 }
 
-/* pbrt-v3's spp and seconds for name from REFERENCES.md ("…: pbrt-v3 13d871f, 1024 spp, 133 s …"). */
-static bool reference_entry(const char *dir, const char *name, int *spp, double *seconds)
-{
-    char path[4096], line[2048], key[300];
-    snprintf(path, sizeof path, "%s/REFERENCES.md", dir);
-    snprintf(key, sizeof key, "- %s:", name);
-    FILE *f = fopen(path, "r");
-    if (!f) return false;
-    bool found = false;
-    while (!found && fgets(line, sizeof line, f)) {
-        if (strncmp(line, key, strlen(key)) != 0) continue;
-        const char *ref = strstr(line, "reference:");
-        if (!ref) continue;
-        const char *p = strstr(ref, " spp");
-        if (!p) continue;
-        const char *q = p;
-        while (q > ref && (q[-1] >= '0' && q[-1] <= '9'))
-            q--;
-        *spp = atoi(q);
-        const char *sec = strstr(p, ", ");
-        *seconds = sec ? atof(sec + 2) : 0;
-        found = *spp > 0;
-    }
-    fclose(f);
-    return found;
-}
-
 int main(int argc, char **argv)
 {
     if (argc < 2) {
@@ -397,14 +305,7 @@ int main(int argc, char **argv)
                 argv[0]);
         return 2;
     }
-    char refs[4096];
-    snprintf(refs, sizeof refs, "%s/REFERENCES.md", dir);
-    FILE *probe = fopen(refs, "r");
-    if (!probe) {
-        printf("SKIPPED: %s is absent (the shared pbrt-v3 scenes live beside the source tree)\n", refs);
-        return 77;
-    }
-    fclose(probe);
+    if (!ts_corpus_present(dir)) return 77;
     if (bench)
         /* pbrt-v3's time is its wall time on 2 threads of an otherwise idle machine; on a
          * shared machine tessera's wall time counts waiting for a core, so its CPU time ÷ 2
@@ -414,13 +315,13 @@ int main(int argc, char **argv)
         printf("%-18s %-26s %-6s %-8s %-8s %-8s %-9s %-10s %s\n", "scene", "mean ratio R G B", "spp", "load s",
                "wall s", "CPU/2 s", "pbrt-v3 s", "wall ratio", "(load + CPU/2) ratio (tessera/pbrt-v3)");
     int unexpected = 0, n_pass = 0, n_xfail = 0;
-    for (size_t i = 0; i < sizeof scenes / sizeof scenes[0]; i++) {
-        const corpus_scene *cs = &scenes[i];
+    for (int i = 0; i < ts_corpus_scene_count; i++) {
+        const corpus_scene *cs = &ts_corpus_scenes[i];
         if (only && strcmp(only, cs->name) != 0) continue;
         int ref_spp = 0;
         double ref_s = 0;
         if (ref_override) ref_spp = override_spp;
-        if (!ref_override && !reference_entry(dir, cs->name, &ref_spp, &ref_s)) {
+        if (!ref_override && !ts_corpus_reference_entry(dir, cs->name, &ref_spp, &ref_s)) {
             printf("%s: FAIL: no reference entry in REFERENCES.md\n", cs->name);
             unexpected++;
             continue;
