@@ -257,7 +257,9 @@ try {
     const open = async (p, j) => {
       await p.getByRole('button', { name: 'show job ' + j.name + ' (' + j.id + ') in the preview' }).click();
       await p.waitForFunction((id) => document.querySelector(`#jobs tr[data-id="${id}"]`)?.classList.contains('selected') &&
-        document.getElementById('preview-status').textContent.startsWith('done'), j.id, { timeout: 10000 });
+        // 'done · …' is the job's full status; a bare 'done' is what selecting shows until it
+        // arrives (a fresh-machine run read the preview in between).
+        document.getElementById('preview-status').textContent.startsWith('done · '), j.id, { timeout: 10000 });
     };
     await open(fresh, timed);
     const n = await expectPlotted(fresh, timed.id, false);
