@@ -5,7 +5,8 @@
 //
 // Scenarios: submit the Cornell box and see the canvas change as tiles arrive; the plot
 // gains points; reload mid-render and see the image at once; overlay two jobs; cancel a
-// job and delete it; a broken scene's message beside its field; the preview's view (fit, 1:1,
+// job and delete it; a job's import warnings under the preview (a bundle, a folder, after a
+// restart with --data) and none for a job without; a broken scene's message beside its field; the preview's view (fit, 1:1,
 // zoom about the cursor, pan), pixel readout (against the EXR the API serves) and error and
 // sample-count channels; layout at 1280×800 and phone width; labelled, keyboard-operable controls.
 import { spawn } from 'node:child_process';
@@ -338,6 +339,110 @@ try {
     await shot('19-bundle-refused');
     await page.click('#f-bundle-clear');
     assert(await page.isHidden('#bundle-row'), 'back to the JSON scene');
+  });
+
+  await check('a job\'s import warnings are listed under the preview and counted in the list: a bundle, a folder, after a restart with --data; none for a job without', async () => {
+    const { makeTar } = await import(path.join(TS_SOURCE_DIR, 'web/src/tar.js'));
+    const text = (s) => new TextEncoder().encode(s);
+    // Line 4 (halton) and line 5 (bdpt) each give one warning; sobol and path give none.
+    const pbrt = (sampler, integ) => 'LookAt 0 0 5  0 0 0  0 1 0\nCamera "perspective" "float fov" [30]\n' +
+      'Film "image" "integer xresolution" [32] "integer yresolution" [24]\n' +
+      `Sampler "${sampler}" "integer pixelsamples" [4]\nIntegrator "${integ}"\n` +
+      'WorldBegin\nLightSource "infinite" "rgb L" [1 1 1]\nMaterial "matte"\nShape "sphere" "float radius" [1]\nWorldEnd\n';
+    const halton = 'scene.pbrt:4:1: Sampler "halton" is mapped to tessera\'s Owen-scrambled Sobol sampler with its pixelsamples (4)';
+    const warnTar = makeTar([{ path: 'scene.pbrt', data: text(pbrt('halton', 'bdpt')) }]);
+    const cleanTar = makeTar([{ path: 'scene.pbrt', data: text(pbrt('sobol', 'path')) }]);
+    // Posts what setFiles puts in a bundle field through the form; waits until the job is done.
+    const postViaForm = async (p, setFiles) => {
+      await setFiles();
+      const resp = p.waitForResponse((x) => x.url().endsWith('/api/v1/jobs') && x.request().method() === 'POST');
+      await p.click('#f-submit');
+      const r = await resp, body = await r.json();
+      assert(r.status() === 201 && body.id, 'POST answered ' + r.status() + ' ' + JSON.stringify(body));
+      await jobRow(p, body.id).locator('.state-done').waitFor({ timeout: 30000 });
+      return body;
+    };
+    // Opens a job and reads its warnings off the page once its full status is shown (selecting
+    // shows the bare state first) and the warnings box is this job's.
+    const shown = async (p, id) => {
+      await jobRow(p, id).locator('button.link').click();
+      await p.waitForFunction((id) => document.querySelector(`#jobs tr[data-id="${id}"]`)?.classList.contains('selected') &&
+        document.getElementById('preview-status').textContent.startsWith('done · ') &&
+        document.getElementById('preview-warnings').dataset.job === id, id, { timeout: 10000 });
+      return p.evaluate((id) => {
+        const box = document.getElementById('preview-warnings'), cell = document.querySelector(`#jobs tr[data-id="${id}"] .warn`);
+        const r = box.getBoundingClientRect();
+        return { count: Number(box.dataset.count), visible: !box.hidden && r.width > 0 && r.height > 0,
+          heading: document.getElementById('warnings-h').textContent, items: [...box.querySelectorAll('li')].map((li) => li.textContent),
+          row: cell ? cell.textContent : '' };
+      }, id);
+    };
+    // What the API says, against what the page shows: every sentence, in order, readable.
+    const expectShown = (w, status, what) => {
+      const want = status.warnings;
+      assert(want.length === 2 && want[0] === halton && /^scene\.pbrt:5:1: .*"bdpt"/.test(want[1]),
+        what + ': the API lists the two warnings, got ' + JSON.stringify(want));
+      assert(w.visible && w.count === 2 && w.heading.startsWith('2 import warnings') && w.row === '2 import warnings',
+        what + ': count shown under the preview and in the list: ' + JSON.stringify(w));
+      assert(JSON.stringify(w.items) === JSON.stringify(want), what + ': the sentences shown ' + JSON.stringify(w.items));
+    };
+    const expectNone = (w, what) => assert(!w.visible && w.count === 0 && w.items.length === 0 && w.row === '',
+      what + ': no warnings shown, got ' + JSON.stringify(w));
+
+    // Whatever fails, the form goes back to the JSON scene for the checks after this one.
+    try {
+    const warned = await postViaForm(page, () => page.setInputFiles('#f-bundle', { name: 'warns.tar', mimeType: 'application/x-tar', buffer: Buffer.from(warnTar) }));
+    expectShown(await shown(page, warned.id), warned, 'a .tar bundle');
+    await shot('20-import-warnings');
+    const clean = await postViaForm(page, () => page.setInputFiles('#f-bundle', { name: 'clean.tar', mimeType: 'application/x-tar', buffer: Buffer.from(cleanTar) }));
+    assert(Array.isArray(clean.warnings) && clean.warnings.length === 0, 'sobol and path warn of nothing: ' + JSON.stringify(clean.warnings));
+    expectNone(await shown(page, clean.id), 'a bundle without warnings');
+    expectNone(await shown(page, first.id), 'a JSON job');
+    const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'tessera-warn-folder-'));
+    try {
+      fs.writeFileSync(path.join(dir, 'scene.pbrt'), pbrt('halton', 'bdpt'));
+      const folder = await postViaForm(page, async () => {
+        await page.setInputFiles('#f-folder', dir);
+        await page.waitForFunction(() => /Posting folder tessera-warn-folder-\S+ \(1 files/.test(document.getElementById('bundle-info').textContent),
+          null, { timeout: 5000 });
+      });
+      expectShown(await shown(page, folder.id), folder, 'a folder upload');
+    } finally {
+      fs.rmSync(dir, { recursive: true, force: true });
+    }
+    } finally {
+      if (await page.isVisible('#bundle-row')) await page.click('#f-bundle-clear');
+    }
+    // A server with --data, restarted: the restored job (its scene.pbrt loaded again) still lists them.
+    const data = fs.mkdtempSync(path.join(os.tmpdir(), 'tessera-warn-data-'));
+    let s1 = null, s2 = null;
+    const p = await context.newPage();
+    p.on('pageerror', (e) => pageErrors.push('restart page: ' + e));
+    try {
+      s1 = await startServer(['--data', data]);
+      const r = await p.request.post(s1.url + 'api/v1/jobs', { headers: { 'Content-Type': 'application/x-tar' }, data: Buffer.from(warnTar) });
+      const before = await r.json();
+      assert(r.status() === 201 && before.warnings.length === 2, 'POST to the --data server: ' + r.status() + ' ' + JSON.stringify(before));
+      for (let t = Date.now(); (await (await p.request.get(s1.url + 'api/v1/jobs/' + before.id)).json()).state !== 'done'; ) {
+        assert(Date.now() - t < 30000, 'the job on the --data server did not finish in 30 s');
+        await new Promise((res) => setTimeout(res, 200));
+      }
+      const exited = new Promise((res) => s1.srv.once('exit', res));
+      s1.srv.kill('SIGTERM');
+      await exited;
+      s1 = null;
+      s2 = await startServer(['--data', data]);
+      await p.goto(s2.url, { waitUntil: 'load' });
+      await jobRow(p, before.id).waitFor({ timeout: 5000 });
+      const after = await (await p.request.get(s2.url + 'api/v1/jobs/' + before.id)).json();
+      assert(JSON.stringify(after.warnings) === JSON.stringify(before.warnings), 'restored warnings ' + JSON.stringify(after.warnings));
+      expectShown(await shown(p, before.id), after, 'after a restart with --data');
+      await shot('21-import-warnings-restored', p);
+    } finally {
+      await p.close();
+      for (const s of [s1, s2]) if (s && s.srv.exitCode === null) { const e = new Promise((res) => s.srv.once('exit', res)); s.srv.kill('SIGTERM'); await e; }
+      fs.rmSync(data, { recursive: true, force: true });
+    }
   });
 
   await check('cancel a job from the list, then delete it', async () => {

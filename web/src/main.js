@@ -74,6 +74,12 @@ const HALT_TEXT = { time_limit: 'time limit reached', target_error: 'target erro
 // A running job's progress: the server's fraction of its first halting bound and the ETA.
 const progressOf = (j) => Math.round(100 * (j.progress || 0)) + '%' + (j.eta_s != null ? ' · ETA ' + fmtTime(j.eta_s) : '');
 
+// A job's import warnings (API v1.3 `warnings`: what loading its scene mapped or dropped, one
+// sentence each with its position, e.g. `scene.pbrt:11:1: Sampler "halton" is mapped …`; the
+// server keeps 64 and counts the rest in `warnings_dropped`).
+const warningCount = (j) => (Array.isArray(j.warnings) ? j.warnings.length : 0) + (j.warnings_dropped || 0);
+const plural = (n, word) => n + ' ' + word + (n === 1 ? '' : 's');
+
 // ------------------------------------------------------------------ jobs list
 function el(tag, attrs = {}, ...kids) {
   const e = document.createElement(tag);
@@ -100,7 +106,9 @@ function renderJobs() {
         'aria-pressed': j.id === selectedId ? 'true' : 'false', onclick: () => select(j.id) }, jobLabel(j)),
         el('div', { class: 'muted small' }, j.integrator || '')),
       el('td', { 'data-label': 'State' }, el('span', { class: 'state state-' + j.state, title: j.error || j.halt_reason || '' }, j.state),
-        j.error ? el('div', { class: 'err small' }, j.error) : ''),
+        j.error ? el('div', { class: 'err small' }, j.error) : '',
+        warningCount(j) ? el('div', { class: 'warn small', title: 'listed under the preview when the job is shown' },
+          plural(warningCount(j), 'import warning')) : ''),
       el('td', { 'data-label': 'Progress' }, el('progress', { max: '1', value: String(frac), 'aria-label': 'progress of ' + j.id }),
         el('span', { class: 'small progress-text' }, ' ' + progressText)),
       el('td', { 'data-label': 'spp', class: 'num' }, j.spp_done + ' / ' + j.spp_target),
@@ -124,6 +132,7 @@ function renderJobs() {
   const activeRow = active && active.closest && active.closest('#jobs tr');
   const focusKey = activeRow ? [activeRow.dataset.id, [...activeRow.querySelectorAll('button,a')].indexOf(active)] : null;
   tbody.replaceChildren(...rows);
+  showWarnings(selectedId ? jobs.get(selectedId) : null);
   if (focusKey) {
     const r = tbody.querySelector(`tr[data-id="${focusKey[0]}"]`);
     const c = r && r.querySelectorAll('button,a')[focusKey[1]];
@@ -626,6 +635,7 @@ function select(id) {
   $('preview-job').textContent = '— ' + jobLabel(j);
   loadHistory(id);
   $('preview-status').textContent = j.state;
+  showWarnings(j);
   openStream(id);
   renderJobs();
   updatePlots(true);
@@ -636,6 +646,21 @@ $('exposure').addEventListener('input', () => {
   if (channelMode() === 'rgb') paintAll();
 });
 $('outline').addEventListener('change', drawOutlines);
+
+// The shown job's import warnings, under its status line: their count and every sentence,
+// from the job's status document (the list poll or the POST's answer; they never change
+// after the job is made). data-job and data-count say whose and how many are on the page.
+function showWarnings(j) {
+  const box = $('preview-warnings'), n = j ? warningCount(j) : 0;
+  const key = j ? j.id + ':' + n : '';
+  if (box.dataset.key === key) return; // unchanged: keep the reader's scroll position
+  Object.assign(box.dataset, { key, job: j ? j.id : '', count: String(n) });
+  box.hidden = n === 0;
+  $('warnings-h').textContent = plural(n, 'import warning') + ': what loading the scene mapped or dropped';
+  const kept = j && Array.isArray(j.warnings) ? j.warnings : [];
+  $('warnings-list').replaceChildren(...kept.map((w) => el('li', {}, w)),
+    ...(j && j.warnings_dropped ? [el('li', { class: 'muted' }, `and ${j.warnings_dropped} more (the server keeps the first ${kept.length})`)] : []));
+}
 
 // ------------------------------------------------------------------ plots
 // The job's whole convergence series from the server (GET …/history, kept across restarts
