@@ -16,27 +16,13 @@
 
 #include "chi2_bsdf.h"
 #include "core/hash.h"
+#include "material_frame.h"
 #include "materials/bsdf.h"
 #include "materials/fresnel.h"
 #include "materials/material.h"
 
 static const ts_rgb silver_eta = {0.155f, 0.117f, 0.138f}, silver_k = {4.83f, 3.12f, 2.15f};
 static const ts_rgb gold_eta = {0.143f, 0.374f, 1.442f}, gold_k = {3.983f, 2.385f, 1.603f};
-
-static void build(const ts_material *m, ts_bsdf *b)
-{
-    ts_interaction si;
-    memset(&si, 0, sizeof si);
-    si.n = si.ns = (ts_vec3){0, 0, 1};
-    si.dpdu = (ts_vec3){1, 0, 0};
-    ts_material_bsdf(m, &si, NULL, b);
-}
-
-static ts_vec3 dir_cos(double cos_theta, double phi)
-{
-    double s = sqrt(fmax(0, 1 - cos_theta * cos_theta));
-    return (ts_vec3){(float)(s * cos(phi)), (float)(s * sin(phi)), (float)cos_theta};
-}
 
 static ts_material plastic(float kd, float ks, float alpha)
 {
@@ -78,7 +64,7 @@ static ts_material conductor(ts_rgb eta, ts_rgb k, float alpha, ts_microfacet_ty
 static void run_chi2(const char *name, ts_material m, ts_vec3 wo)
 {
     ts_chi2_bsdf c;
-    build(&m, &c.b);
+    canonical_bsdf(&m, &c.b);
     c.wo = ts_vec3_normalize(wo);
     ts_chi2_params p;
     ts_chi2_params_default(&p);
@@ -126,7 +112,7 @@ static void test_fresnel_specular_split(void **state)
     (void)state;
     ts_material m = dielectric(1.5f, 0);
     ts_bsdf b;
-    build(&m, &b);
+    canonical_bsdf(&m, &b);
     const double cosines[] = {1,     0.7,  0.3,   0.05,
                               -0.95, -0.8, -0.75, -0.7}; /* inside: TIR below cos ≈ 0.745 */
     const int n = 200000;
@@ -275,7 +261,7 @@ static const double sweep[] = {1, 0.9, 0.7, 0.5, 0.3, 0.15, 0.05, 0.01, 0.002};
 static double max_albedo(const char *name, ts_material m)
 {
     ts_bsdf b;
-    build(&m, &b);
+    canonical_bsdf(&m, &b);
     double worst = 0, worst_cos = 0, side_max[2] = {0, 0};
     int ns = (int)(sizeof sweep / sizeof sweep[0]);
     bool grey = m.type != TS_MATERIAL_CONDUCTOR;
@@ -373,7 +359,7 @@ static double fresnel_hh_conductor(ts_rgb eta, ts_rgb k)
 static void check_rho_hh(const char *name, ts_material m, double want)
 {
     ts_bsdf b;
-    build(&m, &b);
+    canonical_bsdf(&m, &b);
     enum { BATCHES = 32, N = 4096 };
     static ts_vec2 uwo[N], uwi[N];
     static float ul[N];
@@ -431,7 +417,7 @@ static void test_reciprocity(void **state)
     ts_pcg32_seed(&rng, 3, 3);
     for (size_t k = 0; k < sizeof ms / sizeof ms[0]; k++) {
         ts_bsdf b;
-        build(&ms[k], &b);
+        canonical_bsdf(&ms[k], &b);
         for (int i = 0; i < 10000; i++) {
             ts_vec3 a = dir_cos(ts_pcg32_double(&rng), 2 * TS_PI_D * ts_pcg32_double(&rng));
             ts_vec3 c = dir_cos(ts_pcg32_double(&rng), 2 * TS_PI_D * ts_pcg32_double(&rng));
@@ -471,7 +457,7 @@ static void test_no_nan(void **state)
         };
         for (size_t k = 0; k < sizeof ms / sizeof ms[0]; k++) {
             ts_bsdf b;
-            build(&ms[k], &b);
+            canonical_bsdf(&ms[k], &b);
             for (size_t i = 0; i < sizeof dirs / sizeof dirs[0]; i++) {
                 ts_vec3 wo = ts_vec3_normalize(dirs[i]);
                 for (size_t j = 0; j < sizeof dirs / sizeof dirs[0]; j++) {
@@ -507,8 +493,8 @@ static void test_near_smooth_dielectric(void **state)
     (void)state;
     ts_material ms = dielectric(1.5f, 0), mr = dielectric(1.5f, 1e-3f);
     ts_bsdf bs, br;
-    build(&ms, &bs);
-    build(&mr, &br);
+    canonical_bsdf(&ms, &bs);
+    canonical_bsdf(&mr, &br);
     const double cosines[] = {1, 0.8, 0.5, 0.2, 0.05, 0.01, -1, -0.9, -0.8, -0.7, -0.3};
     const int n = 1 << 16;
     double worst = 0;
