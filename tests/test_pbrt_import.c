@@ -407,7 +407,8 @@ static void textured_parameters(void **state)
 }
 
 /* uber, translucent and mix with pbrt-v3's parameter names and defaults; anisotropic
- * roughness where pbrt-v3 reads it (each of u/vroughness defaulting to roughness). */
+ * roughness where pbrt-v3 reads it (each of u/vroughness defaulting to roughness; substrate's
+ * to 0.1). */
 static void pbrt3_materials_mapped(void **state)
 {
     (void)state;
@@ -447,9 +448,15 @@ static void pbrt3_materials_mapped(void **state)
     const ts_material *g = &s->materials[s->shapes[3].material];
     assert_true(g->has_vroughness && g->roughness.value == 0.3f && g->vroughness.value == 0.1f);
     ts_scene_destroy(s);
-    expect_error("WorldBegin\nMaterial \"substrate\" \"float uroughness\" 0.3\nShape \"sphere\"\nWorldEnd\n",
-                 "t.pbrt:2:1: Material \"substrate\": anisotropic roughness (uroughness ≠ vroughness) is not "
-                 "supported on this material");
+    /* substrate: uroughness and vroughness each default to 0.1 (pbrt-v3's, not to each other). */
+    s = load("WorldBegin\nMaterial \"substrate\" \"float uroughness\" 0.3\nShape \"sphere\"\n"
+             "Material \"substrate\" \"float vroughness\" 0.1\nShape \"sphere\"\nWorldEnd\n",
+             &w);
+    const ts_material *sa = &s->materials[s->shapes[0].material], *sb = &s->materials[s->shapes[1].material];
+    assert_true(sa->type == TS_MATERIAL_SUBSTRATE && sa->has_vroughness && sa->roughness.value == 0.3f &&
+                sa->vroughness.value == 0.1f && sa->remap_roughness);
+    assert_true(!sb->has_vroughness && sb->roughness.value == 0.1f);
+    ts_scene_destroy(s);
     expect_error("WorldBegin\nMakeNamedMaterial \"n\" \"string type\" \"none\"\n"
                  "MakeNamedMaterial \"a\" \"string type\" \"matte\"\n"
                  "MakeNamedMaterial \"m\" \"string type\" \"mix\" \"string namedmaterial1\" \"a\"\n"

@@ -33,7 +33,7 @@ typedef enum ts_material_type {
     TS_MATERIAL_DIELECTRIC, /* eta, reflectance, transmittance, roughness (0 = smooth) */
     TS_MATERIAL_CONDUCTOR,  /* eta[rgb], k[rgb], roughness, distribution */
     TS_MATERIAL_PLASTIC,    /* diffuse, specular, roughness */
-    TS_MATERIAL_SUBSTRATE,  /* diffuse, specular, roughness (FresnelBlend) */
+    TS_MATERIAL_SUBSTRATE,  /* diffuse, specular, roughness, vroughness (FresnelBlend) */
     TS_MATERIAL_FOURIER,    /* file: pbrt-v3 .bsdf */
     /* pbrt-v3's own materials, its parameters under tessera's field names (pbrt-v3's name
      * and default in brackets; the builder takes the values as given, the defaults are for
@@ -84,7 +84,7 @@ typedef struct ts_material {
     const struct ts_fourier_table *fourier;   /* fourier: owned by the scene */
     /* Anisotropic roughness (pbrt-v3's uroughness / vroughness): roughness is along dpdu
      * (the shading frame's s axis), vroughness along the other when has_vroughness (else
-     * it is roughness). Conductor, dielectric, uber. */
+     * it is roughness). Conductor, dielectric, substrate, uber. */
     bool has_vroughness;
     ts_material_float vroughness;
     /* pbrt-v3's remaproughness: roughness and vroughness pass through
@@ -173,8 +173,8 @@ struct ts_bsdf; /* bsdf.h */
  *              Fresnel F from 1 into 1.5, over Lambertian(diffuse) scaled by
  *              (1 − specular·F(cosθo))(1 − specular·F(cosθi)) (a departure from
  *              pbrt-v3 so unit plastic conserves energy; material.c explains)
- *   substrate  FresnelBlend(diffuse, specular, GGX roughness); when smooth, its diffuse
- *              part + a specular reflection with Schlick's Fresnel(specular)
+ *   substrate  FresnelBlend(diffuse, specular, GGX(roughness, vroughness)); when smooth,
+ *              its diffuse part + a specular reflection with Schlick's Fresnel(specular)
  *   fourier    the tabulated lobe (out->eta from the table)
  *   plastic_pbrt3  pbrt-v3's PlasticMaterial: Lambertian(diffuse) + microfacet (GGX)
  *              reflection(specular) with pbrt-v3's FresnelDielectric(1.5, 1) — its

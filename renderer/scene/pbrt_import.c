@@ -740,12 +740,12 @@ static ts_status map_integrator(imp *im)
 /* The roughness parameters of a microfacet material into m as pbrt-v3 reads them:
  * "roughness" (def; not read when !plain, pbrt-v3's glass and substrate have none), and
  * when uv, "uroughness" and "vroughness" each defaulting to it (pbrt-v3's metal, glass,
- * uber; substrate's default to def). Each may be a float texture; remaproughness (true by
- * default) becomes the builder's remap_roughness, so a textured roughness is remapped
- * where it is evaluated. aniso: the builder takes vroughness on this type; else a
- * vroughness unlike uroughness is refused. */
+ * uber, substrate; substrate's and glass's default to def). Each may be a float texture;
+ * remaproughness (true by default) becomes the builder's remap_roughness, so a textured
+ * roughness is remapped where it is evaluated. uroughness ≠ vroughness makes the
+ * material anisotropic (has_vroughness), which the builder takes on every type with uv. */
 static ts_status get_roughness(imp *im, ts_pbrt_params *ps, ts_pbrt_loc loc, float def, bool plain, bool uv,
-                               bool aniso, ts_material *m)
+                               ts_material *m)
 {
     ts_material_float r = ts_material_float_const(def), u, v;
     if (plain) TRY(get_mfloat(im, ps, "roughness", def, &r));
@@ -761,9 +761,6 @@ static ts_status get_roughness(imp *im, ts_pbrt_params *ps, ts_pbrt_loc loc, flo
             return derr(im, ps, loc, TS_ERR_INVALID, "roughness must be a finite number ≥ 0, got %g",
                         both[k]->value);
     bool differ = u.tex != v.tex || u.value != v.value;
-    if (differ && !aniso)
-        return derr(im, ps, loc, TS_ERR_UNSUPPORTED,
-                    "anisotropic roughness (uroughness ≠ vroughness) is not supported on this material");
     m->roughness = u;
     m->has_vroughness = differ;
     m->vroughness = differ ? v : u;
@@ -819,7 +816,7 @@ static ts_status make_material(imp *im, int32_t mi, ts_material *m, bool *no_sur
         *json_type = "plastic_pbrt3";
         TRY(get_mrgb(im, ps, "Kd", ts_rgb_gray(0.25f), &m->diffuse));
         TRY(get_mrgb(im, ps, "Ks", ts_rgb_gray(0.25f), &m->specular));
-        TRY(get_roughness(im, ps, loc, 0.1f, true, false, false, m));
+        TRY(get_roughness(im, ps, loc, 0.1f, true, false, m));
     } else if (strcmp(type, "mirror") == 0) {
         m->type = TS_MATERIAL_MIRROR;
         *json_type = "mirror";
@@ -833,7 +830,7 @@ static ts_status make_material(imp *im, int32_t mi, ts_material *m, bool *no_sur
         TRY(get_float(im, ps, "index", 1.5f, &eta));
         TRY(get_mfloat(im, ps, "eta", eta, &m->eta));
         /* Smooth where both roughnesses are 0 before remapping (the builder's rule, pbrt-v3's). */
-        TRY(get_roughness(im, ps, loc, 0, false, true, true, m));
+        TRY(get_roughness(im, ps, loc, 0, false, true, m));
     } else if (strcmp(type, "metal") == 0) {
         m->type = TS_MATERIAL_CONDUCTOR;
         *json_type = "conductor";
@@ -842,13 +839,13 @@ static ts_status make_material(imp *im, int32_t mi, ts_material *m, bool *no_sur
         TRY(get_mrgb(im, ps, "eta", eta, &m->conductor_eta));
         TRY(get_mrgb(im, ps, "k", k, &m->conductor_k));
         m->distribution = TS_MICROFACET_GGX;
-        TRY(get_roughness(im, ps, loc, 0.01f, true, true, true, m));
+        TRY(get_roughness(im, ps, loc, 0.01f, true, true, m));
     } else if (strcmp(type, "substrate") == 0) {
         m->type = TS_MATERIAL_SUBSTRATE;
         *json_type = "substrate";
         TRY(get_mrgb(im, ps, "Kd", ts_rgb_gray(0.5f), &m->diffuse));
         TRY(get_mrgb(im, ps, "Ks", ts_rgb_gray(0.5f), &m->specular));
-        TRY(get_roughness(im, ps, loc, 0.1f, false, true, false, m));
+        TRY(get_roughness(im, ps, loc, 0.1f, false, true, m));
     } else if (strcmp(type, "fourier") == 0) {
         m->type = TS_MATERIAL_FOURIER;
         *json_type = "fourier";
@@ -875,7 +872,7 @@ static ts_status make_material(imp *im, int32_t mi, ts_material *m, bool *no_sur
         float eta;
         TRY(get_float(im, ps, "index", 1.5f, &eta));
         TRY(get_mfloat(im, ps, "eta", eta, &m->eta));
-        TRY(get_roughness(im, ps, loc, 0.1f, true, true, true, m));
+        TRY(get_roughness(im, ps, loc, 0.1f, true, true, m));
     } else if (strcmp(type, "translucent") == 0) {
         m->type = TS_MATERIAL_TRANSLUCENT;
         *json_type = "translucent";
@@ -883,7 +880,7 @@ static ts_status make_material(imp *im, int32_t mi, ts_material *m, bool *no_sur
         TRY(get_mrgb(im, ps, "Ks", ts_rgb_gray(0.25f), &m->specular));
         TRY(get_mrgb(im, ps, "reflect", ts_rgb_gray(0.5f), &m->reflectance));
         TRY(get_mrgb(im, ps, "transmit", ts_rgb_gray(0.5f), &m->transmittance));
-        TRY(get_roughness(im, ps, loc, 0.1f, true, false, false, m));
+        TRY(get_roughness(im, ps, loc, 0.1f, true, false, m));
     } else if (strcmp(type, "mix") == 0) {
         /* pbrt-v3's MixMaterial: amount (a spectrum texture) weights namedmaterial1. The
          * parser resolved both names when the mix was defined, so they are earlier

@@ -558,9 +558,11 @@ static ts_status check_material(const ts_scene_builder *b, const ts_material *m,
     if (rough && !m->roughness.tex && !(m->roughness.value >= 0 && isfinite(m->roughness.value)))
         return ts_error_set(err, TS_ERR_INVALID, "roughness: expected a finite number ≥ 0, got %g",
                             m->roughness.value);
-    bool aniso = m->type == TS_MATERIAL_CONDUCTOR || m->type == TS_MATERIAL_DIELECTRIC || m->type == TS_MATERIAL_UBER;
+    bool aniso = m->type == TS_MATERIAL_CONDUCTOR || m->type == TS_MATERIAL_DIELECTRIC ||
+                 m->type == TS_MATERIAL_SUBSTRATE || m->type == TS_MATERIAL_UBER;
     if (m->has_vroughness && !aniso)
-        return ts_error_set(err, TS_ERR_INVALID, "vroughness: only conductor, dielectric and uber materials are anisotropic");
+        return ts_error_set(err, TS_ERR_INVALID,
+                            "vroughness: only conductor, dielectric, substrate and uber materials are anisotropic");
     if (m->has_vroughness) TRY(check_float_texture(&m->vroughness, "vroughness", err));
     if (m->has_vroughness && !m->vroughness.tex && !(m->vroughness.value >= 0 && isfinite(m->vroughness.value)))
         return ts_error_set(err, TS_ERR_INVALID, "vroughness: expected a finite number ≥ 0, got %g",

@@ -183,7 +183,7 @@ ts_status ts_scene_builder_load_texture_image(ts_scene_builder *b, const char *r
  * mix names two materials added before by id (mix_id; mix[] is set by the builder) and
  * may have at most TS_BSDF_MAX_BXDFS lobes with them ("materials: the two materials mixed
  * have up to 9 lobes together, more than a BSDF's 8"); vroughness (has_vroughness) only
- * on conductor, dielectric and uber. At most limits.max_materials. */
+ * on conductor, dielectric, substrate and uber. At most limits.max_materials. */
 ts_status ts_scene_builder_add_material(ts_scene_builder *b, const char *name, const ts_material *m,
                                         uint32_t *id, ts_error *err);
 /* The id of the material added under name, or TS_NONE (also for name NULL). */

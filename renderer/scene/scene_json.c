@@ -422,13 +422,15 @@ static ts_status parse_material(loader *ld, const cJSON *m, const char *path, ts
     static const char *const k_conductor[] = {"type", "bumpmap",       "eta",        "k",               "roughness", "distribution",
                                               "uroughness", "vroughness", "remap_roughness", NULL};
     static const char *const k_plastic[] = {"type", "bumpmap", "diffuse", "specular", "roughness", "remap_roughness", NULL};
+    static const char *const k_substrate[] = {"type",       "bumpmap",    "diffuse",         "specular", "roughness",
+                                              "uroughness", "vroughness", "remap_roughness", NULL};
     static const char *const k_fourier[] = {"type", "bumpmap", "file", NULL};
     static const char *const k_uber[] = {"type", "bumpmap",      "diffuse",    "specular",   "reflectance", "transmittance", "eta",
                                          "roughness", "uroughness", "vroughness", "opacity",     "remap_roughness", NULL};
     static const char *const k_translucent[] = {"type", "bumpmap",          "diffuse",   "specular",        "reflectance",
                                                 "transmittance", "roughness", "remap_roughness", NULL};
     static const char *const k_mix[] = {"type", "bumpmap", "materials", "amount", NULL};
-    const char *const *keys[] = {k_diffuse, k_mirror,  k_dielectric, k_conductor,   k_plastic, k_plastic,
+    const char *const *keys[] = {k_diffuse, k_mirror,  k_dielectric, k_conductor,   k_plastic, k_substrate,
                                  k_fourier, k_plastic, k_uber,       k_translucent, k_mix};
     TRY(ts_json_check_object(m, path, keys[type], ld->err));
 
@@ -552,7 +554,8 @@ static ts_status parse_material(loader *ld, const cJSON *m, const char *path, ts
         TRY(ts_json_material_float(tx, m, path, "roughness", TS_J_NONNEG, &out->roughness, ld->err));
         TRY(ts_json_bool(m, path, "remap_roughness", false, &out->remap_roughness, ld->err));
     }
-    if (type == TS_MATERIAL_DIELECTRIC || type == TS_MATERIAL_CONDUCTOR || type == TS_MATERIAL_UBER) {
+    if (type == TS_MATERIAL_DIELECTRIC || type == TS_MATERIAL_CONDUCTOR || type == TS_MATERIAL_SUBSTRATE ||
+        type == TS_MATERIAL_UBER) {
         /* uroughness and vroughness each default to roughness (read only when present: an
          * absent key would reset a texture reference). */
         ts_material_float r = out->roughness;
