@@ -2,8 +2,8 @@
  *
  * Every file is written by the test into a fresh folder under /tmp (plus a second folder
  * standing for "outside the scene") and both are removed at the end. Expected values are
- * exact: all coordinates are small binary fractions, so text and float agree bit for bit;
- * normals are compared after normalisation with a tolerance of a few float ulps. */
+ * exact: all coordinates are small binary fractions, so text and float agree bit for bit,
+ * normals too: the readers keep their lengths (pbrt-v3's triangles interpolate them so). */
 #ifndef _XOPEN_SOURCE
 #define _XOPEN_SOURCE 700 /* mkdtemp, symlink, nftw */
 #endif
@@ -159,7 +159,8 @@ static void test_obj_cube(void **state)
                 cube_corner(cube_quads[f][corner], p);
                 assert_vec(m.p + 3 * v, p, 3, 0);
                 assert_vec(m.uv + 2 * v, quad_uv[corner], 2, 0);
-                assert_vec(m.n + 3 * v, cube_face_normal[f], 3, 1e-7);
+                const float n3[3] = {3 * cube_face_normal[f][0], 3 * cube_face_normal[f][1], 3 * cube_face_normal[f][2]};
+                assert_vec(m.n + 3 * v, n3, 3, 0); /* as written: length 3 */
             }
     }
     ts_mesh_data_free(&m);
@@ -231,10 +232,8 @@ static void check_ply_cube(const char *rel)
     for (int i = 0; i < 8; i++) {
         float p[3], n[3], uv[2];
         ply_vertex(i, p, n, uv);
-        for (int k = 0; k < 3; k++)
-            n[k] /= sqrtf(12.0f);
         assert_vec(m.p + 3 * i, p, 3, 0);
-        assert_vec(m.n + 3 * i, n, 3, 1e-7);
+        assert_vec(m.n + 3 * i, n, 3, 0); /* as written: length √12 */
         assert_vec(m.uv + 2 * i, uv, 2, 0);
     }
     for (int f = 0; f < 6; f++) {
@@ -438,6 +437,12 @@ static void test_parse_errors(void **state)
                "property float z\nelement face 0\nproperty list uchar uint vertex_index\nend_header\n"
                "0 NaN 0\n");
     expect_error("nan.ply", NULL, TS_ERR_INVALID, "line 10: vertex 0: 'y' is not a finite number", NULL);
+    /* Normals keep their lengths; only the zero vector is refused (its vertex named). */
+    write_text("n0.ply",
+               "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+               "property float z\nproperty float nx\nproperty float ny\nproperty float nz\nelement face 0\n"
+               "property list uchar uint vertex_index\nend_header\n0 0 0 0 0 1e-30\n1 0 0 0 0 0\n");
+    expect_error("n0.ply", NULL, TS_ERR_INVALID, "line 14: vertex 1 has a zero-length normal", NULL);
     write_text("noface.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
                              "property float z\nend_header\n0 0 0\n");
     expect_error("noface.ply", NULL, TS_ERR_INVALID, "no 'face' element", NULL);

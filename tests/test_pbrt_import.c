@@ -19,6 +19,8 @@
 
 #include <cjson/cJSON.h>
 
+#include "geometry/accel.h"
+#include "geometry/interaction.h"
 #include "image/exr.h"
 #include "render/render.h"
 #include "scene/scene_json.h"
@@ -322,6 +324,68 @@ static void mesh_orientation(void **state)
     }
 }
 
+static void assert_same_pixels(const ts_scene *a, const ts_scene *b, uint32_t spp);
+
+/* PLY normals keep their lengths, as pbrt-v3's plymesh (its CreatePLYMesh hands them to
+ * CreateTriangleMesh as read; Triangle::Intersect interpolates them and normalises the sum):
+ * a plymesh with non-unit normals renders bit for bit as the same trianglemesh written
+ * inline, which the builder already keeps (docs/design.md §4, shapes), with the CTM at
+ * identity and through a rotation and a non-uniform scale; and the shading normal at a hit
+ * of known barycentrics (0.5, 0.25, 0.25) is the one derived by hand. */
+static void plymesh_normals_keep_lengths(void **state)
+{
+    (void)state;
+    /* n0 = (1, 0, 1) (length √2), n1 = (0, 0, 4), n2 = (0, 2, 2) (√8). */
+    static const char ply[] = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                              "property float z\nproperty float nx\nproperty float ny\nproperty float nz\n"
+                              "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                              "-1 -1 0 1 0 1\n1 -1 0 0 0 4\n0 1 0 0 2 2\n3 0 1 2\n";
+    ts_tmp_write("lengths.ply", ply, strlen(ply), NULL, 0);
+    static const char *const shapes[2] = {
+        "Shape \"trianglemesh\" \"point P\" [-1 -1 0 1 -1 0 0 1 0] \"integer indices\" [0 1 2]"
+        " \"normal N\" [1 0 1 0 0 4 0 2 2]\n",
+        "Shape \"plymesh\" \"string filename\" \"lengths.ply\"\n",
+    };
+    static const char *const ctm[2] = {"", "Rotate 35 1 1 0 Scale 1 2 0.5\n"};
+    for (int c = 0; c < 2; c++) {
+        ts_scene *s[2];
+        for (int k = 0; k < 2; k++) {
+            char text[1024];
+            snprintf(text, sizeof text,
+                     "LookAt 0 0 3  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 60\n"
+                     "Film \"image\" \"integer xresolution\" 16 \"integer yresolution\" 16\n"
+                     "Integrator \"path\" \"integer maxdepth\" 1\nWorldBegin\n"
+                     "LightSource \"point\" \"point from\" [0.5 0.5 2] \"rgb I\" [4 4 4]\n%s%sWorldEnd\n",
+                     ctm[c], shapes[k]);
+            warnings w = {0};
+            ts_scene *sc = NULL;
+            ts_error err = {0};
+            if (ts_scene_load_pbrt_text(text, strlen(text), ts_tmp_dir, "t.pbrt", NULL, on_warning, &w, &sc, &err))
+                fail_msg("%s", err.message);
+            assert_int_equal(w.n, 0);
+            s[k] = sc;
+        }
+        if (c == 0) {
+            /* The hit at barycentrics (0.5, 0.25, 0.25): p = (−0.25, −0.5, 0). Interpolated
+             * with their lengths the normals sum to (0.5, 0.5, 2), whose direction is
+             * (1, 1, 4)/√18; normalised first they would give (0.354, 0.177, 0.780)/0.874. */
+            const double want[3] = {1 / sqrt(18.0), 1 / sqrt(18.0), 4 / sqrt(18.0)};
+            for (int k = 0; k < 2; k++) {
+                ts_interaction si;
+                ts_ray r = {{-0.25f, -0.5f, 5}, {0, 0, -1}, INFINITY, TS_NONE, 0, 0};
+                assert_true(ts_accel_intersect(s[k]->accel, &r, &si));
+                const float ns[3] = {si.ns.x, si.ns.y, si.ns.z};
+                for (int a = 0; a < 3; a++)
+                    if (!(fabs(ns[a] - want[a]) <= 2e-7)) /* the double result rounded to float: ≤ ½ ulp (6e-8) */
+                        fail_msg("%s: ns[%d] = %.9g, by hand %.9g", k ? "plymesh" : "trianglemesh", a, ns[a], want[a]);
+            }
+        }
+        assert_same_pixels(s[0], s[1], 4);
+        ts_scene_destroy(s[0]);
+        ts_scene_destroy(s[1]);
+    }
+}
+
 /* Materials: pbrt-v3's parameter names, defaults and roughness remapping. */
 static void materials_mapped(void **state)
 {
@@ -367,7 +431,6 @@ static void materials_mapped(void **state)
     ts_scene_destroy(s);
 }
 
-static void assert_same_pixels(const ts_scene *a, const ts_scene *b, uint32_t spp);
 
 /* A material parameter naming a texture takes the scene's texture (texture_pbrt.h); a
  * constant texture is its value; so does a roughness, and bumpmap is the material's bump. */
@@ -835,6 +898,7 @@ int main(void)
         cmocka_unit_test(lights_mapped),
         cmocka_unit_test(shapes_mapped),
         cmocka_unit_test(mesh_orientation),
+        cmocka_unit_test(plymesh_normals_keep_lengths),
         cmocka_unit_test(materials_mapped),
         cmocka_unit_test(textured_parameters),
         cmocka_unit_test(pbrt3_materials_mapped),

@@ -348,7 +348,7 @@ static ts_status obj_parse(const ts_mesh_reader *c, const char *buf, size_t size
             o.ivt++;
         } else if (ts_mesh_token_is(ts, te, "vn")) {
             st = obj_numbers(&o, line, "normal", s, le, 3, 3, o.nrm + 3 * o.ivn, 3);
-            if (!st && !ts_mesh_normalize3(o.nrm + 3 * o.ivn))
+            if (!st && !ts_mesh_normal_ok(o.nrm + 3 * o.ivn))
                 st = ts_mesh_fail_line(c, line, TS_ERR_INVALID, "normal has zero length");
             o.ivn++;
         } else if (ts_mesh_token_is(ts, te, "f")) {

@@ -7,8 +7,8 @@
  * a texture coordinate (or normal) and others do not, that attribute is dropped for the
  * whole mesh (uv or n is NULL): a partial attribute cannot be interpolated consistently.
  * Statements other than v vt vn f (o g s usemtl mtllib l p, free-form geometry, …) and
- * comments are ignored; a line ending in '\' continues on the next one. Normals are
- * normalised (a zero-length normal is an error), texture coordinates are returned as
+ * comments are ignored; a line ending in '\' continues on the next one. Normals keep
+ * their lengths, as the builder's inline normals (a zero normal is an error), texture coordinates are returned as
  * written (no v flip), non-finite numbers are errors, faces need at least 3 vertices,
  * degenerate triangles are kept, a file without faces is an error. Errors name the line.
  *

@@ -509,7 +509,7 @@ static ts_status ply_read_vertices(ply_in *in, const ply_header *h, ts_mesh_data
         if (m->n) {
             for (int k = 0; k < 3; k++)
                 m->n[3 * i + k] = (float)val[ROLE_NX + k];
-            if (!ts_mesh_normalize3(m->n + 3 * i))
+            if (!ts_mesh_normal_ok(m->n + 3 * i))
                 return ply_fail(in, TS_ERR_INVALID, "vertex %llu has a zero-length normal",
                                 (unsigned long long)i);
         }

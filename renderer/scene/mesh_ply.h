@@ -6,8 +6,8 @@
  * texture_v or texture_s texture_t); element face with a list property vertex_indices (or
  * vertex_index) of integer count and index types, fan-triangulated. Other elements and
  * properties, lists included, are skipped; every vertex is kept. Data after the last
- * declared element is ignored. An ASCII element takes one line. Normals are normalised (a
- * zero-length normal is an error), texture coordinates are returned as written, non-finite
+ * declared element is ignored. An ASCII element takes one line. Normals keep their lengths,
+ * as pbrt-v3's plymesh (a zero normal is an error), texture coordinates are returned as written, non-finite
  * numbers are errors, faces need at least 3 vertices, degenerate triangles are kept, a file
  * without faces is an error. Errors name the line (ASCII) or the byte offset and element
  * (binary).

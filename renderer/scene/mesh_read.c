@@ -97,12 +97,4 @@ bool ts_mesh_parse_int(const char *s, const char *e, int64_t *out)
     return true;
 }
 
-bool ts_mesh_normalize3(float *n)
-{
-    double x = n[0], y = n[1], z = n[2], len = sqrt(x * x + y * y + z * z);
-    if (!(len > 0) || !isfinite(len)) return false;
-    n[0] = (float)(x / len);
-    n[1] = (float)(y / len);
-    n[2] = (float)(z / len);
-    return true;
-}
+bool ts_mesh_normal_ok(const float *n) { return n[0] != 0 || n[1] != 0 || n[2] != 0; }

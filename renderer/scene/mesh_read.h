@@ -30,7 +30,7 @@ typedef struct ts_mesh_limits {
 typedef struct ts_mesh_data {
     uint32_t n_vertices, n_triangles;
     float *p;        /* 3·n_vertices, malloc-owned */
-    float *n;        /* 3·n_vertices normals (the file readers' unit, a subdivision's not), or NULL */
+    float *n;        /* 3·n_vertices normals, non-zero, of any length (as written), or NULL */
     float *uv;       /* 2·n_vertices, or NULL */
     uint32_t *index; /* 3·n_triangles, every index < n_vertices */
 } ts_mesh_data;
@@ -79,8 +79,10 @@ bool ts_mesh_parse_double(const char *s, const char *e, double *out);
 bool ts_mesh_to_float(double d, float *f);
 /* Parses [s, e) as an optionally signed decimal integer; false on syntax or overflow. */
 bool ts_mesh_parse_int(const char *s, const char *e, int64_t *out);
-/* Normalises the 3-vector n in place (in double); false if its length is zero or not finite. */
-bool ts_mesh_normalize3(float *n);
+/* Whether the vertex normal n (finite floats, checked by the reader) can shade: false for
+ * the zero vector. Normals keep their lengths, which weight their interpolation as in
+ * pbrt-v3's triangles (docs/design.md §4, shapes). */
+bool ts_mesh_normal_ok(const float *n);
 
 /* A token shown in a message: at most 32 bytes. */
 #define TS_MESH_TOKEN_FMT       "%.*s"
