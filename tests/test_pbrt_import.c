@@ -26,6 +26,7 @@
 #include "scene/scene_json.h"
 #include "scene/scene_load.h"
 #include "scene/spectrum.h"
+#include "render_stats.h"
 #include "tmp_folder.h"
 
 static void write_file(const char *rel, const char *text, char *path, size_t len)
@@ -384,6 +385,92 @@ static void plymesh_normals_keep_lengths(void **state)
         ts_scene_destroy(s[0]);
         ts_scene_destroy(s[1]);
     }
+}
+
+/* directlighting's strategy "one" selects its light uniformly, as pbrt-v3's
+ * DirectLightingIntegrator (UniformSampleOneLight without a light distribution): the
+ * built scene's selection pmf is ½ for two lights whose powers are 1 : 9 (JSON's default,
+ * power, gives 0.1 and 0.9); `convert` writes "light_sampling": "uniform", and its
+ * document renders bit for bit as the .pbrt; and the image mean of 16 independent renders
+ * matches the closed form. The scene: a matte plane (Kd 0.5) under two point lights, seen
+ * by an orthographic camera filling the film with [−1, 1]² of the plane, box filter, so the
+ * image mean is the plane's mean radiance there, (1/4)∬ (Kd/π) Σ I_k h_k / r_k³ dx dy
+ * (integrated below by the midpoint rule on 1024² cells: error below 1e-7 relative, far
+ * under the renders' standard error). Student's t with 15 degrees of freedom at α = 1e-3
+ * two-sided (|t| < 4.07) fails correct code once in 1000 runs if the image means are
+ * normal (each averages 16 × 16 pixels × 16 samples). */
+static void directlighting_one_uniform(void **state)
+{
+    (void)state;
+    static const char text[] =
+        "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"orthographic\"\n"
+        "Film \"image\" \"integer xresolution\" 16 \"integer yresolution\" 16\nPixelFilter \"box\"\n"
+        "Sampler \"sobol\" \"integer pixelsamples\" 16\n"
+        "Integrator \"directlighting\" \"string strategy\" \"one\"\nWorldBegin\n"
+        "LightSource \"point\" \"point from\" [0.3 0.2 1] \"rgb I\" [1 1 1]\n"
+        "LightSource \"point\" \"point from\" [-0.5 -0.4 2] \"rgb I\" [9 9 9]\n"
+        "Material \"matte\" \"rgb Kd\" [0.5 0.5 0.5]\n"
+        "Shape \"trianglemesh\" \"point P\" [-2 -2 0 2 -2 0 2 2 0 -2 2 0] \"integer indices\" [0 1 2 0 2 3]\n"
+        "WorldEnd\n";
+    char path[512];
+    write_file("one.pbrt", text, path, sizeof path);
+    warnings w = {0};
+    ts_scene *s = load(text, &w);
+    assert_int_equal(s->integrator.type, TS_INTEGRATOR_DIRECT);
+    assert_int_equal(s->integrator.strategy, TS_LIGHTS_ONE);
+    assert_int_equal(s->n_lights, 2);
+    for (uint32_t i = 0; i < 2; i++)
+        assert_float_equal(ts_light_distribution_pmf(&s->light_distribution, (ts_vec3){0, 0, 0}, i), 0.5f, 1e-7);
+
+    /* convert says uniform; its document renders the same pixels; without the key JSON's
+     * default (power) selects 1 : 9. */
+    char *json = NULL;
+    size_t len = 0;
+    ts_error err = {0};
+    assert_int_equal(ts_scene_convert_pbrt_path(path, NULL, on_warning, &w, &json, &len, &err), TS_OK);
+    cJSON *doc = cJSON_ParseWithLength(json, len);
+    const cJSON *integ = cJSON_GetObjectItemCaseSensitive(doc, "integrator");
+    assert_string_equal(cJSON_GetObjectItemCaseSensitive(integ, "type")->valuestring, "direct");
+    assert_string_equal(cJSON_GetObjectItemCaseSensitive(integ, "strategy")->valuestring, "one");
+    const cJSON *sel = cJSON_GetObjectItemCaseSensitive(integ, "light_sampling");
+    assert_true(cJSON_IsString(sel));
+    assert_string_equal(sel->valuestring, "uniform");
+    ts_scene *b = NULL;
+    if (ts_scene_load_text(json, len, ts_tmp_dir, "one", NULL, &b, &err)) fail_msg("%s", err.message);
+    assert_same_pixels(s, b, 4);
+    ts_scene_destroy(b);
+    cJSON_DeleteItemFromObjectCaseSensitive((cJSON *)integ, "light_sampling");
+    char *power_doc = cJSON_PrintUnformatted(doc);
+    if (ts_scene_load_text(power_doc, strlen(power_doc), ts_tmp_dir, "one", NULL, &b, &err)) fail_msg("%s", err.message);
+    assert_float_equal(ts_light_distribution_pmf(&b->light_distribution, (ts_vec3){0, 0, 0}, 0), 0.1f, 1e-6);
+    assert_float_equal(ts_light_distribution_pmf(&b->light_distribution, (ts_vec3){0, 0, 0}, 1), 0.9f, 1e-6);
+    ts_scene_destroy(b);
+    free(power_doc);
+    cJSON_Delete(doc);
+    free(json);
+
+    /* The image mean against the closed form. */
+    const double lights[2][4] = {{0.3, 0.2, 1, 1}, {-0.5, -0.4, 2, 9}}; /* x, y, height, I */
+    const int cells = 1024;
+    double sum = 0;
+    for (int j = 0; j < cells; j++)
+        for (int i = 0; i < cells; i++) {
+            double x = -1 + (i + 0.5) * 2.0 / cells, y = -1 + (j + 0.5) * 2.0 / cells;
+            for (int k = 0; k < 2; k++) {
+                double dx = x - lights[k][0], dy = y - lights[k][1], h = lights[k][2];
+                double r2 = dx * dx + dy * dy + h * h;
+                sum += lights[k][3] * h / (r2 * sqrt(r2));
+            }
+        }
+    const double want = 0.5 / TS_PI_D * sum / ((double)cells * cells);
+    ts_rs_blocks r;
+    ts_rs_render(s, TS_SAMPLER_SOBOL, 7, 16, 16, 8, &r);
+    double t = (r.image_mean - want) / r.image_se;
+    print_message("directlighting one, uniform: image mean %.6f ± %.6f, closed form %.6f (t %.2f)\n", r.image_mean,
+                  r.image_se, want, t);
+    assert_true(r.image_se > 0);
+    assert_true(ts_rs_student_two_sided(t, 15) >= 1e-3);
+    ts_scene_destroy(s);
 }
 
 /* Materials: pbrt-v3's parameter names, defaults and roughness remapping. */
@@ -899,6 +986,7 @@ int main(void)
         cmocka_unit_test(shapes_mapped),
         cmocka_unit_test(mesh_orientation),
         cmocka_unit_test(plymesh_normals_keep_lengths),
+        cmocka_unit_test(directlighting_one_uniform),
         cmocka_unit_test(materials_mapped),
         cmocka_unit_test(textured_parameters),
         cmocka_unit_test(pbrt3_materials_mapped),

@@ -693,9 +693,12 @@ static ts_status map_integrator(imp *im)
             dwarn(im, ps, o->loc,
                   "rendered by the direct-lighting integrator (each light sampled once, specular "
                   "paths followed): Whitted's estimate");
-        if (strcmp(strat, "one") == 0)
+        if (strcmp(strat, "one") == 0) {
+            /* pbrt-v3's DirectLightingIntegrator calls UniformSampleOneLight without a
+             * light distribution: every light equally likely. */
             d.strategy = TS_LIGHTS_ONE;
-        else if (strcmp(strat, "all") != 0)
+            d.light_sampling = TS_LIGHT_SELECT_UNIFORM;
+        } else if (strcmp(strat, "all") != 0)
             return ts_pbrt_param_error(ps, ts_pbrt_params_get(ps, "strategy"), im->err, TS_ERR_INVALID,
                                        "must be all or one, got \"%s\"", strat);
         if (depth < 0 || depth > 1000)
@@ -726,7 +729,9 @@ static ts_status map_integrator(imp *im)
                          : d.light_sampling == TS_LIGHT_SELECT_SPATIAL ? "spatial"
                                                                        : "power");
         if (ok && d.type == TS_INTEGRATOR_DIRECT)
-            ok = jstring(j, "strategy", d.strategy == TS_LIGHTS_ONE ? "one" : "all");
+            ok = jstring(j, "strategy", d.strategy == TS_LIGHTS_ONE ? "one" : "all") &&
+                 (d.strategy != TS_LIGHTS_ONE ||
+                  jstring(j, "light_sampling", d.light_sampling == TS_LIGHT_SELECT_UNIFORM ? "uniform" : "power"));
         if (!ok || !jadd(im->doc, "integrator", j)) {
             if (!ok) cJSON_Delete(j);
             return nomem(im);

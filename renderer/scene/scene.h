@@ -43,7 +43,7 @@ typedef enum ts_direct_sampling { TS_SAMPLING_MIS, TS_SAMPLING_LIGHT, TS_SAMPLIN
 typedef struct ts_integrator_desc {
     ts_integrator_type type;
     int max_depth, rr_depth;            /* path; direct: max_depth of specular recursion */
-    ts_light_selection light_sampling;  /* path */
+    ts_light_selection light_sampling;  /* path; direct's strategy one (uniform or power) */
     ts_light_strategy strategy;         /* direct */
     ts_direct_sampling sampling;        /* path, direct */
     int samples_per_light;              /* direct, all */
@@ -103,8 +103,8 @@ typedef struct ts_scene {
     /* Some material has a texture (or bump map): camera rays carry ray differentials
      * (integrators/differential.h); else none are made. */
     bool textured;
-    /* Light selection for next-event estimation: integrator.light_sampling for `path`,
-     * power for `direct`. */
+    /* Light selection for next-event estimation: integrator.light_sampling for `path` and
+     * `direct` (used by its strategy one), power for the others. */
     ts_light_distribution light_distribution;
     uint32_t *infinite_lights; /* indices of the infinite lights, added to escaping rays */
     uint32_t n_infinite_lights;

@@ -300,6 +300,10 @@ ts_status ts_scene_builder_set_integrator(ts_scene_builder *b, const ts_integrat
         if (in->strategy != TS_LIGHTS_ALL && in->strategy != TS_LIGHTS_ONE)
             return ts_error_set(err, TS_ERR_INVALID, "integrator.strategy: unknown strategy %d",
                                 (int)in->strategy);
+        /* Strategy one's selection: pbrt-v3's uniform, or by power. */
+        if (in->light_sampling != TS_LIGHT_SELECT_UNIFORM && in->light_sampling != TS_LIGHT_SELECT_POWER)
+            return ts_error_set(err, TS_ERR_INVALID, "integrator.light_sampling: direct selects uniform or power, not %d",
+                                (int)in->light_sampling);
         if (!sampling_ok)
             return ts_error_set(err, TS_ERR_INVALID, "integrator.sampling: unknown strategy %d",
                                 (int)in->sampling);
@@ -1107,9 +1111,10 @@ static ts_status build(ts_scene_builder *b, ts_error *err)
         return ts_error_set(err, TS_ERR_INVALID, "camera.from: farther than 1e15 units from the origin");
     TRY(ts_lights_prepare(s->lights, s->n_lights, s->shapes, s->bounds, err));
     ts_light_sampling mode = TS_LIGHT_SAMPLING_POWER;
-    if (s->integrator.type == TS_INTEGRATOR_PATH && s->integrator.light_sampling == TS_LIGHT_SELECT_UNIFORM)
+    bool selects = s->integrator.type == TS_INTEGRATOR_PATH || s->integrator.type == TS_INTEGRATOR_DIRECT;
+    if (selects && s->integrator.light_sampling == TS_LIGHT_SELECT_UNIFORM)
         mode = TS_LIGHT_SAMPLING_UNIFORM;
-    else if (s->integrator.type == TS_INTEGRATOR_PATH && s->integrator.light_sampling == TS_LIGHT_SELECT_SPATIAL)
+    else if (selects && s->integrator.light_sampling == TS_LIGHT_SELECT_SPATIAL)
         mode = TS_LIGHT_SAMPLING_SPATIAL;
     TRY(ts_light_distribution_init(&s->light_distribution, s->lights, s->n_lights, s->shapes, mode, s->bounds,
                                    &s->arena, err));

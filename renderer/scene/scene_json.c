@@ -302,7 +302,8 @@ static ts_status parse_integrator(loader *ld, const cJSON *doc)
     TRY(ts_json_enum(it, "integrator", "type", true, types, &type, ld->err));
     in->type = (ts_integrator_type)type;
     static const char *const path_keys[] = {"type", "max_depth", "rr_depth", "light_sampling", "sampling", NULL};
-    static const char *const direct_keys[] = {"type", "strategy", "max_depth", "samples_per_light", "sampling", NULL};
+    static const char *const direct_keys[] = {"type",    "strategy",          "light_sampling", "max_depth",
+                                              "samples_per_light", "sampling", NULL};
     static const char *const ao_keys[] = {"type", "max_distance", NULL};
     static const char *const normals_keys[] = {"type", NULL};
     const char *const *keys[] = {path_keys, direct_keys, ao_keys, normals_keys};
@@ -335,6 +336,11 @@ static ts_status parse_integrator(loader *ld, const cJSON *doc)
         int k = 0;
         TRY(ts_json_enum(it, "integrator", "strategy", false, strat, &k, ld->err));
         in->strategy = (ts_light_strategy)k;
+        /* Strategy one's light selection: uniform (pbrt-v3's directlighting) or power. */
+        static const char *const sel[] = {"uniform", "power", NULL};
+        k = 1;
+        TRY(ts_json_enum(it, "integrator", "light_sampling", false, sel, &k, ld->err));
+        in->light_sampling = (ts_light_selection)k;
         v = in->max_depth;
         TRY(ts_json_int(it, "integrator", "max_depth", false, 0, 1000, &v, ld->err));
         in->max_depth = (int)v;
