@@ -7,6 +7,7 @@
 #include "server_harness.h"
 
 #include <curl/curl.h>
+#include <dirent.h>
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
@@ -177,6 +178,35 @@ void ts_http_post(const test_server *s, const char *path, const void *body, size
                   const char *enc, http_resp *out)
 {
     request(s, "POST", path, body, len, NULL, type, enc, 60, out); /* a bundle is unpacked before the answer */
+}
+
+long ts_http_post_body(const test_server *s, const char *path, const void *body, size_t len, const char *type,
+                       const char *enc, char **out)
+{
+    http_resp r;
+    ts_http_post(s, path, body, len, type, enc, &r);
+    *out = r.body;
+    return r.status;
+}
+
+int ts_count_entries(const char *folder)
+{
+    DIR *d = opendir(folder);
+    if (!d) return 0;
+    int n = 0;
+    for (struct dirent *e; (e = readdir(d));) n += strcmp(e->d_name, ".") && strcmp(e->d_name, "..");
+    closedir(d);
+    return n;
+}
+
+void ts_assert_bundles_left(const char *root, int jobs_expected, const char *what)
+{
+    char p[600];
+    snprintf(p, sizeof p, "%s/incoming", root);
+    if (ts_count_entries(p)) fail_msg("%s: %d entries left in incoming/", what, ts_count_entries(p));
+    snprintf(p, sizeof p, "%s/jobs", root);
+    if (ts_count_entries(p) != jobs_expected)
+        fail_msg("%s: jobs/ holds %d entries, expected %d", what, ts_count_entries(p), jobs_expected);
 }
 
 void ts_http_free(http_resp *r)

@@ -37,6 +37,9 @@ void ts_http(const test_server *s, const char *method, const char *path, const c
  * with Content-Encoding enc unless NULL. */
 void ts_http_post(const test_server *s, const char *path, const void *body, size_t len, const char *type,
                   const char *enc, http_resp *out);
+/* ts_http_post, for a status and a body: returns the status, *out the body (caller frees). */
+long ts_http_post_body(const test_server *s, const char *path, const void *body, size_t len, const char *type,
+                       const char *enc, char **out);
 void ts_http_free(http_resp *r);
 /* GET path and parse the JSON body (caller deletes); asserts the status. */
 cJSON *ts_http_json(const test_server *s, const char *path, long expect_status);
@@ -55,6 +58,13 @@ double ts_wait_field(const test_server *s, const char *id, const char *field, do
 double ts_json_num(const cJSON *o, const char *key);
 const char *ts_json_str(const cJSON *o, const char *key);
 void ts_sleep_ms(int ms);
+
+/* Entries in folder (0 when it does not exist), "." and ".." aside. */
+int ts_count_entries(const char *folder);
+/* What bundles leave under root (the server's --data, or its temporary bundle folder):
+ * fails the test unless incoming/ is empty and jobs/ holds jobs_expected entries (a
+ * refused bundle leaves nothing; an accepted one its job). what names the moment. */
+void ts_assert_bundles_left(const char *root, int jobs_expected, const char *what);
 
 /* A small scene document (malloc'd): ambient occlusion of a sphere on a square floor, w×h
  * pixels, spp samples, box filter — quick to render, for tests of jobs and checkpoints. */

@@ -139,32 +139,12 @@ static int good_entries(tar_entry *e, bool dot)
 
 /* POSTs body to path as type (with Content-Encoding enc unless NULL); returns the status,
  * *out the body (caller frees). */
-static long post_to(const test_server *s, const char *path, const void *body, size_t len, const char *type,
-                    const char *enc, char **out)
-{
-    http_resp r;
-    ts_http_post(s, path, body, len, type, enc, &r);
-    *out = r.body;
-    return r.status;
-}
-
 static long post(const test_server *s, const void *body, size_t len, const char *type, const char *enc, char **out)
 {
-    return post_to(s, "/api/v1/jobs", body, len, type, enc, out);
+    return ts_http_post_body(s, "/api/v1/jobs", body, len, type, enc, out);
 }
 
 /* ---------------------------------------------------------------- disk */
-
-/* Entries in folder (0 when it does not exist), "." and ".." aside. */
-static int count_entries(const char *folder)
-{
-    DIR *d = opendir(folder);
-    if (!d) return 0;
-    int n = 0;
-    for (struct dirent *e; (e = readdir(d));) n += strcmp(e->d_name, ".") && strcmp(e->d_name, "..");
-    closedir(d);
-    return n;
-}
 
 /* The folder under which the server keeps bundles: --data, or its temporary folder under
  * TMPDIR (the only tessera-serve-* there: each server of this test has a TMPDIR of its own). */
@@ -181,16 +161,6 @@ static void files_root(const char *data, const char *tmp, char *out, size_t n)
         if (!strncmp(e->d_name, "tessera-serve-", 14)) snprintf(out, n, "%s/%s", tmp, e->d_name);
     closedir(d);
     assert_true(out[0]);
-}
-
-static void assert_nothing_left(const char *root, int jobs_expected, const char *what)
-{
-    char p[600];
-    snprintf(p, sizeof p, "%s/incoming", root);
-    if (count_entries(p)) fail_msg("%s: %d entries left in incoming/", what, count_entries(p));
-    snprintf(p, sizeof p, "%s/jobs", root);
-    if (count_entries(p) != jobs_expected)
-        fail_msg("%s: jobs/ holds %d entries, expected %d", what, count_entries(p), jobs_expected);
 }
 
 static void make_tmp(char *out, size_t n, const char *tag)
@@ -297,7 +267,7 @@ static void test_good_bundles(void **state)
         ts_image_fini(&img);
         assert_true(mean[w] > 0 && mean[w] == mean[0]);
     }
-    assert_nothing_left(root, 5, "after five good bundles");
+    ts_assert_bundles_left(root, 5, "after five good bundles");
     /* Restarted on the same --data: the jobs and their folders are back, images served. */
     assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
     start_with_tmpdir(&s, tmp, args);
@@ -326,7 +296,7 @@ static void test_good_bundles(void **state)
     const char *args2[] = {"--threads", "2", NULL};
     start_with_tmpdir(&s, tmp, args2);
     /* (made at the first bundle: a server that takes none leaves nothing in TMPDIR) */
-    if (count_entries(tmp)) fail_msg("the temporary folder exists before any bundle");
+    if (ts_count_entries(tmp)) fail_msg("the temporary folder exists before any bundle");
     n = good_entries(e, false);
     tar = make_tar(e, n, true, &len);
     st = post(&s, tar, len, "application/x-tar", NULL, &body);
@@ -345,9 +315,9 @@ static void test_good_bundles(void **state)
     ts_http(&s, "DELETE", p, NULL, 0, NULL, &r);
     assert_int_equal(r.status, 204);
     ts_http_free(&r);
-    assert_nothing_left(root, 0, "after DELETE without --data");
+    ts_assert_bundles_left(root, 0, "after DELETE without --data");
     assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
-    if (count_entries(tmp)) fail_msg("the server's temporary folder outlived it");
+    if (ts_count_entries(tmp)) fail_msg("the server's temporary folder outlived it");
     rm_rf(data);
     rm_rf(tmp);
 }
@@ -393,7 +363,7 @@ static void test_pbrt_warnings_and_spp(void **state)
     unsigned char *tar = make_tar(pe, 2, false, &len);
     char *body;
     /* ?spp= is the job's target; the file's pixelsamples (64) stay the sampler's. */
-    long st = post_to(&s, "/api/v1/jobs?spp=2", tar, len, "application/x-tar", NULL, &body);
+    long st = ts_http_post_body(&s, "/api/v1/jobs?spp=2", tar, len, "application/x-tar", NULL, &body);
     if (st != 201) fail_msg("?spp=2: %ld %s", st, body);
     char id[32];
     snprintf(id, sizeof id, "%s", job_id_of(body));
@@ -422,14 +392,14 @@ static void test_pbrt_warnings_and_spp(void **state)
     for (size_t b = 0; b < sizeof bad / sizeof *bad; b++) {
         char path[64];
         snprintf(path, sizeof path, "/api/v1/jobs%s", bad[b].query);
-        st = post_to(&s, path, tar, len, "application/x-tar", NULL, &body);
+        st = ts_http_post_body(&s, path, tar, len, "application/x-tar", NULL, &body);
         if (st != bad[b].status || !strstr(body, bad[b].says))
             fail_msg("%s: %ld %s; expected %ld and '%s'", bad[b].query, st, body, bad[b].status, bad[b].says);
         free(body);
-        assert_nothing_left(root, 1, bad[b].query);
+        ts_assert_bundles_left(root, 1, bad[b].query);
     }
     /* A JSON scene sets job.spp: the query parameter is refused there. */
-    st = post_to(&s, "/api/v1/jobs?spp=2", scene_json, strlen(scene_json), "application/json", NULL, &body);
+    st = ts_http_post_body(&s, "/api/v1/jobs?spp=2", scene_json, strlen(scene_json), "application/json", NULL, &body);
     if (st != 400 || !strstr(body, "a JSON scene sets job.spp")) fail_msg("JSON with ?spp=2: %ld %s", st, body);
     free(body);
     free(tar);
@@ -511,7 +481,7 @@ static void test_bad_entries(void **state)
                 fail_msg("%s: the answer names a server path: %s", cases[c].what, body);
             free(body);
             free(tar);
-            assert_nothing_left(root, 0, cases[c].what);
+            ts_assert_bundles_left(root, 0, cases[c].what);
         }
     /* Truncated archives: a good bundle cut short, plain and compressed, in an entry's data
      * and in a header; and bytes that are no tar at all. */
@@ -525,7 +495,7 @@ static void test_bad_entries(void **state)
             if (st != 400 || (!strstr(body, "truncated") && !strstr(body, "not a tar archive")))
                 fail_msg("%s cut at %zu of %zu: %ld %s", gz ? "tgz" : "tar", cuts[k], len, st, body);
             free(body);
-            assert_nothing_left(root, 0, "truncated");
+            ts_assert_bundles_left(root, 0, "truncated");
         }
         free(tar);
     }
@@ -541,7 +511,7 @@ static void test_bad_entries(void **state)
     if (st != 400 || !strstr(body, "empty")) fail_msg("empty bundle: %ld %s", st, body);
     free(body);
     free(tar);
-    assert_nothing_left(root, 0, "after every refusal");
+    ts_assert_bundles_left(root, 0, "after every refusal");
     assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
     rm_rf(data);
     rm_rf(tmp);
@@ -574,7 +544,7 @@ static void test_limits(void **state)
     if (st != 413 || !strstr(body, "more than 12 entries")) fail_msg("13 entries: %ld %s", st, body);
     free(body), free(tar);
     files_root(NULL, tmp, root, sizeof root);
-    assert_nothing_left(root, 0, "too many entries");
+    ts_assert_bundles_left(root, 0, "too many entries");
     /* An expansion bomb: 11 files of 128 KiB (each under the per-entry limit), 1.4 MiB in
      * all over the 1 MiB limit; it stops at the 9th, whose bytes would pass it. */
     for (int i = 1; i < 12; i++) e[i] = (tar_entry){names[i], 'f', NULL, 128 << 10};
@@ -583,7 +553,7 @@ static void test_limits(void **state)
     if (st != 413 || !strstr(body, "expands to more than this server accepts (1048576 bytes) at entry 'f08'"))
         fail_msg("expansion bomb (%zu bytes compressed): %ld %s", len, st, body);
     free(body), free(tar);
-    assert_nothing_left(root, 0, "expansion bomb");
+    ts_assert_bundles_left(root, 0, "expansion bomb");
     /* A gzip bomb: 256 MiB of zeros in one entry, about 0.26 MB compressed. */
     e[1] = (tar_entry){"zeros.bin", 'f', NULL, 256u << 20};
     tar = make_tar(e, 2, true, &len);
@@ -592,7 +562,7 @@ static void test_limits(void **state)
     if (st != 413 || !strstr(body, "'zeros.bin' is 268435456 bytes, more than this server accepts (524288)"))
         fail_msg("gzip bomb (%zu bytes compressed): %ld %s", len, st, body);
     free(body), free(tar);
-    assert_nothing_left(root, 0, "gzip bomb");
+    ts_assert_bundles_left(root, 0, "gzip bomb");
     /* A path over 64 bytes. */
     e[1] = (tar_entry){"meshes/a-very-long-folder-name-for-a-mesh/and-a-long-file-name-too.obj", 'f', tri_obj, 5};
     tar = make_tar(e, 2, false, &len);
@@ -609,9 +579,9 @@ static void test_limits(void **state)
     st = post(&s, tar, len, "application/x-tar", NULL, &body);
     if (st != 413 || !strstr(body, "larger than the limit of 2097152 bytes")) fail_msg("large bundle: %ld %s", st, body);
     free(body), free(tar), free(noise);
-    assert_nothing_left(root, 0, "after the limits");
+    ts_assert_bundles_left(root, 0, "after the limits");
     assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
-    if (count_entries(tmp)) fail_msg("the server's temporary folder outlived it");
+    if (ts_count_entries(tmp)) fail_msg("the server's temporary folder outlived it");
     rm_rf(tmp);
 }
 

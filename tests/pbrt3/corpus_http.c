@@ -239,32 +239,7 @@ static long post_bundle(const test_server *s, const bundle *b, const char *type,
 {
     char path[64];
     snprintf(path, sizeof path, "/api/v1/jobs?spp=%d", HTTP_SPP);
-    http_resp r;
-    ts_http_post(s, path, b->data, b->len, type, NULL, &r);
-    *out = r.body;
-    return r.status;
-}
-
-/* ---------------------------------------------------------------- disk */
-
-static int count_entries(const char *folder)
-{
-    DIR *d = opendir(folder);
-    if (!d) return 0;
-    int n = 0;
-    for (struct dirent *e; (e = readdir(d));) n += strcmp(e->d_name, ".") && strcmp(e->d_name, "..");
-    closedir(d);
-    return n;
-}
-
-static void assert_nothing_left(const char *data, int jobs_expected, const char *what)
-{
-    char p[600];
-    snprintf(p, sizeof p, "%s/incoming", data);
-    if (count_entries(p)) fail_msg("%s: %d entries left in --data's incoming/", what, count_entries(p));
-    snprintf(p, sizeof p, "%s/jobs", data);
-    if (count_entries(p) != jobs_expected)
-        fail_msg("%s: --data's jobs/ holds %d entries, expected %d", what, count_entries(p), jobs_expected);
+    return ts_http_post_body(s, path, b->data, b->len, type, NULL, out);
 }
 
 /* ---------------------------------------------------------------- warnings */
@@ -368,7 +343,7 @@ static void test_bad_bundles(const test_server *srv, const char *data, const sce
         free(body);
         char what[300];
         snprintf(what, sizeof what, "after %s without %s", bad[b].scene, bad[b].omit);
-        assert_nothing_left(data, accepted, what);
+        ts_assert_bundles_left(data, accepted, what);
     }
 }
 
@@ -411,7 +386,7 @@ static void test_corpus_over_http(void **state)
         printf("%s: posted (%zu bytes%s), job %s\n", j->cs->name, b.len, gzip ? ", gzip" : "", j->id);
         free(b.data);
     }
-    assert_nothing_left(data, n, "after the good bundles");
+    ts_assert_bundles_left(data, n, "after the good bundles");
     test_bad_bundles(&srv, data, jobs, n, n);
     int failures = 0;
     for (int i = 0; i < n; i++) {
