@@ -557,8 +557,8 @@ static void textured_parameters(void **state)
 }
 
 /* uber, translucent and mix with pbrt-v3's parameter names and defaults; anisotropic
- * roughness where pbrt-v3 reads it (each of u/vroughness defaulting to roughness; substrate's
- * to 0.1). */
+ * roughness where pbrt-v3 reads it (metal's u/vroughness each defaulting to roughness, uber's
+ * vroughness to uroughness, substrate's each to 0.1). */
 static void pbrt3_materials_mapped(void **state)
 {
     (void)state;
@@ -606,6 +606,16 @@ static void pbrt3_materials_mapped(void **state)
     assert_true(sa->type == TS_MATERIAL_SUBSTRATE && sa->has_vroughness && sa->roughness.value == 0.3f &&
                 sa->vroughness.value == 0.1f && sa->remap_roughness);
     assert_true(!sb->has_vroughness && sb->roughness.value == 0.1f);
+    ts_scene_destroy(s);
+    /* uber: a missing vroughness takes uroughness's value (pbrt-v3's roughv = roughu), not
+     * roughness's as metal's does: (0.3, 0.3), not (0.3, 0.1). */
+    s = load("WorldBegin\nMaterial \"uber\" \"float uroughness\" 0.3\nShape \"sphere\"\n"
+             "Material \"metal\" \"float uroughness\" 0.3\nShape \"sphere\"\nWorldEnd\n",
+             &w);
+    const ts_material *ua = &s->materials[s->shapes[0].material], *ma = &s->materials[s->shapes[1].material];
+    assert_true(ua->type == TS_MATERIAL_UBER && !ua->has_vroughness && ua->roughness.value == 0.3f);
+    assert_true(ma->type == TS_MATERIAL_CONDUCTOR && ma->has_vroughness && ma->roughness.value == 0.3f &&
+                ma->vroughness.value == 0.01f);
     ts_scene_destroy(s);
     expect_error("WorldBegin\nMakeNamedMaterial \"n\" \"string type\" \"none\"\n"
                  "MakeNamedMaterial \"a\" \"string type\" \"matte\"\n"

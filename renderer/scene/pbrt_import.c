@@ -749,8 +749,10 @@ static ts_status map_integrator(imp *im)
  * remaproughness (true by default) becomes the builder's remap_roughness, so a textured
  * roughness is remapped where it is evaluated. uroughness ≠ vroughness makes the
  * material anisotropic (has_vroughness), which the builder takes on every type with uv. */
+/* v_follows_u: a missing vroughness takes uroughness's value (pbrt-v3's UberMaterial:
+ * roughv = roughu), not roughness's (its MetalMaterial). */
 static ts_status get_roughness(imp *im, ts_pbrt_params *ps, ts_pbrt_loc loc, float def, bool plain, bool uv,
-                               ts_material *m)
+                               bool v_follows_u, ts_material *m)
 {
     ts_material_float r = ts_material_float_const(def), u, v;
     if (plain) TRY(get_mfloat(im, ps, "roughness", def, &r));
@@ -758,6 +760,7 @@ static ts_status get_roughness(imp *im, ts_pbrt_params *ps, ts_pbrt_loc loc, flo
     if (uv) {
         if (ts_pbrt_params_get(ps, "uroughness")) TRY(get_mfloat(im, ps, "uroughness", def, &u));
         if (ts_pbrt_params_get(ps, "vroughness")) TRY(get_mfloat(im, ps, "vroughness", def, &v));
+        else if (v_follows_u) v = u;
     }
     TRY(ts_pbrt_find_bool(ps, "remaproughness", true, &m->remap_roughness, im->err));
     const ts_material_float *both[2] = {&u, &v};
@@ -821,7 +824,7 @@ static ts_status make_material(imp *im, int32_t mi, ts_material *m, bool *no_sur
         *json_type = "plastic_pbrt3";
         TRY(get_mrgb(im, ps, "Kd", ts_rgb_gray(0.25f), &m->diffuse));
         TRY(get_mrgb(im, ps, "Ks", ts_rgb_gray(0.25f), &m->specular));
-        TRY(get_roughness(im, ps, loc, 0.1f, true, false, m));
+        TRY(get_roughness(im, ps, loc, 0.1f, true, false, false, m));
     } else if (strcmp(type, "mirror") == 0) {
         m->type = TS_MATERIAL_MIRROR;
         *json_type = "mirror";
@@ -835,7 +838,7 @@ static ts_status make_material(imp *im, int32_t mi, ts_material *m, bool *no_sur
         TRY(get_float(im, ps, "index", 1.5f, &eta));
         TRY(get_mfloat(im, ps, "eta", eta, &m->eta));
         /* Smooth where both roughnesses are 0 before remapping (the builder's rule, pbrt-v3's). */
-        TRY(get_roughness(im, ps, loc, 0, false, true, m));
+        TRY(get_roughness(im, ps, loc, 0, false, true, false, m));
     } else if (strcmp(type, "metal") == 0) {
         m->type = TS_MATERIAL_CONDUCTOR;
         *json_type = "conductor";
@@ -844,13 +847,13 @@ static ts_status make_material(imp *im, int32_t mi, ts_material *m, bool *no_sur
         TRY(get_mrgb(im, ps, "eta", eta, &m->conductor_eta));
         TRY(get_mrgb(im, ps, "k", k, &m->conductor_k));
         m->distribution = TS_MICROFACET_GGX;
-        TRY(get_roughness(im, ps, loc, 0.01f, true, true, m));
+        TRY(get_roughness(im, ps, loc, 0.01f, true, true, false, m));
     } else if (strcmp(type, "substrate") == 0) {
         m->type = TS_MATERIAL_SUBSTRATE;
         *json_type = "substrate";
         TRY(get_mrgb(im, ps, "Kd", ts_rgb_gray(0.5f), &m->diffuse));
         TRY(get_mrgb(im, ps, "Ks", ts_rgb_gray(0.5f), &m->specular));
-        TRY(get_roughness(im, ps, loc, 0.1f, false, true, m));
+        TRY(get_roughness(im, ps, loc, 0.1f, false, true, false, m));
     } else if (strcmp(type, "fourier") == 0) {
         m->type = TS_MATERIAL_FOURIER;
         *json_type = "fourier";
@@ -866,7 +869,8 @@ static ts_status make_material(imp *im, int32_t mi, ts_material *m, bool *no_sur
                     : type[0] == 'h' ? "hair is not implemented"
                                      : "subsurface scattering needs media, which tessera does not render");
     } else if (strcmp(type, "uber") == 0) {
-        /* pbrt-v3's UberMaterial: eta, else index; u/vroughness default to roughness. */
+        /* pbrt-v3's UberMaterial: eta, else index; uroughness defaults to roughness, vroughness
+         * to uroughness. */
         m->type = TS_MATERIAL_UBER;
         *json_type = "uber";
         TRY(get_mrgb(im, ps, "Kd", ts_rgb_gray(0.25f), &m->diffuse));
@@ -877,7 +881,7 @@ static ts_status make_material(imp *im, int32_t mi, ts_material *m, bool *no_sur
         float eta;
         TRY(get_float(im, ps, "index", 1.5f, &eta));
         TRY(get_mfloat(im, ps, "eta", eta, &m->eta));
-        TRY(get_roughness(im, ps, loc, 0.1f, true, true, m));
+        TRY(get_roughness(im, ps, loc, 0.1f, true, true, true, m));
     } else if (strcmp(type, "translucent") == 0) {
         m->type = TS_MATERIAL_TRANSLUCENT;
         *json_type = "translucent";
@@ -885,7 +889,7 @@ static ts_status make_material(imp *im, int32_t mi, ts_material *m, bool *no_sur
         TRY(get_mrgb(im, ps, "Ks", ts_rgb_gray(0.25f), &m->specular));
         TRY(get_mrgb(im, ps, "reflect", ts_rgb_gray(0.5f), &m->reflectance));
         TRY(get_mrgb(im, ps, "transmit", ts_rgb_gray(0.5f), &m->transmittance));
-        TRY(get_roughness(im, ps, loc, 0.1f, true, false, m));
+        TRY(get_roughness(im, ps, loc, 0.1f, true, false, false, m));
     } else if (strcmp(type, "mix") == 0) {
         /* pbrt-v3's MixMaterial: amount (a spectrum texture) weights namedmaterial1. The
          * parser resolved both names when the mix was defined, so they are earlier
