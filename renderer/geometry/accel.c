@@ -14,6 +14,16 @@
  * (ts_shape_triangle_ahead) — Embree's float triangle test can report the coplanar
  * neighbour of the triangle a ray leaves. Rays without skip ids cost the filter one test.
  *
+ * Alpha cut-outs (shape.h): a mesh with an alpha texture gets other filter functions —
+ * the intersect filter tests alpha, the occluded filter alpha and then shadow_alpha
+ * (pbrt-v3's Triangle::Intersect and IntersectP), each after the skip test above, at the
+ * hit's point and (u, v) as ts_shape_triangle_point_uv computes them from the ray (taken to
+ * the object's space through an instance, where pbrt-v3's TransformedPrimitive tests the
+ * object's own triangles), with no footprint: a texture lookup of the finest MIP level. A
+ * rejected hit is no hit and traversal goes on past it. A mesh without alpha textures
+ * keeps the plain filter and pays nothing. The decision is a pure function of the ray and
+ * the hit, so it is the same on every thread and in any traversal order.
+ *
  * Each mesh triangle has a ts_tri_cache (shape.h: its normal, edge lengths, ∂p/∂u, ∂p/∂v),
  * made at build time, 72 bytes a triangle; the filter and the hit's interaction read it
  * instead of recomputing those per hit, with bit-identical results.
@@ -33,6 +43,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include "textures/texture.h"
 
 /* Under ThreadSanitizer Embree builds on the calling thread. Embree and TBB are not
  * instrumented, so TSan cannot see how TBB hands work to its worker threads and reports
@@ -233,6 +245,55 @@ static void triangle_filter(const struct RTCFilterFunctionNArguments *args)
     }
 }
 
+/* ---- alpha cut-out filters (shape.h) ---- */
+
+/* Whether triangle prim of g cuts out the hit of r (in the triangle's space) at parameter t:
+ * alpha, or for a shadow ray shadow_alpha, evaluates to exactly 0 there (pbrt-v3's test).
+ * The context is pbrt-v3's isectLocal: the hit's point and (u, v), the triangle's ∂p/∂u,
+ * ∂p/∂v, no footprint. */
+static bool cut_out(const mesh_geom *g, uint32_t prim, const ts_ray *r, float t, bool shadow)
+{
+    const ts_shape *s = g->shape;
+    ts_texture_context c;
+    ts_shape_triangle_point_uv(s, prim, r, t, &c.p, &c.uv);
+    c.dpdu = g->tri[prim].dpdu;
+    c.dpdv = g->tri[prim].dpdv;
+    ts_texture_context_clear_differentials(&c);
+    if (s->alpha && ts_texture_eval_float(s->alpha, &c) == 0) return true;
+    return shadow && s->shadow_alpha && ts_texture_eval_float(s->shadow_alpha, &c) == 0;
+}
+
+/* triangle_filter's skip test, then the cut-out test, for every valid hit. */
+static inline void cutout_filter(const struct RTCFilterFunctionNArguments *args, bool shadow)
+{
+    const query_ctx *q = (const query_ctx *)args->context;
+    const ts_ray *ray = q->ray;
+    const mesh_geom *g = args->geometryUserPtr;
+    const unsigned *hit = (const unsigned *)args->hit;
+    const float *rn = (const float *)args->ray; /* tfar: the hit's t */
+    unsigned N = args->N;
+    uint32_t k = current_instance(q->a, args->context), inst = k == TS_NONE ? 0 : k + 1;
+    ts_ray r_obj;
+    if (ray && k != TS_NONE) r_obj = ray_to_object(q->a, k, ray);
+    const ts_ray *r = ray && k != TS_NONE ? &r_obj : ray;
+    bool skips = ray && ray->skip_shape != TS_NONE;
+    for (unsigned i = 0; i < N; i++) {
+        if (args->valid[i] != -1) continue;
+        unsigned prim = hit[5 * N + i];
+        if (skips && ((g->shape_index == ray->skip_shape && prim == ray->skip_prim && inst == ray->skip_inst) ||
+                      !ts_shape_triangle_ahead_cached(g->shape, &g->tri[prim], prim, r))) {
+            args->valid[i] = 0;
+            continue;
+        }
+        ts_ray own; /* a query without our ray: Embree's, in the geometry's space */
+        if (!r) own = ray_from_packet(rn, N, i);
+        if (cut_out(g, prim, r ? r : &own, rn[8 * N + i], shadow)) args->valid[i] = 0;
+    }
+}
+
+static void alpha_filter(const struct RTCFilterFunctionNArguments *args) { cutout_filter(args, false); }
+static void shadow_alpha_filter(const struct RTCFilterFunctionNArguments *args) { cutout_filter(args, true); }
+
 /* ---- build ---- */
 
 static RTCGeometry make_mesh(ts_accel *a, uint32_t i)
@@ -260,8 +321,8 @@ static RTCGeometry make_mesh(ts_accel *a, uint32_t i)
     memcpy(v, m->p, (size_t)m->n_vertices * 3 * sizeof(float));
     rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, m->index, 0, 3 * sizeof(uint32_t),
                                m->n_triangles);
-    rtcSetGeometryIntersectFilterFunction(g, triangle_filter);
-    rtcSetGeometryOccludedFilterFunction(g, triangle_filter);
+    rtcSetGeometryIntersectFilterFunction(g, s->alpha ? alpha_filter : triangle_filter);
+    rtcSetGeometryOccludedFilterFunction(g, s->alpha || s->shadow_alpha ? shadow_alpha_filter : triangle_filter);
     rtcSetGeometryUserData(g, mg);
     return g;
 }

@@ -620,6 +620,61 @@ void ts_shape_triangle_cache_init(const ts_shape *s, uint32_t prim, ts_tri_cache
     }
 }
 
+/* The barycentrics (b1, b2 of p1, p2) and t of the hit of ray on triangle tr, in double
+ * (Möller–Trumbore); for a ray in the triangle's plane (traversal should not report that)
+ * those of the point at t_hint projected onto the plane. */
+static void tri_bary(const tri_d *tr, ts_dvec3 o, ts_dvec3 d, float t_hint, double *b1_out, double *b2_out,
+                     double *t_out)
+{
+    double b1, b2, t;
+    tri_solve ms;
+    if (tri_mt(tr, o, d, &ms)) {
+        b1 = ms.u;
+        b2 = ms.v;
+        t = ms.t;
+    } else {
+        ts_dvec3 e1 = ts_dvec3_sub(tr->p1, tr->p0), e2 = ts_dvec3_sub(tr->p2, tr->p0);
+        t = t_hint;
+        ts_dvec3 q = ts_dvec3_sub(ts_dvec3_add(o, ts_dvec3_scale(d, t)), tr->p0);
+        double d00 = ts_dvec3_dot(e1, e1), d01 = ts_dvec3_dot(e1, e2), d11 = ts_dvec3_dot(e2, e2);
+        double d20 = ts_dvec3_dot(q, e1), d21 = ts_dvec3_dot(q, e2), den = d00 * d11 - d01 * d01;
+        b1 = den != 0 ? (d11 * d20 - d01 * d21) / den : 0;
+        b2 = den != 0 ? (d00 * d21 - d01 * d20) / den : 0;
+    }
+    *b1_out = b1;
+    *b2_out = b2;
+    *t_out = t;
+}
+
+/* The hit point b0·p0 + b1·p1 + b2·p2 (double). */
+static inline ts_dvec3 tri_point(const tri_d *tr, double b0, double b1, double b2)
+{
+    return ts_dvec3_add(ts_dvec3_add(ts_dvec3_scale(tr->p0, b0), ts_dvec3_scale(tr->p1, b1)),
+                        ts_dvec3_scale(tr->p2, b2));
+}
+
+/* (u, v) as pbrt-v3 interpolates it (default uvs (0,0), (1,0), (1,1)). */
+static inline ts_vec2 tri_uv(const ts_mesh *mesh, const tri_d *tr, double b0, double b1, double b2)
+{
+    if (mesh->uv) {
+        const float *uv0 = mesh->uv + 2 * tr->i0, *uv1 = mesh->uv + 2 * tr->i1, *uv2 = mesh->uv + 2 * tr->i2;
+        return (ts_vec2){(float)(b0 * (double)uv0[0] + b1 * (double)uv1[0] + b2 * (double)uv2[0]),
+                         (float)(b0 * (double)uv0[1] + b1 * (double)uv1[1] + b2 * (double)uv2[1])};
+    }
+    return (ts_vec2){(float)(b0 * 0.0 + b1 * 1.0 + b2 * 1.0), (float)(b0 * 0.0 + b1 * 0.0 + b2 * 1.0)};
+}
+
+void ts_shape_triangle_point_uv(const ts_shape *s, uint32_t prim, const ts_ray *ray, float t_hint, ts_vec3 *p,
+                                ts_vec2 *uv)
+{
+    tri_d tr = tri_load(&s->mesh, prim);
+    double b1, b2, t;
+    tri_bary(&tr, ts_dvec3_from(ray->o), ts_dvec3_from(ray->d), t_hint, &b1, &b2, &t);
+    double b0 = 1 - b1 - b2;
+    *p = ts_dvec3_to_vec3(tri_point(&tr, b0, b1, b2));
+    *uv = tri_uv(&s->mesh, &tr, b0, b1, b2);
+}
+
 static void triangle_interaction(const ts_shape *s, const ts_tri_cache *c, uint32_t prim, const ts_ray *ray,
                                  float t_hint, ts_interaction *si)
 {
@@ -627,25 +682,9 @@ static void triangle_interaction(const ts_shape *s, const ts_tri_cache *c, uint3
     tri_d tr = tri_load(mesh, prim);
     ts_dvec3 o = ts_dvec3_from(ray->o), d = ts_dvec3_from(ray->d);
     double b1, b2, t;
-    tri_solve ms;
-    if (tri_mt(&tr, o, d, &ms)) {
-        b1 = ms.u;
-        b2 = ms.v;
-        t = ms.t;
-    } else {
-        /* Ray in the plane (traversal should not report that): barycentrics of the point
-         * at t_hint projected onto the plane. */
-        ts_dvec3 e1 = ts_dvec3_sub(tr.p1, tr.p0), e2 = ts_dvec3_sub(tr.p2, tr.p0);
-        t = t_hint;
-        ts_dvec3 q = ts_dvec3_sub(ts_dvec3_add(o, ts_dvec3_scale(d, t)), tr.p0);
-        double d00 = ts_dvec3_dot(e1, e1), d01 = ts_dvec3_dot(e1, e2), d11 = ts_dvec3_dot(e2, e2);
-        double d20 = ts_dvec3_dot(q, e1), d21 = ts_dvec3_dot(q, e2), den = d00 * d11 - d01 * d01;
-        b1 = den != 0 ? (d11 * d20 - d01 * d21) / den : 0;
-        b2 = den != 0 ? (d00 * d21 - d01 * d20) / den : 0;
-    }
+    tri_bary(&tr, o, d, t_hint, &b1, &b2, &t);
     double b0 = 1 - b1 - b2;
-    ts_dvec3 p = ts_dvec3_add(ts_dvec3_add(ts_dvec3_scale(tr.p0, b0), ts_dvec3_scale(tr.p1, b1)),
-                              ts_dvec3_scale(tr.p2, b2));
+    ts_dvec3 p = tri_point(&tr, b0, b1, b2);
 
     /* pbrt-v3's bound gamma(7)·Σ|b_i·p_i| (it contains the rounding of the double sum to
      * float), plus the slide of the hit in the plane from double round-off: a line moved
@@ -700,14 +739,7 @@ static void triangle_interaction(const ts_shape *s, const ts_tri_cache *c, uint3
         }
     }
 
-    /* uv as pbrt-v3 (default uvs (0,0), (1,0), (1,1)). */
-    if (mesh->uv) {
-        const float *uv0 = mesh->uv + 2 * tr.i0, *uv1 = mesh->uv + 2 * tr.i1, *uv2 = mesh->uv + 2 * tr.i2;
-        si->uv = (ts_vec2){(float)(b0 * (double)uv0[0] + b1 * (double)uv1[0] + b2 * (double)uv2[0]),
-                           (float)(b0 * (double)uv0[1] + b1 * (double)uv1[1] + b2 * (double)uv2[1])};
-    } else {
-        si->uv = (ts_vec2){(float)(b0 * 0.0 + b1 * 1.0 + b2 * 1.0), (float)(b0 * 0.0 + b1 * 0.0 + b2 * 1.0)};
-    }
+    si->uv = tri_uv(mesh, &tr, b0, b1, b2);
     si->dpdu = c->dpdu;
     si->dpdv = c->dpdv;
     /* to_unit_f(−d), whose length is d_len bit for bit ((−x)² = x²). */

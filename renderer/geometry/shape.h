@@ -34,6 +34,14 @@
  * (pbrt-v3's ReverseOrientation). Meshes carry their orientation in their winding (the
  * builder reverses the winding of a reversed or mirrored mesh).
  *
+ * Alpha cut-outs (pbrt-v3's TriangleMesh alphaMask / shadowAlphaMask; docs/design.md §4):
+ * a mesh may carry a float texture `alpha` and one `shadow_alpha`. The accelerator
+ * (geometry/accel.c) evaluates them in its Embree filters at the hit's point and (u, v)
+ * (ts_shape_triangle_point_uv: the interaction's own values) with no footprint, and a hit
+ * where alpha is exactly 0 is no hit for any ray; one where shadow_alpha is 0 is none for
+ * shadow rays (pbrt-v3's Triangle::Intersect and IntersectP). Analytic shapes have none
+ * (pbrt-v3 reads alpha on trianglemesh and plymesh only).
+ *
  * Shapes are immutable after scene build and read by all threads. */
 #ifndef TS_SHAPE_H
 #define TS_SHAPE_H
@@ -44,6 +52,8 @@
 #include "core/transform.h"
 #include "core/vecmath.h"
 #include "geometry/interaction.h"
+
+struct ts_texture;
 
 typedef enum ts_shape_type {
     TS_SHAPE_SPHERE,
@@ -80,6 +90,9 @@ typedef struct ts_shape {
      * where nothing reads them (bump maps and ray differentials come with textures), so
      * their hits do not pay for them. */
     bool no_normal_derivatives;
+    /* Meshes: the alpha cut-out textures (float textures owned by the scene; NULL, the zero
+     * value: opaque, the filter's one test is not even installed). */
+    const struct ts_texture *alpha, *shadow_alpha;
     union {
         /* z_min < z_max within [−radius, radius], theta_min = acos(z_min/radius) >
          * theta_max = acos(z_max/radius): read only when partial */
@@ -133,6 +146,13 @@ void ts_shape_triangle_interaction_cached(const ts_shape *s, const ts_tri_cache 
 
 /* ts_shape_triangle_ahead with the triangle's cache: the same answer. */
 bool ts_shape_triangle_ahead_cached(const ts_shape *s, const ts_tri_cache *c, uint32_t prim, const ts_ray *ray);
+
+/* The point p and (u, v) of the hit of ray on triangle prim of mesh s (t_hint: its
+ * parameter, read only for a ray in the triangle's plane): the p and uv that
+ * ts_shape_interaction fills for that hit, bit for bit, without the rest. Embree's filters
+ * test the alpha textures there. */
+void ts_shape_triangle_point_uv(const ts_shape *s, uint32_t prim, const ts_ray *ray, float t_hint, ts_vec3 *p,
+                                ts_vec2 *uv);
 
 /* Surface area in world space (meshes: of one triangle prim; other shapes ignore prim). */
 double ts_shape_area(const ts_shape *s, uint32_t prim);

@@ -1272,6 +1272,71 @@ static cJSON *juints(const uint32_t *v, size_t n)
     return a;
 }
 
+/* A mesh's alpha cut-out texture as the builder takes it (scene_builder.h): NULL for
+ * opaque; zero: the constant 0 (written to JSON as the number 0). */
+typedef struct cutout {
+    const ts_texture *tex;
+    bool zero;
+} cutout;
+
+/* pbrt-v3's "alpha" / "shadowalpha" of a trianglemesh or plymesh (CreateTriangleMeshShape):
+ * a "texture" naming a float texture in scope, or a "float" value, which pbrt-v3 makes a
+ * cut-out only when it is 0 (any other value leaves the mesh opaque; a value in (0, 1) is
+ * warned, as pbrt-v3 cuts out only where alpha is exactly 0). A "constant" texture is read
+ * as its value. Refused, where pbrt-v3 prints an error and goes on opaque: a name that is
+ * no float texture in scope (a spectrum texture's name said so), another parameter type,
+ * and a value outside [0, 1]. */
+static ts_status get_cutout(imp *im, ts_pbrt_params *ps, const char *name, cutout *out)
+{
+    *out = (cutout){0};
+    ts_pbrt_param *p = ts_pbrt_params_get(ps, name);
+    if (!p) return TS_OK;
+    float v;
+    if (p->type == TS_PBRT_PARAM_TEXTURE) {
+        if (p->texture_float < 0 && p->texture_spectrum >= 0)
+            return ts_pbrt_param_error(ps, p, im->err, TS_ERR_INVALID,
+                                       "names the spectrum texture \"%s\": %s takes a float texture", p->strings[0],
+                                       name);
+        if (p->texture_float < 0)
+            return ts_pbrt_param_error(ps, p, im->err, TS_ERR_INVALID, "names no float texture \"%s\" in scope",
+                                       p->strings[0]);
+        if (strcmp(im->s->textures[p->texture_float].class_name, "constant") != 0) {
+            out->tex = im->tp.textures[p->texture_float];
+            return TS_OK;
+        }
+        TRY(constant_texture(im, ps, p, true, &v, NULL));
+    } else if (p->type == TS_PBRT_PARAM_FLOAT) {
+        TRY(ts_pbrt_find_float(ps, name, 1, &v, im->err));
+    } else {
+        return ts_pbrt_param_error(ps, p, im->err, TS_ERR_INVALID,
+                                   "expects a float in [0, 1] or a float texture (\"texture %s\")", name);
+    }
+    if (!(v >= 0 && v <= 1))
+        return ts_pbrt_param_error(ps, p, im->err, TS_ERR_INVALID, "must be in [0, 1], got %g", v);
+    if (v > 0) {
+        if (v < 1)
+            pwarn(im, ps, p, "is %g: pbrt-v3 cuts out only where alpha is exactly 0, so the mesh is opaque", v);
+        return TS_OK;
+    }
+    ts_texture zero = ts_texture_constant_float(0);
+    TRY(at(im, ts_scene_builder_add_texture(im->b, &zero, &out->tex, im->err), ps, p->loc));
+    out->zero = true;
+    return TS_OK;
+}
+
+/* A cut-out as v1 has it (docs/design.md §4): 0, or the name of its texture; nothing when
+ * opaque. */
+static ts_status jcutout(imp *im, cJSON *j, const char *key, const cutout *c)
+{
+    if (!c->tex) return TS_OK;
+    if (c->zero) return cJSON_AddNumberToObject(j, key, 0) ? TS_OK : nomem(im);
+    char hint[64];
+    snprintf(hint, sizeof hint, "%s", key);
+    cJSON *ref = ts_json_texture_ref(&im->jtex, c->tex, hint, im->err);
+    if (!ref) return im->err->status;
+    return jadd(j, key, ref) ? TS_OK : nomem(im);
+}
+
 static ts_status map_shape(imp *im, size_t si)
 {
     ts_pbrt_shape *sh = &im->s->shapes[si];
@@ -1312,17 +1377,22 @@ static ts_status map_shape(imp *im, size_t si)
         ps->count = 0; /* its parameters do not matter */
         return TS_OK;
     }
-    ts_pbrt_param *alpha = ts_pbrt_params_get(ps, "alpha");
-    ts_pbrt_param *salpha = ts_pbrt_params_get(ps, "shadowalpha");
-    if (alpha && alpha->type == TS_PBRT_PARAM_FLOAT && alpha->n == 1 && alpha->floats[0] == 0) {
-        pwarn(im, ps, alpha, "is 0: the shape is cut out entirely and left out");
-        ps->count = 0;
-        return TS_OK;
+    /* pbrt-v3 reads alpha and shadowalpha on trianglemesh and plymesh only; on other shapes
+     * they are unused parameters (warned below, as pbrt-v3 reports them). */
+    cutout alpha = {0}, salpha = {0};
+    if (strcmp(t, "trianglemesh") == 0 || strcmp(t, "plymesh") == 0) {
+        TRY(get_cutout(im, ps, "alpha", &alpha));
+        TRY(get_cutout(im, ps, "shadowalpha", &salpha));
+        if (alpha.zero && !emits) {
+            /* Cut out everywhere for every ray, and no light: nothing of it can be seen. */
+            pwarn(im, ps, ts_pbrt_params_get(ps, "alpha"),
+                  "is 0: the shape is cut out entirely (it neither shows nor shadows) and left out");
+            ps->count = 0;
+            return TS_OK;
+        }
+        d.alpha = alpha.tex;
+        d.shadow_alpha = salpha.tex;
     }
-    if (alpha && !(alpha->type == TS_PBRT_PARAM_FLOAT && alpha->n == 1 && alpha->floats[0] == 1))
-        pwarn(im, ps, alpha, "is ignored: alpha cut-outs are not supported yet (the surface is opaque)");
-    if (salpha)
-        pwarn(im, ps, salpha, "is ignored: alpha cut-outs are not supported yet (shadows are opaque)");
 
     ts_xform user;
     if (!user_xform(sh->object_to_world, &user))
@@ -1445,6 +1515,8 @@ static ts_status map_shape(imp *im, size_t si)
             }
         }
     }
+    if (!st && j && jok) st = jcutout(im, j, "alpha", &alpha);
+    if (!st && j && jok) st = jcutout(im, j, "shadow_alpha", &salpha);
     if (!st) {
         warn_unused(im, ps);
         st = at(im, ts_scene_builder_add_shape(im->b, &d, NULL, im->err), ps, sh->loc);

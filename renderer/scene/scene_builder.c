@@ -744,6 +744,15 @@ static ts_status check_shape(const ts_scene_builder *b, const ts_shape_desc *d, 
     if (!rgb_nonneg(d->emission)) return bad_rgb(err, "emission", "RGB ≥ 0", d->emission);
     if (d->light_samples > 4096)
         return ts_error_set(err, TS_ERR_INVALID, "light_samples: %u is not in [1, 4096]", d->light_samples);
+    const ts_texture *cut_tex[2] = {d->alpha, d->shadow_alpha};
+    for (int k = 0; k < 2; k++) {
+        const char *what = k ? "shadow_alpha" : "alpha";
+        if (cut_tex[k] && d->type != TS_SHAPE_MESH)
+            return ts_error_set(err, TS_ERR_INVALID,
+                                "%s: only meshes take alpha textures (as pbrt-v3's trianglemesh and plymesh)", what);
+        if (cut_tex[k] && cut_tex[k]->is_rgb)
+            return ts_error_set(err, TS_ERR_INVALID, "%s: expected a float texture, got an RGB one", what);
+    }
     /* Sizes and transforms too large for float are refused at finish, with the scene's
      * bounds ("shapes: the scene reaches beyond ±1e15 units …"). */
     switch (d->type) {
@@ -852,6 +861,8 @@ ts_status ts_scene_builder_add_shape(ts_scene_builder *b, const ts_shape_desc *d
     sh.emissive = !ts_rgb_is_black(d->emission);
     sh.two_sided = d->two_sided;
     sh.light_samples = d->light_samples;
+    sh.alpha = d->alpha;
+    sh.shadow_alpha = d->shadow_alpha;
     if (d->type == TS_SHAPE_MESH) {
         TRY(place_mesh(b, &d->mesh, &d->to_world, d->reverse_orientation, &sh.mesh, err));
         sh.to_world = ts_xform_identity();

@@ -227,6 +227,14 @@ typedef struct ts_shape_desc {
      * builder swaps two indices of every triangle). */
     bool reverse_orientation;
     ts_shape_cut cut;  /* sphere, disk, cylinder only (zero for meshes) */
+    /* Meshes only: pbrt-v3's alpha cut-outs (geometry/shape.h), float textures of this scene
+     * (ts_scene_builder_add_texture), or NULL (opaque). A hit where alpha evaluates to
+     * exactly 0 is no hit for any ray, one where shadow_alpha does none for shadow rays; a
+     * front end turns a constant 0 into a constant texture and any other constant into
+     * NULL (pbrt-v3's CreateTriangleMeshShape). An emitting mesh stays a light over all its
+     * triangles (pbrt-v3 samples them whole). "alpha: expected a float texture, got an RGB
+     * one"; "alpha: only meshes take alpha textures". */
+    const ts_texture *alpha, *shadow_alpha;
     /* clang-format off */
     union {
         struct { double radius; } sphere;              /* > 0 */

@@ -739,6 +739,24 @@ static ts_status parse_cut(loader *ld, const cJSON *sh, const char *path, double
     return TS_OK;
 }
 
+/* A mesh's "alpha" or "shadow_alpha" (docs/design.md §4): a number in [0, 1], 0 cutting
+ * the whole mesh out and any other leaving it opaque (pbrt-v3's test is alpha == 0), or the
+ * name of a float texture. *out: the builder's texture (the constant 0 made here), or NULL. */
+static ts_status parse_cutout(loader *ld, const cJSON *sh, const char *path, const char *key, const ts_texture **out)
+{
+    *out = NULL;
+    if (!cJSON_GetObjectItemCaseSensitive(sh, key)) return TS_OK;
+    ts_material_float f = ts_material_float_const(1);
+    TRY(ts_json_material_float(&ld->textures, sh, path, key, TS_J_UNIT, &f, ld->err));
+    if (f.tex || f.value != 0) {
+        *out = f.tex;
+        return TS_OK;
+    }
+    ts_texture zero = ts_texture_constant_float(0);
+    ts_jpath p = ts_jpath_key(path, key);
+    return at(ts_scene_builder_add_texture(ld->b, &zero, out, ld->err), p.s, ld->err);
+}
+
 /* Reads shape sh into *d (a mesh's arrays into *arrays, which the caller frees). */
 static ts_status parse_shape(loader *ld, const cJSON *sh, const char *path, ts_shape_desc *d, ts_mesh_data *arrays)
 {
@@ -750,7 +768,7 @@ static ts_status parse_shape(loader *ld, const cJSON *sh, const char *path, ts_s
     static const char *const k_sphere[] = {COMMON, "center", "radius", "z_min", "z_max", "phi_max", NULL};
     static const char *const k_disk[] = {COMMON, "center", "normal", "radius", "inner_radius", "phi_max", NULL};
     static const char *const k_cyl[] = {COMMON, "p0", "p1", "radius", "phi_max", NULL};
-    static const char *const k_mesh[] = {COMMON, "positions", "indices", "normals", "uvs", "file", NULL};
+    static const char *const k_mesh[] = {COMMON, "positions", "indices", "normals", "uvs", "file", "alpha", "shadow_alpha", NULL};
     static const char *const k_subdiv[] = {COMMON, "positions", "indices", "levels", NULL};
 #undef COMMON
     const char *const *keys[] = {k_sphere, k_disk, k_cyl, k_mesh, k_subdiv};
@@ -826,6 +844,10 @@ static ts_status parse_shape(loader *ld, const cJSON *sh, const char *path, ts_s
     case TS_SHAPE_MESH:
         d->to_world = user; /* the builder takes the vertices to world space */
         TRY(parse_mesh(ld, sh, path, arrays, &d->mesh));
+        if (!subdiv) {
+            TRY(parse_cutout(ld, sh, path, "alpha", &d->alpha));
+            TRY(parse_cutout(ld, sh, path, "shadow_alpha", &d->shadow_alpha));
+        }
         if (subdiv) {
             double levels = 3;
             TRY(ts_json_number(sh, path, "levels", false, TS_J_NONNEG, &levels, ld->err));
