@@ -653,15 +653,17 @@ static inline ts_dvec3 tri_point(const tri_d *tr, double b0, double b1, double b
                         ts_dvec3_scale(tr->p2, b2));
 }
 
-/* (u, v) as pbrt-v3 interpolates it (default uvs (0,0), (1,0), (1,1)). */
-static inline ts_vec2 tri_uv(const ts_mesh *mesh, const tri_d *tr, double b0, double b1, double b2)
+/* (u, v) as pbrt-v3 interpolates it (default uvs (0,0), (1,0), (1,1)), into *uv (stored
+ * through the pointer: the interaction's hot path then compiles as it did before). */
+static inline void tri_uv(const ts_mesh *mesh, const tri_d *tr, double b0, double b1, double b2, ts_vec2 *uv)
 {
     if (mesh->uv) {
         const float *uv0 = mesh->uv + 2 * tr->i0, *uv1 = mesh->uv + 2 * tr->i1, *uv2 = mesh->uv + 2 * tr->i2;
-        return (ts_vec2){(float)(b0 * (double)uv0[0] + b1 * (double)uv1[0] + b2 * (double)uv2[0]),
-                         (float)(b0 * (double)uv0[1] + b1 * (double)uv1[1] + b2 * (double)uv2[1])};
+        *uv = (ts_vec2){(float)(b0 * (double)uv0[0] + b1 * (double)uv1[0] + b2 * (double)uv2[0]),
+                        (float)(b0 * (double)uv0[1] + b1 * (double)uv1[1] + b2 * (double)uv2[1])};
+    } else {
+        *uv = (ts_vec2){(float)(b0 * 0.0 + b1 * 1.0 + b2 * 1.0), (float)(b0 * 0.0 + b1 * 0.0 + b2 * 1.0)};
     }
-    return (ts_vec2){(float)(b0 * 0.0 + b1 * 1.0 + b2 * 1.0), (float)(b0 * 0.0 + b1 * 0.0 + b2 * 1.0)};
 }
 
 void ts_shape_triangle_point_uv(const ts_shape *s, uint32_t prim, const ts_ray *ray, float t_hint, ts_vec3 *p,
@@ -672,7 +674,7 @@ void ts_shape_triangle_point_uv(const ts_shape *s, uint32_t prim, const ts_ray *
     tri_bary(&tr, ts_dvec3_from(ray->o), ts_dvec3_from(ray->d), t_hint, &b1, &b2, &t);
     double b0 = 1 - b1 - b2;
     *p = ts_dvec3_to_vec3(tri_point(&tr, b0, b1, b2));
-    *uv = tri_uv(&s->mesh, &tr, b0, b1, b2);
+    tri_uv(&s->mesh, &tr, b0, b1, b2, uv);
 }
 
 static void triangle_interaction(const ts_shape *s, const ts_tri_cache *c, uint32_t prim, const ts_ray *ray,
@@ -739,7 +741,7 @@ static void triangle_interaction(const ts_shape *s, const ts_tri_cache *c, uint3
         }
     }
 
-    si->uv = tri_uv(mesh, &tr, b0, b1, b2);
+    tri_uv(mesh, &tr, b0, b1, b2, &si->uv);
     si->dpdu = c->dpdu;
     si->dpdv = c->dpdv;
     /* to_unit_f(−d), whose length is d_len bit for bit ((−x)² = x²). */
