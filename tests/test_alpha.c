@@ -180,6 +180,49 @@ static void test_camera_sees_through_cut_outs(void **state)
     expect_pixels("alpha 0.3", doc, front_everywhere);
 }
 
+/* An image alpha is looked up as pbrt-v3 looks it up without ray differentials: bilinearly
+ * in the finest MIP level. A 4 × 4 float image whose left two columns are 0 and right two
+ * 1, wrap clamp, across the front quad (s = u = (x + 1.5)/3): the bilinear value is 0
+ * exactly where s·4 − ½ < 1 (both texels looked at are 0), s < 0.375, the world's
+ * x < −0.375 — the pixel edge between columns 4 and 5; any coarser level (the 2 × 2 level
+ * is 0, 1 per column pair, blended over wider texels; the 1 × 1 one 0.5) cuts out less or
+ * nothing. */
+static float image_cut(int px, int py)
+{
+    (void)py;
+    return px <= 4 ? 0.5f : 2.0f;
+}
+
+static void test_image_alpha_finest_level(void **state)
+{
+    (void)state;
+    unsigned char pfm[64 + 16 * 4];
+    int n = snprintf((char *)pfm, 64, "Pf\n4 4\n-1.0\n");
+    for (int i = 0; i < 16; i++) {
+        float v = (i % 4) < 2 ? 0.0f : 1.0f;
+        memcpy(pfm + n + 4 * i, &v, 4);
+    }
+    ts_tmp_write("half.pfm", pfm, (size_t)n + 64, NULL, 0);
+    static char doc[4096];
+    snprintf(doc, sizeof doc,
+             VIEW "\"integrator\":{\"type\":\"direct\"},\"textures\":{\"img\":{\"type\":\"imagemap\",\"kind\":"
+                  "\"float\",\"file\":\"half.pfm\",\"wrap\":\"clamp\"}},"
+                  "\"materials\":{\"black\":{\"type\":\"diffuse\",\"reflectance\":0}},"
+                  "\"shapes\":[{\"type\":\"mesh\",\"alpha\":\"img\",\"emission\":2,\"material\":\"black\"," FRONT_QUAD
+                  "},{\"type\":\"mesh\",\"emission\":0.5,\"material\":\"black\"," BIG_QUAD "}]}");
+    ts_scene *s = NULL;
+    ts_error err = {0};
+    if (ts_scene_load_text(doc, strlen(doc), ts_tmp_dir, "t", NULL, &s, &err)) fail_msg("%s", err.message);
+    ts_film *f = render(s);
+    for (int py = 0; py < 16; py++)
+        for (int px = 0; px < 16; px++) {
+            float got = ts_film_pixel_rgb(f, px, py).g, want = image_cut(px, py);
+            if (fabsf(got - want) > 1e-5f) fail_msg("image alpha: pixel (%d, %d) is %.7g, want %.7g", px, py, got, want);
+        }
+    ts_film_destroy(f);
+    ts_scene_destroy(s);
+}
+
 /* ---------------------------------------------------------------- shadow rays */
 
 /* Shadow rays (pbrt-v3's IntersectP) test alpha and then shadow_alpha: the floor is lit
@@ -566,6 +609,17 @@ static void test_pbrt_constants(void **state)
     assert_null(s->shapes[0].shadow_alpha);
     ts_scene_destroy(s);
 
+    /* "texture alpha" naming a "constant" float texture: its value, here 0. */
+    w = (warnings){0};
+    s = pbrt_load("Texture \"none\" \"float\" \"constant\" \"float value\" 0\n"
+                  "AttributeBegin AreaLightSource \"diffuse\" \"rgb L\" [2 2 2]\n"
+                  "Shape \"trianglemesh\" \"texture alpha\" \"none\" " PBRT_QUAD(1) "\nAttributeEnd",
+                  &w);
+    assert_int_equal(w.n, 0);
+    assert_int_equal(s->n_shapes, 1);
+    assert_non_null(s->shapes[0].alpha);
+    ts_scene_destroy(s);
+
     w = (warnings){0};
     s = pbrt_load("Shape \"sphere\" \"float alpha\" 0", &w);
     assert_int_equal(s->n_shapes, 1);
@@ -636,6 +690,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_camera_sees_through_cut_outs),
+        cmocka_unit_test(test_image_alpha_finest_level),
         cmocka_unit_test(test_shadows_through_cut_outs),
         cmocka_unit_test(test_instanced_cut_outs),
         cmocka_unit_test(test_emitter_light_sampling),
