@@ -10,6 +10,8 @@
 # Every figure is a median of ratios taken within side-by-side repetitions.
 #
 # Writes OUT_DIR/compare.md (printed) and keeps the raw throughput.csv and cycles.* beside it.
+# Also bench_scaling (Cornell box; COMPARE_SCALING_ARGS [--reps 3 --seconds 2]) and bench_memory
+# (COMPARE_MEMORY_ARGS: bench_memory's options, default 1 M and 4 M triangles and 16 instances).
 # Environment: COMPARE_THROUGHPUT_ARGS [--reps 3 --seconds 2]; COMPARE_CYCLES [auto: run where
 # Blender is found; 0 skips it]; CYCLES_* as in bench/cycles/run.sh, with these defaults here:
 # CYCLES_WIDTH 64, CYCLES_MAX_SPP 256, CYCLES_REF_SPP 2048, CYCLES_REPS 3.
@@ -29,6 +31,13 @@ echo "bench-compare: throughput of $# scene(s) at 1 and 2 threads (a minute or t
 "$BUILD/bench_throughput" --header --threads 2 --integrators scene ${COMPARE_THROUGHPUT_ARGS:---reps 3 --seconds 2} "$@" \
   > "$OUT/compare_throughput.csv.tmp"
 mv "$OUT/compare_throughput.csv.tmp" "$OUT/compare_throughput.csv"
+
+echo "bench-compare: thread scaling on the Cornell box (CPU per sample, run-queue wait, idle; about a minute)" >&2
+# shellcheck disable=SC2086 # word splitting of the extra arguments is intended
+"$BUILD/bench_scaling" ${COMPARE_SCALING_ARGS:---reps 3 --seconds 2} "$ROOT/scenes/cornell-box.json" > "$OUT/compare_scaling.md"
+echo "bench-compare: peak memory per triangle (1 M and 4 M triangles; about a minute)" >&2
+# shellcheck disable=SC2086 # word splitting of the extra arguments is intended
+"$BUILD/bench_memory" --csv "$OUT/compare_memory.csv" ${COMPARE_MEMORY_ARGS:-} > "$OUT/compare_memory.md"
 
 cycles_note="Blender not installed (make bench-deps): no Cycles comparison."
 if [ "${COMPARE_CYCLES:-auto}" != 0 ] && command -v "${BLENDER:-blender}" >/dev/null 2>&1; then
@@ -67,6 +76,20 @@ fi
   echo
   echo "Targets: render ÷ Embree ≥ 0.6; 2 threads ÷ 1 thread near 2 on a quiet machine (on a busy one"
   echo "it says how much of the second CPU the render got)."
+  echo
+  echo "Thread scaling on the Cornell box (bench_scaling: CPU per sample and where the threads' wall time went;"
+  echo "target 2 threads ÷ 1 thread ≥ 1.9; \"scaling on free CPUs\" leaves out the run-queue wait, the machine's part):"
+  echo
+  sed -n '/^| scene/,$p' "$OUT/compare_scaling.md"
+  echo
+  echo "Peak memory per triangle (bench_memory; target: not above pbrt-v3's, whose figure is derived from its"
+  echo "data structures, not measured: docs/performance.md, \"Memory per triangle\"):"
+  echo
+  sed -n '/^| case/,$p' "$OUT/compare_memory.md"
+  echo
+  awk -F, 'NR > 1 { n++; if ($6 <= $12) met++ } END {
+      printf "Memory target: %d of %d cases at or below pbrt-v3'"'"'s least (leaves of 4 primitives) — %s.\n", met, n, (met == n && n > 0) ? "met" : "missed" }' \
+    "$OUT/compare_memory.csv"
   echo
   if [ -z "$cycles_note" ] && [ -f "$OUT/cycles.md" ]; then
     echo "Cornell box against Blender Cycles at equal RMSE ($(grep -c '^tessera,' "$OUT/cycles.csv" 2>/dev/null || echo ?)" \

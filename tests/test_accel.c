@@ -458,13 +458,61 @@ static void test_concurrent(void **state)
     ts_accel_destroy(a);
 }
 
+/* What the accel reports holding (ts_accel_memory_get, for bench/memory.c): the caches of
+ * exactly the non-empty meshes' triangles, and Embree's bytes from its memory monitor —
+ * at least the two copied vertex buffers, at most its peak, and more for more triangles. */
+static void test_memory(void **state)
+{
+    (void)state;
+    ts_shape s[N_SHAPES];
+    build_scene(s);
+    ts_error err = {0};
+    ts_accel *a = ts_accel_create(s, N_SHAPES, &err);
+    assert_non_null(a);
+    ts_accel_memory m = {0};
+    ts_accel_memory_get(a, &m);
+    assert_int_equal(m.tri_cache_bytes, (6 + 1) * sizeof(ts_tri_cache)); /* meshes 0 and 4; 5 is empty */
+    assert_true(m.embree_bytes >= (8 + 3) * 3 * sizeof(float));
+    assert_true(m.embree_peak_bytes >= m.embree_bytes);
+    ts_accel_destroy(a);
+    /* A 20 000-triangle grid: Embree holds more, at least its copied vertices. */
+    enum { SIDE = 100 };
+    static float p[3 * (SIDE + 1) * (SIDE + 1)];
+    static uint32_t idx[6 * SIDE * SIDE];
+    for (int i = 0; i < (SIDE + 1) * (SIDE + 1); i++) {
+        p[3 * i] = (float)(i % (SIDE + 1)), p[3 * i + 1] = 0, p[3 * i + 2] = (float)(i / (SIDE + 1));
+    }
+    for (int y = 0, k = 0; y < SIDE; y++)
+        for (int x = 0; x < SIDE; x++) {
+            uint32_t c = (uint32_t)(y * (SIDE + 1) + x);
+            uint32_t t[6] = {c, c + 1, c + SIDE + 2, c, c + SIDE + 2, c + SIDE + 1};
+            for (int j = 0; j < 6; j++) idx[k++] = t[j];
+        }
+    ts_shape g;
+    memset(&g, 0, sizeof g);
+    g.type = TS_SHAPE_MESH;
+    g.to_world = ts_xform_identity();
+    g.mesh = (ts_mesh){(SIDE + 1) * (SIDE + 1), 2 * SIDE * SIDE, p, NULL, NULL, idx};
+    a = ts_accel_create(&g, 1, &err);
+    assert_non_null(a);
+    ts_accel_memory big = {0};
+    ts_accel_memory_get(a, &big);
+    assert_int_equal(big.tri_cache_bytes, 2 * SIDE * SIDE * sizeof(ts_tri_cache));
+    assert_true(big.embree_bytes >= sizeof p);
+    assert_true(big.embree_bytes > m.embree_bytes);
+    assert_true(big.embree_peak_bytes >= big.embree_bytes);
+    print_message("  Embree: %zu bytes held (%zu at its peak) for %d triangles\n", big.embree_bytes,
+                  big.embree_peak_bytes, 2 * SIDE * SIDE);
+    ts_accel_destroy(a);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_nearest_and_tmax), cmocka_unit_test(test_random_rays),
         cmocka_unit_test(test_skip_ids),         cmocka_unit_test(test_quad_spawn),
         cmocka_unit_test(test_empty_scene),      cmocka_unit_test(test_embree_error),
-        cmocka_unit_test(test_concurrent),
+        cmocka_unit_test(test_concurrent),       cmocka_unit_test(test_memory),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

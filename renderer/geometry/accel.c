@@ -33,6 +33,9 @@
  * thread-safe (the scene is immutable after rtcCommitScene, the context lives on the
  * caller's stack) and allocate nothing.
  *
+ * Embree's memory monitor counts the device's bytes (now and peak) for the memory
+ * benchmark (ts_accel_memory_get); Embree allocates only while building and tearing down.
+ *
  * Benchmarks may attach a ray log (accel.h): the one field set after the build, only
  * between renders. When it is NULL a query tests it and goes on (the logging itself is a
  * separate cold function). */
@@ -88,6 +91,9 @@ struct ts_accel {
      * touched once ts_accel_create has returned. */
     char build_error[256];
     enum RTCError build_code; /* the first error's code, with build_error */
+    /* Embree's allocations for this device (its memory monitor; atomic: TBB's build threads
+     * report concurrently; no allocation happens after the build). */
+    _Atomic int64_t embree_bytes, embree_peak;
 };
 
 /* The per-query context: Embree's first, then what our callbacks need. */
@@ -142,6 +148,32 @@ static void on_embree_error(void *user, enum RTCError code, const char *str)
     if (!a || a->build_error[0]) return; /* keep the first */
     a->build_code = code;
     snprintf(a->build_error, sizeof a->build_error, "%s%s%s", rtc_error_name(code), str ? ": " : "", str ? str : "");
+}
+
+/* Embree's memory monitor: bytes > 0 allocated, < 0 freed; never refuses. */
+static bool on_embree_memory(void *user, ssize_t bytes, bool post)
+{
+    (void)post;
+    ts_accel *a = user;
+    int64_t now = atomic_fetch_add_explicit(&a->embree_bytes, (int64_t)bytes, memory_order_relaxed) + bytes;
+    int64_t peak = atomic_load_explicit(&a->embree_peak, memory_order_relaxed);
+    while (now > peak &&
+           !atomic_compare_exchange_weak_explicit(&a->embree_peak, &peak, now, memory_order_relaxed,
+                                                  memory_order_relaxed)) {
+    }
+    return true;
+}
+
+void ts_accel_memory_get(const ts_accel *a, ts_accel_memory *m)
+{
+    size_t tri = 0;
+    for (uint32_t i = 0; i < a->n_shapes; i++)
+        if (a->meshes[i].tri) tri += sizeof(ts_tri_cache) * (size_t)a->shapes[i].mesh.n_triangles;
+    m->tri_cache_bytes = tri;
+    int64_t now = atomic_load_explicit(&a->embree_bytes, memory_order_relaxed);
+    int64_t peak = atomic_load_explicit(&a->embree_peak, memory_order_relaxed);
+    m->embree_bytes = now > 0 ? (size_t)now : 0;
+    m->embree_peak_bytes = peak > 0 ? (size_t)peak : 0;
 }
 
 /* ---- user geometry callbacks (analytic shapes) ---- */
@@ -468,6 +500,7 @@ ts_accel *ts_accel_create_instanced(const ts_shape *shapes, uint32_t n_shapes, c
         goto fail_device;
     }
     rtcSetDeviceErrorFunction(a->device, on_embree_error, a);
+    rtcSetDeviceMemoryMonitorFunction(a->device, on_embree_memory, a);
 
     a->scene = rtcNewScene(a->device);
     if (!a->scene) goto fail_embree;
@@ -494,7 +527,8 @@ ts_accel *ts_accel_create_instanced(const ts_shape *shapes, uint32_t n_shapes, c
     if (n_objects && !build_objects(a)) goto fail_embree;
     rtcCommitScene(a->scene);
     if (a->build_error[0] || rtcGetDeviceError(a->device) != RTC_ERROR_NONE) goto fail_embree;
-    rtcSetDeviceErrorFunction(a->device, NULL, NULL); /* nothing writes to a after this */
+    /* Nothing writes to a after this but the memory monitor, which counts the teardown's frees. */
+    rtcSetDeviceErrorFunction(a->device, NULL, NULL);
     return a;
 
 fail_embree:

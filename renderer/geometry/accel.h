@@ -57,6 +57,16 @@ bool ts_accel_occluded(const ts_accel *a, const ts_ray *ray);
 /* World bounds of everything. */
 ts_bounds3 ts_accel_bounds(const ts_accel *a);
 
+/* What the accel holds in memory, for the memory benchmark (bench/memory.c): its
+ * per-triangle caches (ts_tri_cache), and the bytes Embree's device allocated for it as
+ * its memory monitor reports them (BVHs, primitive blocks, the copied vertex buffers):
+ * still held now, and at most while building. Any field pointer may be NULL. */
+typedef struct ts_accel_memory {
+    size_t tri_cache_bytes;
+    size_t embree_bytes, embree_peak_bytes;
+} ts_accel_memory;
+void ts_accel_memory_get(const ts_accel *a, ts_accel_memory *m);
+
 /* A record of the rays an accel is asked about, for benchmarks (bench/throughput replays
  * them against raw Embree). Caller-owned storage. Every query that reaches Embree takes
  * the next slot with an atomic increment of n and, while slots remain, stores its ray
