@@ -1315,7 +1315,7 @@ static ts_status get_cutout(imp *im, ts_pbrt_params *ps, const char *name, cutou
         return ts_pbrt_param_error(ps, p, im->err, TS_ERR_INVALID, "must be in [0, 1], got %g", v);
     if (v > 0) {
         if (v < 1)
-            pwarn(im, ps, p, "is %g: pbrt-v3 cuts out only where alpha is exactly 0, so the mesh is opaque", v);
+            pwarn(im, ps, p, "is %g: pbrt-v3 cuts out only where %s is exactly 0, so the mesh is opaque", v, name);
         return TS_OK;
     }
     ts_texture zero = ts_texture_constant_float(0);
