@@ -13,6 +13,7 @@
 #include <cmocka.h>
 
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "chi2.h"
@@ -510,6 +511,352 @@ static void test_edge_cases(void **state)
     assert_true(ts_shape_pdf_solid_angle(&z, 0, &c.info, &c.ref, (ts_vec3){1, 0, 1}) == 0);
 }
 
+/* ---- rectangles of two triangles (Ureña et al.'s spherical rectangles) ---- */
+
+/* A w × h rectangle with corner c and edges along unit vectors ex, ey (orthogonal), as two
+ * triangles (c, c+ex·w, c+ey·h) and (c+ex·w, c+ex·w+ey·h, c+ey·h) wound the same way: the
+ * diagonal is shared, the builder's pairing. Vertices rounded to float. */
+typedef struct rect_mesh {
+    float p[12];
+    uint32_t ix[6];
+    ts_shape s;
+} rect_mesh;
+
+static void rect_mesh_make(rect_mesh *m, ts_dvec3 c, ts_dvec3 ex, ts_dvec3 ey, double w, double h)
+{
+    ts_dvec3 v[4] = {c, ts_dvec3_add(c, ts_dvec3_scale(ex, w)),
+                     ts_dvec3_add(c, ts_dvec3_add(ts_dvec3_scale(ex, w), ts_dvec3_scale(ey, h))),
+                     ts_dvec3_add(c, ts_dvec3_scale(ey, h))};
+    for (int k = 0; k < 4; k++) {
+        m->p[3 * k] = (float)v[k].x;
+        m->p[3 * k + 1] = (float)v[k].y;
+        m->p[3 * k + 2] = (float)v[k].z;
+    }
+    static const uint32_t ix[6] = {0, 1, 3, 1, 2, 3};
+    memcpy(m->ix, ix, sizeof ix);
+    m->s = (ts_shape){0};
+    m->s.type = TS_SHAPE_MESH;
+    m->s.to_world = ts_xform_identity();
+    m->s.mesh.n_vertices = 4;
+    m->s.mesh.n_triangles = 2;
+    m->s.mesh.p = m->p;
+    m->s.mesh.index = m->ix;
+}
+
+static ts_dvec3 vtx(const rect_mesh *m, int k) { return (ts_dvec3){m->p[3 * k], m->p[3 * k + 1], m->p[3 * k + 2]}; }
+
+static void ctx_init_rect(ctx *c, const ts_shape *s, ts_triangle_sampling mode, ts_vec3 ref)
+{
+    c->s = s;
+    ts_error err = {0};
+    assert_int_equal(ts_shape_sample_info_init_rect(s, 0, 1, mode, &c->info, &err), TS_OK);
+    c->ref = ref_at(ref);
+}
+
+/* Solid angle of the part [s0, s1] × [t0, t1] (fractions of the edges) of the rectangle
+ * from p: two Van Oosterom–Strackee triangles, a formula independent of the sampler's. */
+static double sub_rect_omega(const ts_shape_sample_info *in, ts_dvec3 p, double s0, double s1, double t0, double t1)
+{
+    ts_dvec3 q[4];
+    double ss[4] = {s0, s1, s1, s0}, tt[4] = {t0, t0, t1, t1};
+    for (int k = 0; k < 4; k++)
+        q[k] = ts_dvec3_add(in->tri_p[0], ts_dvec3_add(ts_dvec3_scale(in->rect_x, ss[k] * in->rect_w),
+                                                       ts_dvec3_scale(in->rect_y, tt[k] * in->rect_h)));
+    return ts_spherical_triangle_area(q[0], q[1], q[2], p) + ts_spherical_triangle_area(q[0], q[2], q[3], p);
+}
+
+/* χ² over a G × G grid of the rectangle's area: the samples' points binned by their edge
+ * fractions, expected counts N·Ω(cell)/Ω with Ω(cell) by sub_rect_omega. Uniform in solid
+ * angle is exactly this. G = 8 (64 cells, 63 dof), N = 10^6: the smallest expected count
+ * at these receivers is 24 (close over a corner, whose far cells subtend little) and
+ * > 1000 elsewhere, where Pearson's statistic is χ²-distributed well into the tail used. Each case is one test of the project's χ² family (tests/chi2.h: the
+ * Šidák threshold of TS_CHI2_FAMILY_SIZE tests, whole-suite false-failure rate ≤ 0.01);
+ * seeds fixed. Also: each pdf is 1/Ω with Ω = Σ Ω(cell) to 1e-9 relative. */
+static void rect_grid_chi2(const char *name, const rect_mesh *m, ts_vec3 ref, uint64_t seed)
+{
+    enum { G = 8 };
+    ctx c;
+    ctx_init_rect(&c, &m->s, TS_TRIANGLE_SAMPLING_SPHERICAL, ref);
+    ts_dvec3 p = ts_dvec3_from(ref);
+    double cell[G * G], omega = 0;
+    for (int i = 0; i < G; i++)
+        for (int j = 0; j < G; j++) {
+            cell[i * G + j] = sub_rect_omega(&c.info, p, (double)i / G, (double)(i + 1) / G, (double)j / G,
+                                             (double)(j + 1) / G);
+            omega += cell[i * G + j];
+        }
+    assert_close(ts_spherical_rectangle_area(&c.info, p), omega, 1e-9 * omega, "Ω by Ureña's angles vs cells");
+    uint64_t count[G * G] = {0};
+    const uint64_t n = 1000000;
+    ts_pcg32 rng;
+    ts_pcg32_seed(&rng, seed, 1);
+    for (uint64_t i = 0; i < n; i++) {
+        ts_shape_point pt;
+        if (!ts_shape_sample_solid_angle(&m->s, 0, &c.info, &c.ref, u2(&rng), &pt))
+            fail_msg("%s: no sample", name);
+        assert_true(isfinite(pt.pdf));
+        if (!(fabs(pt.pdf * omega - 1) <= 1e-6)) fail_msg("%s: pdf %.9g, 1/Ω %.9g", name, pt.pdf, 1 / omega);
+        ts_dvec3 d = ts_dvec3_sub(ts_dvec3_from(pt.p), c.info.tri_p[0]);
+        double fs = ts_dvec3_dot(d, c.info.rect_x) / c.info.rect_w, ft = ts_dvec3_dot(d, c.info.rect_y) / c.info.rect_h;
+        int bi = (int)floor(fs * G), bj = (int)floor(ft * G);
+        /* a point on the far edge (float rounding) belongs to the last cell */
+        if (bi == G && fs < 1 + 1e-6) bi = G - 1;
+        if (bj == G && ft < 1 + 1e-6) bj = G - 1;
+        if (bi == -1 && fs > -1e-6) bi = 0;
+        if (bj == -1 && ft > -1e-6) bj = 0;
+        if (bi < 0 || bi >= G || bj < 0 || bj >= G) fail_msg("%s: sample off the rectangle (%g, %g)", name, fs, ft);
+        count[bi * G + bj]++;
+    }
+    double chi2 = 0, emin = INFINITY;
+    for (int k = 0; k < G * G; k++) {
+        double e = (double)n * cell[k] / omega;
+        emin = fmin(emin, e);
+        chi2 += ((double)count[k] - e) * ((double)count[k] - e) / e;
+    }
+    double pv = ts_chi2_upper_tail(chi2, G * G - 1), th = ts_chi2_sidak(0.01, TS_CHI2_FAMILY_SIZE);
+    print_message("rect grid chi2 %-30s Ω %.6g sr, χ² %.1f (63 dof), p %.4f (threshold %.2e), smallest expected %.0f\n",
+                  name, omega, chi2, pv, th, emin);
+    assert_true(emin >= 5);
+    if (!(pv >= th)) fail_msg("%s: χ² %.1f, p %.3g < %.3g", name, chi2, pv, th);
+}
+
+/* The rectangle of these tests: 1.5 × 0.8, turned out of the axes, corner off the origin. */
+static void test_rect(rect_mesh *m)
+{
+    ts_dvec3 ex = ts_dvec3_normalize((ts_dvec3){0.8, 0.6, 0}), ey = ts_dvec3_normalize((ts_dvec3){-0.36, 0.48, 0.8});
+    rect_mesh_make(m, (ts_dvec3){0.3, -0.2, 0.5}, ex, ey, 1.5, 0.8);
+}
+
+/* Receivers, in the rectangle's edge fractions (s, t) and height above it (along
+ * ex × ey; negative: behind): over the centre, off to the side, near the plane beside it,
+ * grazing (far out, little above), close over a corner, behind. */
+static ts_vec3 rect_receiver(const ctx *c, double s, double t, double z)
+{
+    ts_dvec3 n = ts_dvec3_cross(c->info.rect_x, c->info.rect_y);
+    ts_dvec3 p = ts_dvec3_add(c->info.tri_p[0], ts_dvec3_add(ts_dvec3_scale(c->info.rect_x, s * c->info.rect_w),
+                                                             ts_dvec3_scale(c->info.rect_y, t * c->info.rect_h)));
+    return ts_dvec3_to_vec3(ts_dvec3_add(p, ts_dvec3_scale(n, z)));
+}
+
+static const double rect_refs[6][3] = {{0.5, 0.5, 0.7}, {1.8, 0.4, 0.6}, {1.2, 0.5, 0.05},
+                                       {4.0, 2.5, 0.1}, {0.02, 0.03, 0.02}, {0.3, 0.6, -0.9}};
+static const char *rect_ref_names[6] = {"over the centre", "off to the side", "near the plane", "grazing",
+                                        "close over a corner", "behind"};
+
+static void test_rectangle_grid_chi2(void **state)
+{
+    (void)state;
+    rect_mesh m;
+    test_rect(&m);
+    ctx c;
+    ctx_init_rect(&c, &m.s, TS_TRIANGLE_SAMPLING_SPHERICAL, (ts_vec3){0, 0, 0});
+    for (int k = 0; k < 6; k++)
+        rect_grid_chi2(rect_ref_names[k], &m, rect_receiver(&c, rect_refs[k][0], rect_refs[k][1], rect_refs[k][2]),
+                       61 + (uint64_t)k);
+}
+
+/* The direction χ² of every shape (tests/chi2.h over the sphere), ∫pdf against the first-
+ * hit fraction, and sample pdf = pdf(wi) = pdf(p) (the MIS side, which intersects both
+ * triangles), for the rectangle light in each mode. */
+static void test_rectangle(void **state)
+{
+    (void)state;
+    rect_mesh m;
+    test_rect(&m);
+    ctx c;
+    ctx_init_rect(&c, &m.s, TS_TRIANGLE_SAMPLING_SPHERICAL, (ts_vec3){0, 0, 0});
+    ts_vec3 centre = rect_receiver(&c, 0.5, 0.5, 0.7), side = rect_receiver(&c, 1.8, 0.4, 0.6);
+    ts_vec3 corner = rect_receiver(&c, 0.02, 0.03, 0.02);
+    const struct {
+        const char *name;
+        ts_triangle_sampling mode;
+        ts_vec3 ref;
+    } cases[] = {
+        {"rectangle spherical, over it", TS_TRIANGLE_SAMPLING_SPHERICAL, centre},
+        {"rectangle spherical, to the side", TS_TRIANGLE_SAMPLING_SPHERICAL, side},
+        {"rectangle spherical, at a corner", TS_TRIANGLE_SAMPLING_SPHERICAL, corner},
+        {"rectangle area, over it", TS_TRIANGLE_SAMPLING_AREA, centre},
+        {"rectangle auto, to the side", TS_TRIANGLE_SAMPLING_AUTO, side},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof *cases; k++) {
+        ctx_init_rect(&c, &m.s, cases[k].mode, cases[k].ref);
+        run_chi2(cases[k].name, &c, 71 + k, false);
+        check_consistency(cases[k].name, &c, 20000);
+    }
+    /* A hit on either triangle has the whole rectangle's pdf 1/Ω. */
+    ctx_init_rect(&c, &m.s, TS_TRIANGLE_SAMPLING_SPHERICAL, centre);
+    double omega = ts_spherical_rectangle_area(&c.info, ts_dvec3_from(centre));
+    ts_dvec3 in_a = ts_dvec3_scale(ts_dvec3_add(ts_dvec3_add(vtx(&m, 0), vtx(&m, 1)), vtx(&m, 3)), 1.0 / 3);
+    ts_dvec3 in_b = ts_dvec3_scale(ts_dvec3_add(ts_dvec3_add(vtx(&m, 1), vtx(&m, 2)), vtx(&m, 3)), 1.0 / 3);
+    ts_dvec3 hits[2] = {in_a, in_b};
+    for (int k = 0; k < 2; k++) {
+        float pa = ts_shape_pdf_solid_angle_at(&m.s, 0, &c.info, &c.ref, ts_dvec3_to_vec3(hits[k]));
+        float pw = ts_shape_pdf_solid_angle(&m.s, 0, &c.info, &c.ref,
+                                            ts_dvec3_to_vec3(ts_dvec3_sub(hits[k], ts_dvec3_from(centre))));
+        assert_close(pa * omega, 1, 1e-6, "pdf at a hit = 1/Ω");
+        assert_close(pw * omega, 1, 1e-6, "pdf along a ray = 1/Ω");
+    }
+}
+
+/* Ω of a rectangle a × b seen from a point at height c over one corner has the closed
+ * form atan(ab / (c√(a² + b² + c²))); by superposition of four such rectangles, any point
+ * over the rectangle. */
+static double corner_omega(double a, double b, double c) { return atan(a * b / (c * sqrt(a * a + b * b + c * c))); }
+
+static void test_rectangle_solid_angle(void **state)
+{
+    (void)state;
+    rect_mesh m;
+    rect_mesh_make(&m, (ts_dvec3){0, 0, 0}, (ts_dvec3){1, 0, 0}, (ts_dvec3){0, 1, 0}, 1.5, 0.75);
+    ts_shape_sample_info in;
+    ts_error err = {0};
+    assert_int_equal(ts_shape_sample_info_init_rect(&m.s, 0, 1, 0, &in, &err), TS_OK);
+    assert_close(in.area, 1.125, 1e-12, "area");
+    double hs[4] = {1e-3, 0.1, 1, 100};
+    for (int k = 0; k < 4; k++) {
+        double h = hs[k];
+        /* over the corner, and over (0.5, 0.25) (four corner rectangles), from either side */
+        assert_close(ts_spherical_rectangle_area(&in, (ts_dvec3){0, 0, h}), corner_omega(1.5, 0.75, h),
+                     1e-12 * corner_omega(1.5, 0.75, h) + 4e-15, "Ω over a corner");
+        double inner = corner_omega(0.5, 0.25, h) + corner_omega(1.0, 0.25, h) + corner_omega(0.5, 0.5, h) +
+                       corner_omega(1.0, 0.5, h);
+        assert_close(ts_spherical_rectangle_area(&in, (ts_dvec3){0.5, 0.25, -h}), inner, 1e-12 * inner + 4e-15,
+                     "Ω over an inner point");
+    }
+}
+
+/* Which pairs are rectangles (ts_shape_triangles_rectangle). */
+static void test_rectangle_detection(void **state)
+{
+    (void)state;
+    rect_mesh m;
+    test_rect(&m); /* turned, vertices rounded to float: within the rounding tolerance */
+    assert_true(ts_shape_triangles_rectangle(&m.s, 0, 1));
+    assert_true(ts_shape_triangles_rectangle(&m.s, 1, 0));
+    /* The Cornell box's light, as the shipped scene writes it (indices 0 1 2, 0 2 3). */
+    static float cb[12] = {343, 548.8f, 227, 343, 548.8f, 332, 213, 548.8f, 332, 213, 548.8f, 227};
+    static uint32_t cbi[6] = {0, 1, 2, 0, 2, 3};
+    ts_shape s = m.s;
+    s.mesh.p = cb;
+    s.mesh.index = cbi;
+    assert_true(ts_shape_triangles_rectangle(&s, 0, 1));
+    ts_shape_sample_info in;
+    ts_error err = {0};
+    assert_int_equal(ts_shape_sample_info_init_rect(&s, 0, 1, 0, &in, &err), TS_OK);
+    assert_close(in.area, 130.0 * 105.0, 1e-9, "Cornell light area");
+    assert_true(in.rect_defect.x == 0 && in.rect_defect.y == 0 && in.rect_defect.z == 0);
+    /* Not rectangles: a parallelogram with a 60° corner, a trapezoid, a bent pair (fourth
+     * vertex 1e-3 out of the plane), the second triangle wound the other way, two triangles
+     * without a shared edge; the unit square's fourth corner moved by 2^-20 (beyond the
+     * rounding allowance 2^-21·M, M = 1) but not by 2^-22; a 2^-10 square at x = 100 whose
+     * fourth corner is one float ulp (2^-17) off: within 2^-21·M but beyond 2^-16 of its
+     * edge. */
+    float p[12];
+    uint32_t ix[6];
+    s.mesh.p = p;
+    s.mesh.index = ix;
+    static const float base[12] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+    static const uint32_t bix[6] = {0, 1, 2, 0, 2, 3};
+    struct {
+        const char *name;
+        int vertex;
+        float dx, dy, dz;
+        bool flip, expect;
+    } cases[] = {
+        {"square", 0, 0, 0, 0, false, true},
+        {"parallelogram 60°", 2, 0.57735f, 0, 0, false, false},
+        {"trapezoid", 2, 0.25f, 0, 0, false, false},
+        {"bent", 2, 0, 0, 1e-3f, false, false},
+        {"opposite windings", 0, 0, 0, 0, true, false},
+        {"fourth corner off by 2^-20", 3, 0x1p-20f, 0, 0, false, false},
+        {"fourth corner off by 2^-22", 3, 0x1p-22f, 0, 0, false, true},
+        {"small square far out, 1 ulp", 3, 0x1p-17f, 0, 0, false, false},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof *cases; k++) {
+        memcpy(p, base, sizeof p);
+        memcpy(ix, bix, sizeof ix);
+        if (k == 1) p[3 * 3] += 0.57735f; /* the parallelogram: both far vertices shift */
+        if (k == 7) /* 2^-10 square at x = 100 */
+            for (int v = 0; v < 4; v++) {
+                p[3 * v] = 100 + p[3 * v] * 0x1p-10f;
+                p[3 * v + 1] *= 0x1p-10f;
+            }
+        p[3 * cases[k].vertex] += cases[k].dx;
+        p[3 * cases[k].vertex + 1] += cases[k].dy;
+        p[3 * cases[k].vertex + 2] += cases[k].dz;
+        if (cases[k].flip) ix[4] = 3, ix[5] = 2;
+        bool got = ts_shape_triangles_rectangle(&s, 0, 1);
+        print_message("rectangle detection: %-28s %s\n", cases[k].name, got ? "rectangle" : "two triangles");
+        if (got != cases[k].expect) fail_msg("%s: detected %d, expected %d", cases[k].name, got, cases[k].expect);
+        if (!got) assert_int_equal(ts_shape_sample_info_init_rect(&s, 0, 1, 0, &in, &err), TS_ERR_INVALID);
+    }
+    memcpy(p, base, sizeof p);
+    static const uint32_t apart[6] = {0, 1, 2, 0, 3, 1}; /* share 0–1 and… only an edge that is not a diagonal */
+    memcpy(ix, apart, sizeof ix);
+    assert_false(ts_shape_triangles_rectangle(&s, 0, 1));
+    static const uint32_t same[6] = {0, 1, 2, 0, 1, 2};
+    memcpy(ix, same, sizeof ix);
+    assert_false(ts_shape_triangles_rectangle(&s, 0, 1));
+}
+
+/* Degenerate views stay finite: on the plane (inside and outside the rectangle: no sample,
+ * pdf 0), at a corner and on an edge, from very far (Ω ~ 1e-10: area sampling), almost on
+ * it (Ω → 2π: area sampling past 6.22 sr), and at u on the square's edges; every point
+ * returned is on the rectangle (edge fractions in [0, 1]). */
+static void test_rectangle_edge_cases(void **state)
+{
+    (void)state;
+    rect_mesh m;
+    test_rect(&m);
+    ctx c;
+    ctx_init_rect(&c, &m.s, TS_TRIANGLE_SAMPLING_SPHERICAL, (ts_vec3){0, 0, 0});
+    const double r[][3] = {{0.5, 0.5, 0},    {2, 0.5, 0},      {0, 0, 0},        {1, 1, 0},       {0.5, 0, 1e-7},
+                           {0.5, 0.5, 1e-6}, {0.5, 0.5, 1e-3}, {0, 0, 1e-4},     {3e4, 2e4, 1e3}, {0.5, 0.5, 1e5},
+                           {1, 0.5, 1e-5},   {-1e-4, 0.5, 0.3}, {0.5, 1, -1e-6}, {1e3, 0.5, 1e-3}};
+    const float us[] = {0, 1e-7f, 0.5f, 0x1.fffffep-1f};
+    int produced = 0;
+    for (size_t k = 0; k < sizeof r / sizeof *r; k++)
+        for (int mode = 0; mode < 3; mode++) {
+            ts_vec3 ref = rect_receiver(&c, r[k][0], r[k][1], r[k][2]);
+            ctx e;
+            ctx_init_rect(&e, &m.s, (ts_triangle_sampling)mode, ref);
+            double om = ts_spherical_rectangle_area(&e.info, ts_dvec3_from(ref));
+            assert_true(isfinite(om) && om >= 0 && om <= 2 * TS_PI_D + 1e-12);
+            for (int i = 0; i < 4; i++)
+                for (int j = 0; j < 4; j++) {
+                    ts_shape_point pt;
+                    if (!ts_shape_sample_solid_angle(&m.s, 0, &e.info, &e.ref, (ts_vec2){us[i], us[j]}, &pt)) continue;
+                    produced++;
+                    assert_true(isfinite(pt.pdf) && pt.pdf > 0 && ts_vec3_is_finite(pt.p) && ts_vec3_is_finite(pt.p_error));
+                    ts_dvec3 d = ts_dvec3_sub(ts_dvec3_from(pt.p), e.info.tri_p[0]);
+                    double fs = ts_dvec3_dot(d, e.info.rect_x) / e.info.rect_w;
+                    double ft = ts_dvec3_dot(d, e.info.rect_y) / e.info.rect_h;
+                    assert_true(fs >= -1e-6 && fs <= 1 + 1e-6 && ft >= -1e-6 && ft <= 1 + 1e-6);
+                    float pw = ts_shape_pdf_solid_angle(&m.s, 0, &e.info, &e.ref, ts_vec3_sub(pt.p, ref));
+                    float ph = ts_shape_pdf_solid_angle_at(&m.s, 0, &e.info, &e.ref, pt.p);
+                    assert_true(isfinite(pw) && pw >= 0 && isfinite(ph) && ph >= 0);
+                }
+            if (r[k][2] == 0) { /* on the plane */
+                assert_true(ts_shape_pdf_solid_angle(&m.s, 0, &e.info, &e.ref, (ts_vec3){0, 0, 1}) == 0);
+                ts_shape_point pt;
+                assert_false(ts_shape_sample_solid_angle(&m.s, 0, &e.info, &e.ref, (ts_vec2){0.3f, 0.6f}, &pt));
+            }
+        }
+    assert_true(produced > 300);
+    /* The sampler itself, straight: u over a 64² grid with its edges from a point 1e-9
+     * over the centre and one 1e-9 beside an edge; finite and on the rectangle. */
+    ts_vec3 near[2] = {rect_receiver(&c, 0.5, 0.5, 1e-9), rect_receiver(&c, 1 + 1e-9, 0.5, 0.2)};
+    for (int k = 0; k < 2; k++)
+        for (int i = 0; i <= 64; i++)
+            for (int j = 0; j <= 64; j++) {
+                ts_vec2 u = {fminf(i / 64.0f, 0x1.fffffep-1f), fminf(j / 64.0f, 0x1.fffffep-1f)};
+                ts_dvec3 q;
+                double om;
+                if (!ts_spherical_rectangle_sample(&c.info, ts_dvec3_from(near[k]), u, &q, &om)) continue;
+                assert_true(isfinite(q.x) && isfinite(q.y) && isfinite(q.z) && om > 0 && isfinite(om));
+            }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -521,6 +868,12 @@ int main(void)
         cmocka_unit_test(test_area_sampling),
         cmocka_unit_test(test_tiny_sphere),
         cmocka_unit_test(test_edge_cases),
+        cmocka_unit_test(test_rectangle_detection),
+        cmocka_unit_test(test_rectangle_solid_angle),
+        cmocka_unit_test(test_rectangle_grid_chi2),
+        cmocka_unit_test(test_rectangle),
+        cmocka_unit_test(test_rectangle_edge_cases),
     };
+    if (getenv("TS_TEST_FILTER")) cmocka_set_test_filter(getenv("TS_TEST_FILTER")); /* e.g. "test_rectangle*" */
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -170,6 +170,104 @@ ts_status ts_shape_sample_info_init(const ts_shape *s, uint32_t prim, ts_triangl
     return TS_OK;
 }
 
+/* ---- rectangles of two triangles ---- */
+
+/* The vertices of triangles a and b split as ts_shape_triangles_rectangle describes: o_a,
+ * the shared s0, s1 (in a's order after o_a) and o_b. False unless exactly two positions
+ * are shared. */
+static bool rect_vertices(const ts_shape *s, uint32_t a, uint32_t b, ts_dvec3 *o_a, ts_dvec3 *s0, ts_dvec3 *s1,
+                          ts_dvec3 *o_b)
+{
+    if (s->type != TS_SHAPE_MESH || a >= s->mesh.n_triangles || b >= s->mesh.n_triangles || a == b) return false;
+    ts_dvec3 va[3], vb[3];
+    tri_vertices(s, a, va);
+    tri_vertices(s, b, vb);
+    bool shared_a[3] = {false, false, false}, shared_b[3] = {false, false, false};
+    int shared = 0;
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            if (!shared_b[j] && va[i].x == vb[j].x && va[i].y == vb[j].y && va[i].z == vb[j].z) {
+                shared_a[i] = shared_b[j] = true;
+                shared++;
+                break;
+            }
+    if (shared != 2) return false;
+    int ia = !shared_a[0] ? 0 : !shared_a[1] ? 1 : 2, jb = !shared_b[0] ? 0 : !shared_b[1] ? 1 : 2;
+    *o_a = va[ia];
+    *s0 = va[(ia + 1) % 3];
+    *s1 = va[(ia + 2) % 3];
+    *o_b = vb[jb];
+    return true;
+}
+
+static double dabsmax(ts_dvec3 a) { return dmax3(dabs(a)); }
+
+bool ts_shape_triangles_rectangle(const ts_shape *s, uint32_t a, uint32_t b)
+{
+    ts_dvec3 o_a, s0, s1, o_b, va[3], vb[3];
+    if (!rect_vertices(s, a, b, &o_a, &s0, &s1, &o_b)) return false;
+    tri_vertices(s, a, va);
+    tri_vertices(s, b, vb);
+    ts_dvec3 na = ts_dvec3_cross(ts_dvec3_sub(va[1], va[0]), ts_dvec3_sub(va[2], va[0]));
+    ts_dvec3 nb = ts_dvec3_cross(ts_dvec3_sub(vb[1], vb[0]), ts_dvec3_sub(vb[2], vb[0]));
+    if (!(ts_dvec3_length(na) > 0 && ts_dvec3_length(nb) > 0) || !(ts_dvec3_dot(na, nb) > 0)) return false;
+    ts_dvec3 ex = ts_dvec3_sub(s0, o_a), ey = ts_dvec3_sub(s1, o_a);
+    double lx = ts_dvec3_length(ex), ly = ts_dvec3_length(ey);
+    if (!(lx > 0 && ly > 0) || !isfinite(lx) || !isfinite(ly)) return false;
+    ts_dvec3 D = ts_dvec3_sub(ts_dvec3_add(o_a, o_b), ts_dvec3_add(s0, s1));
+    double M = fmax(fmax(dabsmax(o_a), dabsmax(o_b)), fmax(dabsmax(s0), dabsmax(s1)));
+    if (!(dabsmax(D) <= 0x1p-21 * M)) return false;
+    if (!(ts_dvec3_length(D) <= 0x1p-16 * fmin(lx, ly))) return false;
+    return fabs(ts_dvec3_dot(ex, ey)) <= 0x1p-20 * lx * ly;
+}
+
+ts_status ts_shape_sample_info_init_rect(const ts_shape *s, uint32_t a, uint32_t b,
+                                         ts_triangle_sampling triangle_mode, ts_shape_sample_info *info,
+                                         ts_error *err)
+{
+    memset(info, 0, sizeof *info);
+    info->triangle_mode = triangle_mode;
+    ts_dvec3 o_a, s0, s1, o_b;
+    if (!ts_shape_triangles_rectangle(s, a, b) || !rect_vertices(s, a, b, &o_a, &s0, &s1, &o_b))
+        return ts_error_set(err, TS_ERR_INVALID, "triangles %u and %u do not form a rectangle", a, b);
+    ts_dvec3 v[3];
+    tri_vertices(s, a, v);
+    info->tri_n = ts_dvec3_normalize(ts_dvec3_cross(ts_dvec3_sub(v[1], v[0]), ts_dvec3_sub(v[2], v[0])));
+    ts_dvec3 ex = ts_dvec3_sub(s0, o_a), ey = ts_dvec3_sub(s1, o_a);
+    info->rect_w = ts_dvec3_length(ex);
+    info->rect_x = ts_dvec3_scale(ex, 1 / info->rect_w);
+    ts_dvec3 ey_perp = ts_dvec3_sub(ey, ts_dvec3_scale(info->rect_x, ts_dvec3_dot(ey, info->rect_x)));
+    info->rect_h = ts_dvec3_length(ey_perp);
+    info->rect_y = ts_dvec3_scale(ey_perp, 1 / info->rect_h);
+    info->tri_p[0] = o_a;
+    info->tri_p[1] = s0;
+    info->tri_p[2] = s1;
+    ts_dvec3 far = ts_dvec3_add(o_a, ts_dvec3_add(ts_dvec3_scale(info->rect_x, info->rect_w),
+                                                  ts_dvec3_scale(info->rect_y, info->rect_h)));
+    info->rect_defect = ts_dvec3_to_vec3(dabs(ts_dvec3_sub(o_b, far)));
+    info->rect = true;
+    info->rect_prim[0] = a;
+    info->rect_prim[1] = b;
+    info->area = info->rect_w * info->rect_h;
+    info->tri_pdf_area = (float)(1.0 / info->area);
+    info->similarity = true;
+    info->det_abs = 1;
+    if (!(info->area > 0) || !isfinite(info->area)) info->area = 0;
+    return TS_OK;
+}
+
+/* The point c + sx·x + sy·y of a rectangle (sx ∈ [0, w], sy ∈ [0, h]) with its error bound:
+ * a triangle's bound for the sum of three terms, plus the rectangle's defect. */
+static void rect_point(const ts_shape_sample_info *info, double sx, double sy, ts_shape_point *out)
+{
+    ts_dvec3 tx = ts_dvec3_scale(info->rect_x, sx), ty = ts_dvec3_scale(info->rect_y, sy);
+    ts_dvec3 p = ts_dvec3_add(info->tri_p[0], ts_dvec3_add(tx, ty));
+    ts_dvec3 e = ts_dvec3_add(dabs(info->tri_p[0]), ts_dvec3_add(dabs(tx), dabs(ty)));
+    out->p = ts_dvec3_to_vec3(p);
+    out->p_error = ts_vec3_add(ts_vec3_scale(ts_dvec3_to_vec3(e), ts_gamma(6)), info->rect_defect);
+    out->n = ts_dvec3_to_vec3(info->tri_n);
+}
+
 /* ---- area sampling ---- */
 
 bool ts_shape_sample_area(const ts_shape *s, uint32_t prim, const ts_shape_sample_info *info, ts_vec2 u,
@@ -177,6 +275,11 @@ bool ts_shape_sample_area(const ts_shape *s, uint32_t prim, const ts_shape_sampl
 {
     (void)prim; /* a triangle's vertices and normal are in info */
     if (!(info->area > 0)) return false;
+    if (s->type == TS_SHAPE_MESH && info->rect) {
+        rect_point(info, (double)u.x * info->rect_w, (double)u.y * info->rect_h, out);
+        out->pdf = info->tri_pdf_area;
+        return isfinite(out->pdf) && out->pdf > 0;
+    }
     if (s->type == TS_SHAPE_MESH) {
         const ts_dvec3 *v = info->tri_p;
         ts_vec2 b = ts_sample_uniform_triangle(u);
@@ -394,6 +497,96 @@ double ts_spherical_triangle_area(ts_dvec3 a, ts_dvec3 b, ts_dvec3 c, ts_dvec3 p
     return 2 * atan2(num, den);
 }
 
+/* Ureña, Fajardo and King (2013), "An Area-Preserving Parametrization for Spherical
+ * Rectangles": in the rectangle's frame (x, y along its edges, z = x × y turned so that the
+ * rectangle lies at z0 < 0 from p) the rectangle is [x0, x1] × [y0, y1] × {z0}. The planes
+ * through p and its four edges have unit normals n0…n3 (edges y = y0, x = x1, y = y1,
+ * x = x0); the spherical rectangle's interior angles are g_i = ∠(n_i, −n_{i+1}) and its
+ * area S = Σg_i − 2π. u.x picks the sub-rectangle [x0, xu] of area u.x·S in closed form
+ * (through k = 2π − g2 − g3, b0 = n0.z, b1 = n2.z), u.y the height by the uniform
+ * distribution of h = y/√(xu² + z0² + y²) between its values at y0 and y1. */
+typedef struct rect_view {
+    double x0, x1, y0, y1, z0; /* the rectangle in p's frame */
+    ts_dvec3 z;                /* the frame's third axis (x, y are the rectangle's) */
+    double b0, b1, k, S;
+} rect_view;
+
+static bool rect_setup(const ts_shape_sample_info *info, ts_dvec3 p, rect_view *r)
+{
+    ts_dvec3 d = ts_dvec3_sub(info->tri_p[0], p);
+    r->z = ts_dvec3_cross(info->rect_x, info->rect_y);
+    r->x0 = ts_dvec3_dot(d, info->rect_x);
+    r->y0 = ts_dvec3_dot(d, info->rect_y);
+    r->z0 = ts_dvec3_dot(d, r->z);
+    if (r->z0 > 0) {
+        r->z0 = -r->z0;
+        r->z = ts_dvec3_scale(r->z, -1);
+    }
+    if (!(r->z0 < 0)) return false; /* on the plane (or NaN) */
+    double x0 = r->x0, y0 = r->y0, z0 = r->z0, x1 = x0 + info->rect_w, y1 = y0 + info->rect_h;
+    r->x1 = x1;
+    r->y1 = y1;
+    /* n0 = (0, z0, −y0)/L0, n1 = (−z0, 0, x1)/L1, n2 = (0, −z0, y1)/L2, n3 = (z0, 0, −x0)/L3, so
+     * the cosines −n_i·n_{i+1} are products of the coordinates. acos from a cosine of a few
+     * ulps' error is within ~1e-16/sin g of g: near 0 and π (edge-on views) that is still
+     * 1e-12 at g = 1e-4, far below the 3e-4 sr where AUTO stops sampling spherically. */
+    double L0 = sqrt(z0 * z0 + y0 * y0), L1 = sqrt(z0 * z0 + x1 * x1), L2 = sqrt(z0 * z0 + y1 * y1),
+           L3 = sqrt(z0 * z0 + x0 * x0);
+    if (!(L0 > 0 && L1 > 0 && L2 > 0 && L3 > 0) || !isfinite(L0 * L1 * L2 * L3)) return false;
+    double c[4] = {y0 * x1 / (L0 * L1), -x1 * y1 / (L1 * L2), x0 * y1 / (L2 * L3), -x0 * y0 / (L3 * L0)};
+    double g[4];
+    for (int i = 0; i < 4; i++)
+        g[i] = acos(fmin(1.0, fmax(-1.0, c[i])));
+    r->b0 = -y0 / L0;
+    r->b1 = y1 / L2;
+    r->k = 2 * TS_PI_D - g[2] - g[3];
+    r->S = g[0] + g[1] - r->k;
+    return r->S > 0 && isfinite(r->S);
+}
+
+double ts_spherical_rectangle_area(const ts_shape_sample_info *info, ts_dvec3 p)
+{
+    rect_view r;
+    return info->rect && rect_setup(info, p, &r) ? r.S : 0;
+}
+
+/* The sample of u from a set-up view: offsets (sx, sy) from the corner, within [0, w] × [0, h]. */
+static bool rect_map(const ts_shape_sample_info *info, const rect_view *r, ts_vec2 u, double *sx, double *sy)
+{
+    double au = u.x * r->S + r->k;
+    double sa = sin(au), num = cos(au) * r->b0 - r->b1;
+    /* cu = sign(fu)/√(fu² + b0²) with fu = num/sin(au), written without the division:
+     * sin(au) vanishes inside the range when the sub-rectangle passes a half-turn. */
+    double den = sqrt(num * num + r->b0 * r->b0 * sa * sa);
+    if (!(den > 0) || !isfinite(den)) return false;
+    double cu = fmin(1.0, fmax(-1.0, copysign(1.0, num) * sa / den));
+    double one_c2 = 1 - cu * cu, xu;
+    if (one_c2 > 0) xu = -(cu * r->z0) / sqrt(one_c2);
+    else xu = cu > 0 ? r->x1 : r->x0;
+    xu = fmin(r->x1, fmax(r->x0, xu));
+    double dd = sqrt(xu * xu + r->z0 * r->z0);
+    double h0 = r->y0 / sqrt(dd * dd + r->y0 * r->y0), h1 = r->y1 / sqrt(dd * dd + r->y1 * r->y1);
+    double hv = h0 + u.y * (h1 - h0), hv2 = hv * hv, yv;
+    if (hv2 < 1 - 1e-12) yv = hv * dd / sqrt(1 - hv2);
+    else yv = hv > 0 ? r->y1 : r->y0;
+    yv = fmin(r->y1, fmax(r->y0, yv));
+    *sx = fmin(info->rect_w, fmax(0.0, xu - r->x0));
+    *sy = fmin(info->rect_h, fmax(0.0, yv - r->y0));
+    return isfinite(*sx) && isfinite(*sy);
+}
+
+bool ts_spherical_rectangle_sample(const ts_shape_sample_info *info, ts_dvec3 p, ts_vec2 u, ts_dvec3 *p_rect,
+                                   double *omega)
+{
+    rect_view r;
+    double sx, sy;
+    if (!info->rect || !rect_setup(info, p, &r) || !rect_map(info, &r, u, &sx, &sy)) return false;
+    *p_rect = ts_dvec3_add(info->tri_p[0],
+                           ts_dvec3_add(ts_dvec3_scale(info->rect_x, sx), ts_dvec3_scale(info->rect_y, sy)));
+    *omega = r.S;
+    return true;
+}
+
 /* AUTO's cheap test: the triangle looks small from p (see TS_SPHERICAL_AUTO_MIN_ESTIMATE). */
 static bool auto_small(const ts_shape_sample_info *info, ts_dvec3 p)
 {
@@ -402,6 +595,10 @@ static bool auto_small(const ts_shape_sample_info *info, ts_dvec3 p)
     double d2 = INFINITY;
     for (int k = 0; k < 3; k++) {
         ts_dvec3 w = ts_dvec3_sub(v[k], p);
+        d2 = fmin(d2, ts_dvec3_dot(w, w));
+    }
+    if (info->rect) { /* the fourth corner */
+        ts_dvec3 w = ts_dvec3_sub(ts_dvec3_sub(ts_dvec3_add(v[1], v[2]), v[0]), p);
         d2 = fmin(d2, ts_dvec3_dot(w, w));
     }
     return info->area < TS_SPHERICAL_AUTO_MIN_ESTIMATE * d2;
@@ -512,7 +709,17 @@ bool ts_shape_sample_solid_angle(const ts_shape *s, uint32_t prim, const ts_shap
         out->pdf = (float)(1 / (2 * TS_PI_D * omc));
         return isfinite(out->pdf) && ts_vec3_distance_sq(out->p, ref->p) > 0;
     }
-    if (s->type == TS_SHAPE_MESH && !auto_small(info, p_ref)) {
+    if (s->type == TS_SHAPE_MESH && info->rect && !auto_small(info, p_ref)) {
+        rect_view r;
+        double sx, sy;
+        if (!rect_setup(info, p_ref, &r)) return false;
+        if (use_spherical(info, r.S)) {
+            if (!rect_map(info, &r, u, &sx, &sy)) return false;
+            rect_point(info, sx, sy, out);
+            out->pdf = (float)(1 / r.S);
+            return isfinite(out->pdf) && out->pdf > 0 && ts_vec3_distance_sq(out->p, ref->p) > 0;
+        }
+    } else if (s->type == TS_SHAPE_MESH && !auto_small(info, p_ref)) {
         const ts_dvec3 *v = info->tri_p;
         ts_dvec3 w[3], dir;
         double omega;
@@ -554,7 +761,11 @@ float ts_shape_pdf_solid_angle_at(const ts_shape *s, uint32_t prim, const ts_sha
     if (!(info->area > 0) || edge_on(s, info, ref)) return 0;
     ts_dvec3 p_ref = dv(ref->p);
     if (sphere_cone(s, info, ref)) return (float)(1 / (2 * TS_PI_D * sphere_one_minus_cos(info, p_ref)));
-    if (s->type == TS_SHAPE_MESH && !auto_small(info, p_ref)) {
+    if (s->type == TS_SHAPE_MESH && info->rect && !auto_small(info, p_ref)) {
+        rect_view r;
+        if (!rect_setup(info, p_ref, &r)) return 0;
+        if (use_spherical(info, r.S)) return (float)(1 / r.S);
+    } else if (s->type == TS_SHAPE_MESH && !auto_small(info, p_ref)) {
         ts_dvec3 w[3];
         double omega;
         if (!spherical_setup(info, p_ref, w, &omega)) return 0;
@@ -584,9 +795,16 @@ float ts_shape_pdf_solid_angle(const ts_shape *s, uint32_t prim, const ts_shape_
         if (ts_dvec3_dot(x, x) > r * r) return 0;
         return (float)(1 / (2 * TS_PI_D * sphere_one_minus_cos(info, p_ref)));
     }
-    double t;
+    double t, t_b;
     ts_vec3 wf = ts_dvec3_to_vec3(d);
-    if (!ts_shape_sample_intersect(s, prim, ref->p, wf, ray_tmin(ref, d), INFINITY, &t, NULL)) return 0;
+    bool hit = ts_shape_sample_intersect(s, info->rect ? info->rect_prim[0] : prim, ref->p, wf, ray_tmin(ref, d),
+                                         INFINITY, &t, NULL);
+    if (info->rect && ts_shape_sample_intersect(s, info->rect_prim[1], ref->p, wf, ray_tmin(ref, d), INFINITY, &t_b,
+                                                NULL) && (!hit || t_b < t)) {
+        t = t_b;
+        hit = true;
+    }
+    if (!hit) return 0;
     ts_dvec3 p_hit = ts_dvec3_add(p_ref, ts_dvec3_scale(dv(wf), t));
     return ts_shape_pdf_solid_angle_at(s, prim, info, ref, ts_dvec3_to_vec3(p_hit));
 }

@@ -8,6 +8,10 @@
  * where they exist: the sphere samples the cone of directions it subtends from outside
  * (stable for tiny spheres through the small-angle form of 1 − cos θ_max), and triangles
  * may use Arvo's uniform spherical-triangle sampling (behind ts_triangle_sampling).
+ * Two triangles of a mesh that form a rectangle (ts_shape_triangles_rectangle) can be one
+ * emitter, sampled uniformly in the solid angle of the whole rectangle by Ureña, Fajardo
+ * and King's area-preserving parametrisation of spherical rectangles (2013), under the
+ * same ts_triangle_sampling policy and limits as a triangle.
  *
  * Densities are those of the FIRST surface point along a direction: ts_shape_pdf_solid_
  * angle(ref, wi) intersects the shape and evaluates the density of the sampler at the
@@ -51,6 +55,14 @@ typedef struct ts_shape_sample_info {
     ts_dvec3 tri_p[3];        /* mesh: triangle prim's vertices (the float positions, in double) */
     ts_dvec3 tri_n;           /* mesh: its unit normal, normalize((p1 − p0) × (p2 − p0)) in double */
     float tri_pdf_area;       /* mesh: (float)(1 / area) */
+    /* Rectangle of two triangles (ts_shape_sample_info_init_rect): tri_p[0] is its corner c,
+     * tri_p[1] = c + rect_x·rect_w, tri_p[2] = c + rect_y·rect_h (triangle rect_prim[0]
+     * exactly), tri_n the triangles' front normal; area = rect_w·rect_h. */
+    bool rect;
+    uint32_t rect_prim[2];    /* the two triangles */
+    ts_dvec3 rect_x, rect_y;  /* orthonormal edge directions in the rectangle's plane */
+    double rect_w, rect_h;    /* edge lengths along rect_x, rect_y */
+    ts_vec3 rect_defect;      /* |fourth corner of the mesh − c − w·x − h·y| per component, added to p_error */
 } ts_shape_sample_info;
 
 /* A point on a shape: world position with its error bound, unit normal on the shape's
@@ -68,6 +80,26 @@ typedef struct ts_shape_point {
  * read from it). */
 ts_status ts_shape_sample_info_init(const ts_shape *s, uint32_t prim, ts_triangle_sampling triangle_mode,
                                     ts_shape_sample_info *info, ts_error *err);
+
+/* Whether triangles a and b of mesh s form one rectangle: they share an edge (two vertex
+ * positions, bit for bit), which is the rectangle's diagonal, face the same way, and their
+ * other vertices o_a, o_b complete a parallelogram with a right angle: with s0, s1 the
+ * shared vertices, M the largest |coordinate| of the four and D = o_a + o_b − s0 − s1,
+ * max|D_k| ≤ 2^-21·M (each of the four float vertices is within 2^-24·M of an exact
+ * parallelogram's, 2^-22·M for the sum, and twice that for a transform applied in float)
+ * and |D| ≤ 2^-16 of the shorter edge, and the edges at o_a meet at a cosine of at most
+ * 2^-20. The rectangle sampled (corner o_a, edges towards s0 and s1, the second made
+ * orthogonal to the first) then differs from the two triangles by a fraction of its area
+ * of at most |D|/min edge + 2^-20 < 1.6e-5, the bias bound of treating them as one (the
+ * exact rectangles of the shipped scenes have D = 0 and cosine 0). False for anything
+ * else, degenerate triangles included. Not hot-path. */
+bool ts_shape_triangles_rectangle(const ts_shape *s, uint32_t a, uint32_t b);
+/* Like ts_shape_sample_info_init for the rectangle of triangles a and b (a first: the
+ * corner and the front side are its); TS_ERR_INVALID if ts_shape_triangles_rectangle is
+ * false. */
+ts_status ts_shape_sample_info_init_rect(const ts_shape *s, uint32_t a, uint32_t b,
+                                         ts_triangle_sampling triangle_mode, ts_shape_sample_info *info,
+                                         ts_error *err);
 
 /* Uniform-by-area sample; pdf per unit world area. False if the shape has no area. */
 bool ts_shape_sample_area(const ts_shape *s, uint32_t prim, const ts_shape_sample_info *info, ts_vec2 u,
@@ -97,5 +129,14 @@ bool ts_shape_sample_intersect(const ts_shape *s, uint32_t prim, ts_vec3 o, ts_v
 
 /* Solid angle (sr) that triangle (a, b, c) subtends at p (Van Oosterom & Strackee). */
 double ts_spherical_triangle_area(ts_dvec3 a, ts_dvec3 b, ts_dvec3 c, ts_dvec3 p);
+
+/* Solid angle (sr) that the rectangle of info (init_rect) subtends at p, as the spherical
+ * rectangle sampler computes it (the sum of its four angles − 2π); 0 on its plane. */
+double ts_spherical_rectangle_area(const ts_shape_sample_info *info, ts_dvec3 p);
+/* Ureña et al.'s map of u ∈ [0,1)² onto the rectangle of info as seen from p: a point on the
+ * rectangle whose direction from p is uniform in its solid angle (*omega, as above). False
+ * where the solid angle is 0 or the set-up degenerates (p on the plane or a corner). */
+bool ts_spherical_rectangle_sample(const ts_shape_sample_info *info, ts_dvec3 p, ts_vec2 u, ts_dvec3 *p_rect,
+                                   double *omega);
 
 #endif
