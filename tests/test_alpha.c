@@ -591,7 +591,7 @@ static void test_pbrt_constants(void **state)
                   &w);
     assert_int_equal(w.n, 0);
     assert_int_equal(s->n_shapes, 1);
-    assert_int_equal(s->n_lights, 2); /* one area light per triangle */
+    assert_int_equal(s->n_lights, 1); /* the quad's two triangles: one rectangle light (design.md §4) */
     assert_non_null(s->shapes[0].alpha);
     ts_film *f = render(s);
     for (int py = 0; py < 16; py++)

@@ -96,9 +96,10 @@ static void test_builtin_cornell_box(void **state)
     assert_int_equal(s->spp, 64);
     assert_int_equal(s->n_shapes, 8);
     assert_int_equal(s->n_materials, 4);
-    /* The light quad is two emitting triangles: two area lights. */
-    assert_int_equal(s->n_lights, 2);
+    /* The light quad is two emitting triangles forming a rectangle: one area light. */
+    assert_int_equal(s->n_lights, 1);
     assert_int_equal(s->lights[0].type, TS_LIGHT_AREA);
+    assert_true(s->lights[0].rect);
     assert_true(s->shapes[0].emissive);
     /* Room bounds: x in [0, 556], y in [0, 548.8], z in [0, 559.2]. */
     assert_float_equal(s->bounds.lo.y, 0, 0);

@@ -181,10 +181,11 @@ static void test_same_scene_as_json(void **state)
     assert_memory_equal(&bs->shapes[0].sphere, &js->shapes[0].sphere, sizeof bs->shapes[0].sphere);
     assert_memory_equal(bs->shapes[1].mesh.p, js->shapes[1].mesh.p, 12 * sizeof(float));
     assert_memory_equal(bs->shapes[1].mesh.index, js->shapes[1].mesh.index, 6 * sizeof(uint32_t));
-    /* One spot, then the two emitting triangles. */
-    assert_int_equal(bs->n_lights, 3);
-    assert_int_equal(js->n_lights, 3);
-    for (uint32_t i = 0; i < 3; i++) {
+    /* One spot, then the emitting rectangle (its two triangles are one light). */
+    assert_int_equal(bs->n_lights, 2);
+    assert_int_equal(js->n_lights, 2);
+    assert_true(bs->lights[1].rect && js->lights[1].rect && bs->lights[1].prim_b == js->lights[1].prim_b);
+    for (uint32_t i = 0; i < 2; i++) {
         const ts_light *x = &bs->lights[i], *y = &js->lights[i];
         assert_int_equal(x->type, y->type);
         assert_memory_equal(&x->color, &y->color, sizeof x->color);
@@ -199,9 +200,9 @@ static void test_same_scene_as_json(void **state)
     }
     assert_int_equal(bs->lights[1].type, TS_LIGHT_AREA);
     assert_int_equal(bs->shapes[1].first_light, 1);
-    assert_int_equal(bs->light_distribution.n, 3);
+    assert_int_equal(bs->light_distribution.n, 2);
     assert_memory_equal(bs->light_distribution.table.pmf, js->light_distribution.table.pmf,
-                        3 * sizeof(float));
+                        2 * sizeof(float));
     assert_int_equal(bs->effects, js->effects);
     assert_memory_equal(&bs->bounds, &js->bounds, sizeof bs->bounds);
     ts_scene_destroy(bs);

@@ -585,7 +585,7 @@ static double seen(const ts_scene *s, ts_vec3 o, ts_vec3 d)
     ts_interaction si;
     if (!ts_accel_intersect(s->accel, &r, &si)) return -1;
     const ts_shape *sh = &s->shapes[si.shape];
-    const ts_light *l = &s->lights[sh->first_light + (sh->type == TS_SHAPE_MESH ? si.prim : 0)];
+    const ts_light *l = &s->lights[ts_area_light_index(sh, si.prim)];
     return ts_area_light_l(l, &si, si.wo).g;
 }
 

@@ -78,6 +78,8 @@ typedef struct ts_shape {
     ts_rgb emission;      /* radiance leaving the front side (both sides if two_sided) */
     uint32_t light_samples; /* emitters: samples per light under direct's strategy all (0: the integrator's) */
     uint32_t first_light; /* index of this shape's first area light (meshes: + triangle) */
+    const uint32_t *prim_light; /* emissive meshes: each triangle's area light, in the scene's arena (two
+                                   triangles of a rectangle share one); NULL: first_light + triangle */
     ts_xform to_world;    /* object → world (identity for meshes) */
     bool reverse_orientation; /* analytic shapes: the front side is the inside (disk: −z) */
     bool partial;         /* analytic shapes: cut by phi_max (and a sphere by z_min, z_max) */

@@ -60,7 +60,7 @@ static ts_rgb emitted(const ts_scene *s, const ts_interaction *si, ts_vec3 w)
 {
     const ts_shape *sh = &s->shapes[si->shape];
     if (!sh->emissive) return ts_rgb_gray(0);
-    const ts_light *l = &s->lights[sh->first_light + (sh->type == TS_SHAPE_MESH ? si->prim : 0)];
+    const ts_light *l = &s->lights[ts_area_light_index(sh, si->prim)];
     return ts_area_light_l(l, si, w);
 }
 
@@ -140,7 +140,7 @@ static ts_rgb estimate_direct(const ts_scene *s, const ts_interaction *si, const
     if (ts_accel_intersect(s->accel, &ray, &hit)) {
         const ts_shape *sh = &s->shapes[hit.shape];
         if (light->type == TS_LIGHT_AREA && sh->emissive &&
-            sh->first_light + (sh->type == TS_SHAPE_MESH ? hit.prim : 0) == li) {
+            ts_area_light_index(sh, hit.prim) == li) {
             light_pdf = ts_light_pdf_li_hit(light, s->shapes, si, hit.p);
             Li = ts_area_light_l(light, &hit, ts_vec3_neg(bs.wi));
         }
@@ -262,7 +262,7 @@ static ts_rgb path_emission(const ts_scene *s, uint32_t fx, const ts_ray *ray, b
     if (found) {
         const ts_shape *sh = &s->shapes[si->shape];
         if (!(fx & TS_EFFECT_AREA_LIGHTS) || !sh->emissive) return L;
-        uint32_t li = sh->first_light + (sh->type == TS_SHAPE_MESH ? si->prim : 0);
+        uint32_t li = ts_area_light_index(sh, si->prim);
         const ts_light *l = &s->lights[li];
         L = ts_area_light_l(l, si, si->wo);
         if (full || ts_rgb_is_black(L)) return L;

@@ -61,7 +61,10 @@ ts_status ts_lights_prepare(ts_light *lights, uint32_t n, const ts_shape *shapes
         }
         case TS_LIGHT_AREA: {
             if (!shapes) return ts_error_set(err, TS_ERR_INVALID, "lights[%u]: area light without shapes", i);
-            ts_status st = ts_shape_sample_info_init(&shapes[l->shape], l->prim, l->triangle_sampling, &l->geom, err);
+            ts_status st = l->rect ? ts_shape_sample_info_init_rect(&shapes[l->shape], l->prim, l->prim_b,
+                                                                     l->triangle_sampling, &l->geom, err)
+                                   : ts_shape_sample_info_init(&shapes[l->shape], l->prim, l->triangle_sampling,
+                                                               &l->geom, err);
             if (st) {
                 ts_error_prefix(err, "lights[%u] (shape %u)", i, l->shape);
                 return st;

@@ -10,7 +10,9 @@
  *
  * Conventions (docs/design.md §4): a mesh's emitting triangles are one TS_LIGHT_AREA each
  * (zero-area ones get power 0 and are never selected by the power distribution, and
- * sample nothing). Area lights emit `color` on the shape's front side unless two_sided.
+ * sample nothing), except that two consecutive triangles forming a rectangle
+ * (ts_shape_triangles_rectangle) are one light, `rect`, sampled uniformly in the solid
+ * angle of the whole rectangle; ts_area_light_index maps a hit to its light. Area lights emit `color` on the shape's front side unless two_sided.
  * Infinite lights: radiance `color` (constant), or color × map (color holds the scale),
  * the map's own space taken to world by to_world (see envmap.h for the lat-long axes).
  *
@@ -51,6 +53,8 @@ typedef struct ts_light {
     ts_vec3 direction;     /* spot: unit axis from→to; distant: unit direction the light travels (from→to) */
     float cos_total, cos_falloff_start; /* spot: cos(cone_angle), cos(cone_angle − cone_delta) (pbrt-v3) */
     uint32_t shape, prim;  /* area: the emitting shape and triangle (prim 0 for analytic shapes) */
+    bool rect;             /* area, mesh: the rectangle of triangles prim and prim_b, one light */
+    uint32_t prim_b;
     bool two_sided;        /* area */
     uint32_t samples;      /* samples of this light per camera sample under direct's strategy all
                               (pbrt-v3's nSamples); 0: the integrator's samples_per_light */
@@ -77,6 +81,15 @@ ts_status ts_lights_prepare(ts_light *lights, uint32_t n, const ts_shape *shapes
  * scene files have no key for it. Not thread-safe: call before rendering. */
 uint32_t ts_lights_set_triangle_sampling(ts_light *lights, uint32_t n, const ts_shape *shapes,
                                          ts_triangle_sampling mode);
+
+/* The area light of a hit on emissive shape sh (triangle prim of a mesh): the builder's
+ * per-triangle table where it made one (a rectangle's two triangles share a light), else
+ * one light per triangle from first_light. */
+static inline uint32_t ts_area_light_index(const ts_shape *sh, uint32_t prim)
+{
+    if (sh->type != TS_SHAPE_MESH) return sh->first_light;
+    return sh->prim_light ? sh->prim_light[prim] : sh->first_light + prim;
+}
 
 typedef struct ts_light_sample {
     ts_rgb L;            /* radiance arriving at ref along −wi (before visibility) */

@@ -1076,8 +1076,17 @@ static ts_status lay_out(ts_scene_builder *b, ts_error *err)
         if (!sh->emissive) continue;
         sh->first_light = s->n_lights;
         uint32_t count = sh->type == TS_SHAPE_MESH ? sh->mesh.n_triangles : 1;
+        /* Two consecutive triangles of a mesh that form a rectangle are one light
+         * (docs/design.md §4, ts_shape_triangles_rectangle), so each triangle's light is
+         * looked up in prim_light. */
+        uint32_t *prim_light = NULL;
+        if (sh->type == TS_SHAPE_MESH) {
+            prim_light = ts_arena_calloc(a, (size_t)count, sizeof *prim_light);
+            if (!prim_light) return nomem(err, "the lights");
+            sh->prim_light = prim_light;
+        }
         for (uint32_t t = 0; t < count; t++) {
-            ts_light *l = &s->lights[s->n_lights++];
+            ts_light *l = &s->lights[s->n_lights];
             *l = (ts_light){0};
             l->type = TS_LIGHT_AREA;
             l->color = sh->emission;
@@ -1086,6 +1095,15 @@ static ts_status lay_out(ts_scene_builder *b, ts_error *err)
             l->two_sided = sh->two_sided;
             l->samples = sh->light_samples;
             l->to_world = ts_xform_identity();
+            if (prim_light) {
+                prim_light[t] = s->n_lights;
+                if (t + 1 < count && ts_shape_triangles_rectangle(sh, t, t + 1)) {
+                    l->rect = true;
+                    l->prim_b = ++t;
+                    prim_light[t] = s->n_lights;
+                }
+            }
+            s->n_lights++;
         }
     }
     return TS_OK;
