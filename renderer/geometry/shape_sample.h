@@ -11,7 +11,8 @@
  * Two triangles of a mesh that form a rectangle (ts_shape_triangles_rectangle) can be one
  * emitter, sampled uniformly in the solid angle of the whole rectangle by Ureña, Fajardo
  * and King's area-preserving parametrisation of spherical rectangles (2013), under the
- * same ts_triangle_sampling policy and limits as a triangle.
+ * same ts_triangle_sampling policy and limits as a triangle (AUTO's size test takes half
+ * the rectangle's area: where its triangles would have been sampled spherically).
  *
  * Densities are those of the FIRST surface point along a direction: ts_shape_pdf_solid_
  * angle(ref, wi) intersects the shape and evaluates the density of the sampler at the
