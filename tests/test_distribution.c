@@ -141,6 +141,67 @@ static void test_alias(void **state)
  * coin as frac(u·n) of the bin's own value (the defect this guards against) puts
  * χ² − dof at ~150 standard deviations: 18% of the lights are then never chosen and
  * others are chosen up to 8.6× their pmf. */
+/* The guide table (distribution.h) must give the piece a search of the whole cdf gives:
+ * the largest i < n with cdf[i] ≤ u. Checked against a linear scan on distributions with
+ * runs of zero pieces, a single spike and all zeros, at every cdf value, the floats next
+ * to it on both sides, and a grid of 2^16 values: deterministic, no tolerance. */
+static uint32_t piece_by_scan(const ts_distribution1d *d, float u)
+{
+    uint32_t i = 0;
+    while (i + 1 < d->n && d->cdf[i + 1] <= u) i++;
+    return i;
+}
+
+static void check_pieces(const ts_distribution1d *d, float u, uint32_t *checked)
+{
+    if (!(u >= 0.0f && u < 1.0f)) return;
+    uint32_t off;
+    float pdf;
+    ts_distribution1d_sample_continuous(d, u, &pdf, &off);
+    uint32_t want = piece_by_scan(d, u);
+    if (off != want) fail_msg("n = %u, u = %a: piece %u, the whole cdf says %u", d->n, (double)u, off, want);
+    if (d->func_int > 0 && !(d->func[off] > 0)) fail_msg("n = %u, u = %a: zero piece %u sampled", d->n, (double)u, off);
+    uint32_t i = ts_distribution1d_sample_discrete(d, u, NULL, NULL);
+    if (i != want) fail_msg("n = %u, u = %a: discrete piece %u, the whole cdf says %u", d->n, (double)u, i, want);
+    (*checked)++;
+}
+
+static void test_guide_table(void **state)
+{
+    (void)state;
+    static const uint32_t sizes[] = {1, 2, 3, 4, 5, 7, 8, 9, 13, 100, 1000, 4097};
+    uint32_t checked = 0;
+    for (size_t s = 0; s < sizeof sizes / sizeof *sizes; s++)
+        for (int kind = 0; kind < 3; kind++) {
+            uint32_t n = sizes[s];
+            float *f = malloc(n * sizeof *f);
+            assert_non_null(f);
+            for (uint32_t i = 0; i < n; i++) {
+                uint32_t h = ts_hash4(n, (uint32_t)kind, i, 7);
+                /* kind 0: uneven values (exponents over 2^±12), a third zero, in runs;
+                 * kind 1: one spike among tiny values; kind 2: all zero. */
+                if (kind == 0) f[i] = (h % 3 == 0 || (i / 5) % 4 == 1) ? 0.0f : ldexpf(1.0f + (h >> 8) * 0x1p-24f, (int)(h % 25) - 12);
+                else if (kind == 1) f[i] = i == n / 3 ? 1e6f : (h & 1 ? 1e-6f : 0.0f);
+                else f[i] = 0;
+            }
+            ts_arena arena;
+            ts_arena_init(&arena, 0);
+            ts_error err = {0};
+            ts_distribution1d d;
+            assert_int_equal(ts_distribution1d_init(&d, f, n, &arena, &err), TS_OK);
+            for (uint32_t i = 0; i <= n; i++) {
+                check_pieces(&d, d.cdf[i], &checked);
+                check_pieces(&d, nextafterf(d.cdf[i], 0.0f), &checked);
+                check_pieces(&d, nextafterf(d.cdf[i], 1.0f), &checked);
+            }
+            for (uint32_t k = 0; k < (1u << 16); k++) check_pieces(&d, (float)k * 0x1p-16f, &checked);
+            check_pieces(&d, TS_ONE_MINUS_EPSILON, &checked);
+            ts_arena_fini(&arena);
+            free(f);
+        }
+    assert_true(checked > 36 * 65536);
+}
+
 static void test_alias_many_lights(void **state)
 {
     (void)state;
@@ -197,6 +258,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_1d),
         cmocka_unit_test(test_2d),
+        cmocka_unit_test(test_guide_table),
         cmocka_unit_test(test_alias),
         cmocka_unit_test(test_alias_many_lights),
     };

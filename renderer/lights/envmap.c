@@ -30,13 +30,21 @@ static ts_rgb rgb_lerp(float t, ts_rgb a, ts_rgb b)
     return (ts_rgb){ts_lerpf(t, a.r, b.r), ts_lerpf(t, a.g, b.g), ts_lerpf(t, a.b, b.b)};
 }
 
-/* Row j interpolated linearly in x (texel-centre coordinates), wrapping in φ. */
+/* Row j (in [0, height)) interpolated linearly in x (texel-centre coordinates), wrapping
+ * in φ: texel(m, i0, j) and texel(m, i0 + 1, j), their columns wrapped without a
+ * division where x is in [−1, width) (every lookup's: x = u·width − ½ with u in [0,1)). */
 static ts_rgb row_lookup(const ts_envmap *m, int64_t j, double x)
 {
     double x0 = floor(x);
     float fx = (float)(x - x0);
-    int64_t i0 = (int64_t)x0;
-    return rgb_lerp(fx, texel(m, i0, j), texel(m, i0 + 1, j));
+    int64_t w = m->width, i0 = (int64_t)x0;
+    if (i0 < 0 || i0 >= w) {
+        i0 %= w;
+        if (i0 < 0) i0 += w;
+    }
+    int64_t i1 = i0 + 1 < w ? i0 + 1 : 0;
+    const ts_rgb *row = m->texels + (size_t)j * m->width;
+    return rgb_lerp(fx, row[i0], row[i1]);
 }
 
 ts_rgb ts_envmap_lookup_uv(const ts_envmap *m, ts_vec2 uv)
@@ -90,15 +98,25 @@ bool ts_envmap_sample(const ts_envmap *m, ts_vec2 u, ts_vec3 *w, float *pdf)
     return true;
 }
 
-float ts_envmap_pdf(const ts_envmap *m, ts_vec3 w)
+/* ts_envmap_pdf of w, whose lat-long coordinates are uv. */
+static float pdf_at(const ts_envmap *m, ts_vec3 w, ts_vec2 uv)
 {
     if (!(ts_distribution2d_integral(&m->distrib) > 0)) return 0;
     double st = sqrt((double)w.x * w.x + (double)w.y * w.y);
     if (!(st > 0)) return 0;
     double len = sqrt(st * st + (double)w.z * w.z);
     st /= len;
-    double p = ts_distribution2d_pdf(&m->distrib, ts_envmap_dir_to_uv(w)) / (2 * TS_PI_D * TS_PI_D * st);
+    double p = ts_distribution2d_pdf(&m->distrib, uv) / (2 * TS_PI_D * TS_PI_D * st);
     return p < FLT_MAX ? (float)p : 0.0f;
+}
+
+float ts_envmap_pdf(const ts_envmap *m, ts_vec3 w) { return pdf_at(m, w, ts_envmap_dir_to_uv(w)); }
+
+ts_rgb ts_envmap_lookup_pdf(const ts_envmap *m, ts_vec3 w, float *pdf)
+{
+    ts_vec2 uv = ts_envmap_dir_to_uv(w);
+    *pdf = pdf_at(m, w, uv);
+    return ts_envmap_lookup_uv(m, uv);
 }
 
 ts_status ts_envmap_create(const ts_rgb *texels, uint32_t width, uint32_t height, ts_envmap **out, ts_error *err)

@@ -27,17 +27,41 @@ ts_status ts_distribution1d_init(ts_distribution1d *d, const float *f, uint32_t 
         cdf[i + 1] = (float)(acc / (sum > 0 ? sum : (double)n));
     }
     cdf[n] = 1.0f;
+    /* The guide table: k/n_guide is exact in float (n_guide ≤ 2^30 is a power of two),
+     * and the cdf is non-decreasing, so one pass fills it. */
+    uint32_t n_guide = 1;
+    while (n_guide < n / 4) n_guide <<= 1;
+    uint32_t *guide = ts_arena_calloc(arena, (size_t)n_guide + 1, sizeof *guide);
+    if (!guide) return ts_error_set(err, TS_ERR_NOMEM, "distribution: out of memory for %u values", n);
+    const float inv_guide = 1.0f / (float)n_guide;
+    uint32_t i = 0;
+    for (uint32_t k = 0; k <= n_guide; k++) {
+        float t = (float)k * inv_guide;
+        while (i + 1 < n && cdf[i + 1] <= t) i++;
+        guide[k] = i;
+    }
     d->n = n;
     d->func = func;
     d->cdf = cdf;
     d->func_int = (float)(sum / n);
+    d->n_guide = n_guide;
+    d->guide = guide;
     return TS_OK;
 }
 
-/* Largest i with cdf[i] ≤ u, clamped to [0, n−1]. */
-static uint32_t find_interval(const float *cdf, uint32_t n, float u)
+/* Largest i < n with cdf[i] ≤ u, or 0 if there is none (u < 0 or NaN): the guide table
+ * narrows the binary search to [guide[k], guide[k+1]]. For u ≥ 0, k = ⌊u·n_guide⌋ is
+ * exact, so k/n_guide ≤ u < (k+1)/n_guide: cdf[guide[k]] ≤ k/n_guide ≤ u puts the answer
+ * at guide[k] or above, and the answer's cdf ≤ u < (k+1)/n_guide puts it at guide[k+1]
+ * or below (u ≥ 1 takes the last bucket, whose guide[n_guide] is n − 1). The search
+ * inside is the plain one, so the result is the same as over the whole table. */
+static uint32_t find_interval(const ts_distribution1d *d, float u)
 {
-    uint32_t lo = 0, hi = n; /* invariant: cdf[lo] ≤ u (or lo = 0), answer in [lo, hi) */
+    if (!(u >= 0.0f)) return 0;
+    float x = u * (float)d->n_guide;
+    uint32_t k = x < (float)d->n_guide ? (uint32_t)x : d->n_guide - 1;
+    uint32_t lo = d->guide[k], hi = d->guide[k + 1] + 1; /* cdf[lo] ≤ u, answer in [lo, hi) */
+    const float *cdf = d->cdf;
     while (hi - lo > 1) {
         uint32_t mid = lo + (hi - lo) / 2;
         if (cdf[mid] <= u) lo = mid;
@@ -54,7 +78,7 @@ static float piece_pdf(const ts_distribution1d *d, uint32_t i)
 
 float ts_distribution1d_sample_continuous(const ts_distribution1d *d, float u, float *pdf, uint32_t *offset)
 {
-    uint32_t i = find_interval(d->cdf, d->n, u);
+    uint32_t i = find_interval(d, u);
     /* Skip pieces of zero width (zero function value), which cannot be landed in. */
     while (i + 1 < d->n && d->cdf[i + 1] <= u) i++;
     if (offset) *offset = i;
@@ -87,7 +111,7 @@ float ts_distribution1d_invert(const ts_distribution1d *d, float x)
 
 uint32_t ts_distribution1d_sample_discrete(const ts_distribution1d *d, float u, float *pmf, float *u_remapped)
 {
-    uint32_t i = find_interval(d->cdf, d->n, u);
+    uint32_t i = find_interval(d, u);
     while (i + 1 < d->n && d->cdf[i + 1] <= u) i++;
     float width = d->cdf[i + 1] - d->cdf[i];
     if (pmf) *pmf = ts_distribution1d_discrete_pmf(d, i);

@@ -25,6 +25,13 @@ typedef struct ts_distribution1d {
     const float *func; /* n: |f| as given (negative values are taken as absolute) */
     const float *cdf;  /* n + 1: cdf[0] = 0, cdf[n] = 1 */
     float func_int;    /* ∫ f over [0,1) = Σ f / n; 0 if f ≡ 0 (then the cdf is uniform) */
+    /* Guide table (the cutpoint method): n_guide, the smallest power of two ≥ ⌊n/4⌋
+     * (so at most n/2 for n ≥ 2), and guide[k] for k = 0..n_guide the largest i < n with cdf[i] ≤ k/n_guide.
+     * A u in [k, k+1)/n_guide has its piece in [guide[k], guide[k+1]], so sampling
+     * searches those few pieces instead of all n: the same piece, bit for bit, as a
+     * binary search over the whole cdf, from one or two cache lines. */
+    uint32_t n_guide;
+    const uint32_t *guide;
 } ts_distribution1d;
 
 /* Builds from f[0..n) (copied), n ≥ 1. All-zero (or non-finite-free zero) input gives a
