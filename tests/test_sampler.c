@@ -173,6 +173,31 @@ static void test_pixel_cache_independent(void **state)
     check_pixel_cache(TS_SAMPLER_INDEPENDENT);
 }
 
+/* A dimension's seeds taken once (ts_sampler_dim) give the pure values bit for bit: both
+ * samplers, pixels, dimensions in and past the pixel cache's range, indices up to 2^32−1
+ * (the arrays' index st·n + j). Deterministic, exact. */
+static void test_dim_arrays(void **state)
+{
+    (void)state;
+    for (int type = 0; type < 2; type++) {
+        ts_sampler s = {type ? TS_SAMPLER_INDEPENDENT : TS_SAMPLER_SOBOL, 0x9e3779b9u * (uint32_t)(type + 1)};
+        for (uint32_t p = 0; p < 12; p++)
+            for (uint32_t dim = 0; dim < 70; dim += 3) {
+                uint32_t px = ts_hash_u32(p) % 4096, py = ts_hash_u32(p + 77) % 4096;
+                ts_sampler_dim d;
+                ts_sampler_dim_init(&s, px, py, dim, &d);
+                for (uint32_t k = 0; k < 600; k++) {
+                    uint32_t index = k < 512 ? k : ts_hash_u32(k * 31 + dim);
+                    if (k == 599) index = UINT32_MAX;
+                    ts_vec2 a = ts_sampler_dim_value_2d(&d, index), b = ts_sampler_value_2d(&s, px, py, index, dim);
+                    if (memcmp(&a, &b, sizeof a) != 0)
+                        fail_msg("%s (%u, %u) dim %u index %u: (%a, %a) != (%a, %a)", ts_sampler_type_name(s.type), px,
+                                 py, dim, index, (double)a.x, (double)a.y, (double)b.x, (double)b.y);
+                }
+            }
+    }
+}
+
 static void test_sobol_order_independent(void **state)
 {
     (void)state;
@@ -376,6 +401,7 @@ int main(void)
         cmocka_unit_test(test_sobol_order_independent),
         cmocka_unit_test(test_pixel_cache_sobol),
         cmocka_unit_test(test_pixel_cache_independent),
+        cmocka_unit_test(test_dim_arrays),
         cmocka_unit_test(test_independent_deterministic),
         cmocka_unit_test(test_sobol_decorrelated),
         cmocka_unit_test(test_sobol_cross_dimension_uniform),

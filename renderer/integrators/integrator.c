@@ -145,8 +145,7 @@ static ts_rgb estimate_direct(const ts_scene *s, const ts_interaction *si, const
             Li = ts_area_light_l(light, &hit, ts_vec3_neg(bs.wi));
         }
     } else if (light->type == TS_LIGHT_INFINITE) {
-        light_pdf = ts_light_pdf_li(light, s->shapes, si, bs.wi);
-        Li = ts_light_le(light, &ray);
+        Li = ts_light_le_pdf(light, bs.wi, &light_pdf); /* the ray's direction is bs.wi */
     }
     if (ts_rgb_is_black(Li) || !(light_pdf > 0)) return Ld;
     float w = sampling == TS_SAMPLING_BSDF ? 1.0f : power_heuristic(bs.pdf, light_pdf);
@@ -206,15 +205,20 @@ static ts_rgb sample_all_lights(const ts_scene *s, uint32_t fx, const ts_interac
     for (uint32_t li = 0; li < s->n_lights && !stopped(c); li++) {
         uint32_t n = light_samples(s, li), dim = st->dim;
         st->dim += 3;
+        /* The three dimensions' seeds once for the light's n samples (sampler.h). */
+        ts_sampler_dim d_light, d_lobe, d_bsdf;
+        ts_sampler_dim_init(&sampler, st->px, st->py, dim, &d_light);
+        ts_sampler_dim_init(&sampler, st->px, st->py, dim + 1, &d_lobe);
+        ts_sampler_dim_init(&sampler, st->px, st->py, dim + 2, &d_bsdf);
         ts_rgb Ll = ts_rgb_gray(0);
         for (uint32_t j = 0; j < n; j++) {
             uint32_t index = st->index * n + j;
-            ts_vec2 u_light = ts_sampler_value_2d(&sampler, st->px, st->py, index, dim);
+            ts_vec2 u_light = ts_sampler_dim_value_2d(&d_light, index);
             float u_lobe = 0;
             ts_vec2 u_bsdf = {0, 0};
             if (nee_samples_bsdf(fx)) {
-                if (fx & TS_EFFECT_LOBE_CHOICE) u_lobe = ts_sampler_value_1d(&sampler, st->px, st->py, index, dim + 1);
-                u_bsdf = ts_sampler_value_2d(&sampler, st->px, st->py, index, dim + 2);
+                if (fx & TS_EFFECT_LOBE_CHOICE) u_lobe = ts_sampler_dim_value_2d(&d_lobe, index).x;
+                u_bsdf = ts_sampler_dim_value_2d(&d_bsdf, index);
             }
             Ll = ts_rgb_add(Ll, estimate_direct(s, si, bsdf, li, u_light, u_lobe, u_bsdf, c));
         }

@@ -191,6 +191,18 @@ float ts_sampler_value_1d(const ts_sampler *s, uint32_t px, uint32_t py, uint32_
     return value_2d(s->type, s->seed, px, py, index, dim).x;
 }
 
+void ts_sampler_dim_init(const ts_sampler *s, uint32_t px, uint32_t py, uint32_t dim, ts_sampler_dim *out)
+{
+    *out = (ts_sampler_dim){s->type, s->seed, px, py, dim, {0, 0, 0}};
+    if (s->type == TS_SAMPLER_SOBOL) dim_seeds(ts_hash_combine(pixel_hash(s->seed, px, py), dim), out->seeds);
+}
+
+ts_vec2 ts_sampler_dim_value_2d(const ts_sampler_dim *d, uint32_t index)
+{
+    if (d->type == TS_SAMPLER_INDEPENDENT) return independent_value(d->seed, d->px, d->py, index, d->dim);
+    return sobol_value_reversed(d->seeds, reverse_bits(index));
+}
+
 const char *ts_sampler_type_name(ts_sampler_type type)
 {
     switch (type) {

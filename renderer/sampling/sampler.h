@@ -82,6 +82,24 @@ ts_vec2 ts_sampler_value_2d(const ts_sampler *s, uint32_t px, uint32_t py, uint3
 /* Pure: the 1-D value of that dimension, ts_sampler_value_2d(...).x. */
 float ts_sampler_value_1d(const ts_sampler *s, uint32_t px, uint32_t py, uint32_t index, uint32_t dim);
 
+/* One dimension of one pixel, for arrays of sample values of that dimension (pbrt-v3's
+ * sample arrays: the integrator's many light samples of one camera sample): what
+ * ts_sampler_value_2d computes before it looks at the sample index — for sobol the
+ * pixel's and the dimension's hashes and the three scramble seeds — done once, so each
+ * value costs only its index's shuffle and scrambles. Caller storage, immutable after
+ * init. */
+typedef struct ts_sampler_dim {
+    ts_sampler_type type;
+    uint32_t seed, px, py, dim;
+    uint32_t seeds[3]; /* sobol */
+} ts_sampler_dim;
+
+void ts_sampler_dim_init(const ts_sampler *s, uint32_t px, uint32_t py, uint32_t dim, ts_sampler_dim *out);
+
+/* Pure: ts_sampler_value_2d(s, px, py, index, dim) of d's sampler, pixel and dimension,
+ * bit for bit. */
+ts_vec2 ts_sampler_dim_value_2d(const ts_sampler_dim *d, uint32_t index);
+
 /* Name used in the scene format ("sobol", "independent"). */
 const char *ts_sampler_type_name(ts_sampler_type type);
 
