@@ -62,6 +62,10 @@ bool ts_envmap_sample(const ts_envmap *m, ts_vec2 u, ts_vec3 *w, float *pdf);
 /* Density per solid angle of ts_envmap_sample for unit direction w (light space). */
 float ts_envmap_pdf(const ts_envmap *m, ts_vec3 w);
 
+/* ts_envmap_lookup(m, w) with *pdf = ts_envmap_pdf(m, w), bit for bit, w's (u, v)
+ * computed once (the MIS weight of a BSDF sample that escapes needs both). */
+ts_rgb ts_envmap_lookup_pdf(const ts_envmap *m, ts_vec3 w, float *pdf);
+
 /* Lat-long coordinates of a unit direction and back. */
 ts_vec2 ts_envmap_dir_to_uv(ts_vec3 w);
 ts_vec3 ts_envmap_uv_to_dir(ts_vec2 uv);

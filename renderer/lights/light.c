@@ -215,6 +215,22 @@ ts_rgb ts_light_le(const ts_light *l, const ts_ray *ray)
     return ts_rgb_mul(l->color, ts_envmap_lookup(l->map, world_to_map(l, ray->d, NULL)));
 }
 
+ts_rgb ts_light_le_pdf(const ts_light *l, ts_vec3 wi, float *pdf)
+{
+    *pdf = 0;
+    if (l->type != TS_LIGHT_INFINITE) return ts_rgb_gray(0);
+    if (!l->map) {
+        *pdf = ts_uniform_sphere_pdf();
+        return l->color;
+    }
+    double jac;
+    float pdf_map;
+    ts_rgb L = ts_envmap_lookup_pdf(l->map, world_to_map(l, wi, &jac), &pdf_map);
+    double p = pdf_map * jac;
+    *pdf = p < FLT_MAX ? (float)p : 0.0f;
+    return ts_rgb_mul(l->color, L);
+}
+
 ts_rgb ts_light_power(const ts_light *l, const ts_shape *shapes)
 {
     (void)shapes;

@@ -117,6 +117,9 @@ float ts_light_pdf_li_hit(const ts_light *l, const ts_shape *shapes, const ts_in
 
 /* Infinite lights: radiance along an escaping ray (black for every other type). */
 ts_rgb ts_light_le(const ts_light *l, const ts_ray *ray);
+/* Infinite lights: ts_light_le along direction wi with *pdf = ts_light_pdf_li(l, …, wi),
+ * bit for bit, the map's coordinates of wi found once; black and 0 for other types. */
+ts_rgb ts_light_le_pdf(const ts_light *l, ts_vec3 wi, float *pdf);
 /* Area lights: emitted radiance from a hit si on its shape towards w (black behind a
  * one-sided emitter). */
 ts_rgb ts_area_light_l(const ts_light *l, const ts_interaction *si, ts_vec3 w);
