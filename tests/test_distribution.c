@@ -87,6 +87,12 @@ static void test_2d(void **state)
             ts_vec2 x = ts_distribution2d_sample(&d, u, &pdf);
             assert_true(pdf > 0);
             assert_close(pdf, ts_distribution2d_pdf(&d, x), 1e-5 * pdf, "sample pdf = pdf");
+            /* The cell form gives the same value and, from the cell's own f, the same
+             * density, bit for bit. */
+            uint32_t iu, iv;
+            ts_vec2 xc = ts_distribution2d_sample_cell(&d, u, &iu, &iv);
+            assert_true(xc.x == x.x && xc.y == x.y && iu < 4 && iv < 3);
+            assert_true(ts_distribution2d_pdf_cell(&d, iv, f[iv * 4 + iu]) == pdf);
             ts_vec2 back = ts_distribution2d_invert(&d, x);
             assert_close(back.x, u.x, 1e-4, "invert u");
             assert_close(back.y, u.y, 1e-4, "invert v");

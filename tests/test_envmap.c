@@ -220,10 +220,12 @@ static void test_load_exr(void **state)
     assert_int_equal(m->height, 2);
     int rc = ts_image_channel(&img, "R"), gc = ts_image_channel(&img, "G"), bc = ts_image_channel(&img, "B");
     for (int k = 0; k < 8; k++) {
-        assert_close(m->texels[k].r, img.data[k * 3 + rc], 0, "R");
-        assert_close(m->texels[k].g, img.data[k * 3 + gc], 0, "G");
-        assert_close(m->texels[k].b, img.data[k * 3 + bc], 0, "B");
+        assert_close(m->texels[k].c.r, img.data[k * 3 + rc], 0, "R");
+        assert_close(m->texels[k].c.g, img.data[k * 3 + gc], 0, "G");
+        assert_close(m->texels[k].c.b, img.data[k * 3 + bc], 0, "B");
     }
+    /* Each texel's weight is its cell's value in the distribution, bit for bit. */
+    for (uint32_t k = 0; k < 8; k++) assert_true(m->texels[k].weight == m->distrib.conditional[k / 4].func[k % 4]);
     ts_envmap_destroy(m);
     ts_image_fini(&img);
     /* A missing file is an error naming it, not a crash. */

@@ -22,7 +22,7 @@ static ts_rgb texel(const ts_envmap *m, int64_t i, int64_t j)
     if (i < 0) i += w;
     if (j < 0) j = 0;
     if (j >= (int64_t)m->height) j = m->height - 1;
-    return m->texels[(size_t)j * m->width + (size_t)i];
+    return m->texels[(size_t)j * m->width + (size_t)i].c;
 }
 
 static ts_rgb rgb_lerp(float t, ts_rgb a, ts_rgb b)
@@ -43,8 +43,8 @@ static ts_rgb row_lookup(const ts_envmap *m, int64_t j, double x)
         if (i0 < 0) i0 += w;
     }
     int64_t i1 = i0 + 1 < w ? i0 + 1 : 0;
-    const ts_rgb *row = m->texels + (size_t)j * m->width;
-    return rgb_lerp(fx, row[i0], row[i1]);
+    const ts_envmap_texel *row = m->texels + (size_t)j * m->width;
+    return rgb_lerp(fx, row[i0].c, row[i1].c);
 }
 
 ts_rgb ts_envmap_lookup_uv(const ts_envmap *m, ts_vec2 uv)
@@ -86,8 +86,9 @@ bool ts_envmap_sample(const ts_envmap *m, ts_vec2 u, ts_vec3 *w, float *pdf)
 {
     *pdf = 0;
     if (!(ts_distribution2d_integral(&m->distrib) > 0)) return false;
-    float pdf_uv;
-    ts_vec2 uv = ts_distribution2d_sample(&m->distrib, u, &pdf_uv);
+    uint32_t iu, iv;
+    ts_vec2 uv = ts_distribution2d_sample_cell(&m->distrib, u, &iu, &iv);
+    float pdf_uv = ts_distribution2d_pdf_cell(&m->distrib, iv, m->texels[(size_t)iv * m->width + iu].weight);
     double theta = uv.y * TS_PI_D, phi = uv.x * 2 * TS_PI_D;
     double st = sin(theta);
     if (!(st > 0) || !(pdf_uv > 0)) return false;
@@ -106,7 +107,10 @@ static float pdf_at(const ts_envmap *m, ts_vec3 w, ts_vec2 uv)
     if (!(st > 0)) return 0;
     double len = sqrt(st * st + (double)w.z * w.z);
     st /= len;
-    double p = ts_distribution2d_pdf(&m->distrib, uv) / (2 * TS_PI_D * TS_PI_D * st);
+    uint32_t iu, iv;
+    if (!ts_distribution2d_cell(&m->distrib, uv, &iu, &iv)) return 0;
+    float pdf_uv = ts_distribution2d_pdf_cell(&m->distrib, iv, m->texels[(size_t)iv * m->width + iu].weight);
+    double p = pdf_uv / (2 * TS_PI_D * TS_PI_D * st);
     return p < FLT_MAX ? (float)p : 0.0f;
 }
 
@@ -129,7 +133,7 @@ ts_status ts_envmap_create(const ts_rgb *texels, uint32_t width, uint32_t height
     ts_arena_init(&m->arena, 0);
     ts_status st = TS_OK;
     size_t n = (size_t)width * height;
-    ts_rgb *tx = ts_arena_calloc(&m->arena, n, sizeof *tx);
+    ts_envmap_texel *tx = ts_arena_calloc(&m->arena, n, sizeof *tx);
     float *weight = malloc(n * sizeof *weight);
     if (!tx || !weight) {
         st = ts_error_set(err, TS_ERR_NOMEM, "environment map: out of memory for %u×%u texels", width, height);
@@ -143,7 +147,7 @@ ts_status ts_envmap_create(const ts_rgb *texels, uint32_t width, uint32_t height
                               k % width, k / width, c.r, c.g, c.b);
             goto fail;
         }
-        tx[k] = c;
+        tx[k].c = c;
     }
     m->width = width;
     m->height = height;
@@ -153,7 +157,7 @@ ts_status ts_envmap_create(const ts_rgb *texels, uint32_t width, uint32_t height
     for (uint32_t j = 0; j < height; j++) {
         double d_omega = (2 * TS_PI_D / width) * (cos(j * TS_PI_D / height) - cos((j + 1) * TS_PI_D / height));
         for (uint32_t i = 0; i < width; i++) {
-            ts_rgb c = tx[(size_t)j * width + i];
+            ts_rgb c = tx[(size_t)j * width + i].c;
             mean[0] += c.r * d_omega, mean[1] += c.g * d_omega, mean[2] += c.b * d_omega;
             if (j == 0) pole[0][0] += c.r, pole[0][1] += c.g, pole[0][2] += c.b;
             if (j == height - 1) pole[1][0] += c.r, pole[1][1] += c.g, pole[1][2] += c.b;
@@ -174,7 +178,8 @@ ts_status ts_envmap_create(const ts_rgb *texels, uint32_t width, uint32_t height
                 for (int di = -1; di <= 1; di++) mx = ts_maxf(mx, texel_value(texel(m, (int64_t)i + di, (int64_t)j + dj)));
             if (j == 0) mx = ts_maxf(mx, texel_value(m->pole_mean[0]));
             if (j == height - 1) mx = ts_maxf(mx, texel_value(m->pole_mean[1]));
-            weight[(size_t)j * width + i] = (float)(mx * s);
+            /* ≥ 0, so it is the distribution's |f| of the cell too */
+            weight[(size_t)j * width + i] = tx[(size_t)j * width + i].weight = (float)(mx * s);
         }
     }
     st = ts_distribution2d_init(&m->distrib, weight, width, height, &m->arena, err);

@@ -29,10 +29,18 @@
 #include "core/vecmath.h"
 #include "sampling/distribution.h"
 
+/* A texel's radiance and its sampling weight, the distribution's value of its cell: the
+ * weight sits beside the radiance because every sample and every pdf query reads both
+ * (16 bytes, so a texel never straddles a cache line). */
+typedef struct ts_envmap_texel {
+    ts_rgb c;
+    float weight;
+} ts_envmap_texel;
+
 typedef struct ts_envmap {
     ts_arena arena;            /* owns texels and the distribution */
     uint32_t width, height;
-    const ts_rgb *texels;      /* width·height, row-major, row 0 = θ near 0 */
+    const ts_envmap_texel *texels; /* width·height, row-major, row 0 = θ near 0 */
     ts_rgb pole_mean[2];       /* mean of row 0 and of the last row */
     ts_distribution2d distrib; /* over (u, v) */
     ts_rgb mean_radiance;      /* Σ texel · solid angle / 4π (for the light's power) */

@@ -91,12 +91,17 @@ float ts_distribution1d_sample_continuous(const ts_distribution1d *d, float u, f
     return x < 1.0f ? x : TS_ONE_MINUS_EPSILON;
 }
 
+/* The piece of x in [0,1] of ts_distribution1d_pdf. */
+static uint32_t piece_of(const ts_distribution1d *d, float x)
+{
+    uint32_t i = (uint32_t)(x * d->n);
+    return i < d->n ? i : d->n - 1;
+}
+
 float ts_distribution1d_pdf(const ts_distribution1d *d, float x)
 {
     if (!(x >= 0.0f && x <= 1.0f)) return 0.0f;
-    uint32_t i = (uint32_t)(x * d->n);
-    if (i >= d->n) i = d->n - 1;
-    return piece_pdf(d, i);
+    return piece_pdf(d, piece_of(d, x));
 }
 
 float ts_distribution1d_invert(const ts_distribution1d *d, float x)
@@ -148,23 +153,43 @@ ts_status ts_distribution2d_init(ts_distribution2d *d, const float *f, uint32_t 
     return TS_OK;
 }
 
+ts_vec2 ts_distribution2d_sample_cell(const ts_distribution2d *d, ts_vec2 u, uint32_t *iu, uint32_t *iv)
+{
+    float y = ts_distribution1d_sample_continuous(&d->marginal, u.y, NULL, iv);
+    float x = ts_distribution1d_sample_continuous(&d->conditional[*iv], u.x, NULL, iu);
+    return (ts_vec2){x, y};
+}
+
+/* Density of piece i of a 1D distribution whose function value there is f: piece_pdf. */
+static float piece_pdf_of(const ts_distribution1d *d, float f) { return d->func_int > 0 ? f / d->func_int : 1.0f; }
+
+float ts_distribution2d_pdf_cell(const ts_distribution2d *d, uint32_t iv, float f_cell)
+{
+    return piece_pdf(&d->marginal, iv) * piece_pdf_of(&d->conditional[iv], f_cell);
+}
+
 ts_vec2 ts_distribution2d_sample(const ts_distribution2d *d, ts_vec2 u, float *pdf)
 {
-    float pdf_v, pdf_u;
-    uint32_t v;
-    float y = ts_distribution1d_sample_continuous(&d->marginal, u.y, &pdf_v, &v);
-    float x = ts_distribution1d_sample_continuous(&d->conditional[v], u.x, &pdf_u, NULL);
-    if (pdf) *pdf = pdf_v * pdf_u;
-    return (ts_vec2){x, y};
+    uint32_t iu, iv;
+    ts_vec2 x = ts_distribution2d_sample_cell(d, u, &iu, &iv);
+    if (pdf) *pdf = ts_distribution2d_pdf_cell(d, iv, d->conditional[iv].func[iu]);
+    return x;
+}
+
+bool ts_distribution2d_cell(const ts_distribution2d *d, ts_vec2 p, uint32_t *iu, uint32_t *iv)
+{
+    *iu = *iv = 0;
+    if (!(p.x >= 0.0f && p.x <= 1.0f && p.y >= 0.0f && p.y <= 1.0f)) return false;
+    *iv = piece_of(&d->marginal, p.y);
+    *iu = piece_of(&d->conditional[*iv], p.x);
+    return true;
 }
 
 float ts_distribution2d_pdf(const ts_distribution2d *d, ts_vec2 p)
 {
-    if (!(p.x >= 0.0f && p.x <= 1.0f && p.y >= 0.0f && p.y <= 1.0f)) return 0.0f;
-    uint32_t iv = (uint32_t)(p.y * d->nv);
-    if (iv >= d->nv) iv = d->nv - 1;
-    float pv = ts_distribution1d_pdf(&d->marginal, p.y);
-    return pv * ts_distribution1d_pdf(&d->conditional[iv], p.x);
+    uint32_t iu, iv;
+    if (!ts_distribution2d_cell(d, p, &iu, &iv)) return 0.0f;
+    return ts_distribution2d_pdf_cell(d, iv, d->conditional[iv].func[iu]);
 }
 
 ts_vec2 ts_distribution2d_invert(const ts_distribution2d *d, ts_vec2 p)

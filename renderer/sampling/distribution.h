@@ -66,6 +66,18 @@ ts_status ts_distribution2d_init(ts_distribution2d *d, const float *f, uint32_t 
 ts_vec2 ts_distribution2d_sample(const ts_distribution2d *d, ts_vec2 u, float *pdf);
 /* Density at p in [0,1]². */
 float ts_distribution2d_pdf(const ts_distribution2d *d, ts_vec2 p);
+/* The same two for callers that keep f next to data they read anyway (the environment
+ * map's texels), so the table's own copy of f is not read: ts_distribution2d_sample's
+ * value with its cell (column *iu, row *iv) instead of its density, and the density of
+ * the cell in row iv whose value is f_cell (f[iv][iu] as given to init):
+ * ts_distribution2d_pdf_cell(d, iv, |f[iv][iu]|) is bit for bit the density
+ * ts_distribution2d_sample returns, and with the cell of p the one ts_distribution2d_pdf
+ * returns (ts_distribution2d_cell). */
+ts_vec2 ts_distribution2d_sample_cell(const ts_distribution2d *d, ts_vec2 u, uint32_t *iu, uint32_t *iv);
+float ts_distribution2d_pdf_cell(const ts_distribution2d *d, uint32_t iv, float f_cell);
+/* The cell of p in [0,1]² whose density ts_distribution2d_pdf gives (false, and 0, 0,
+ * where that density is 0 because p is outside). */
+bool ts_distribution2d_cell(const ts_distribution2d *d, ts_vec2 p, uint32_t *iu, uint32_t *iv);
 /* Inverse of ts_distribution2d_sample. */
 ts_vec2 ts_distribution2d_invert(const ts_distribution2d *d, ts_vec2 p);
 /* Integral of f over [0,1)² (mean of f). */
