@@ -190,7 +190,8 @@ static void test_dim_arrays(void **state)
                     uint32_t index = k < 512 ? k : ts_hash_u32(k * 31 + dim);
                     if (k == 599) index = UINT32_MAX;
                     ts_vec2 a = ts_sampler_dim_value_2d(&d, index), b = ts_sampler_value_2d(&s, px, py, index, dim);
-                    if (memcmp(&a, &b, sizeof a) != 0)
+                    float x = ts_sampler_dim_value_1d(&d, index);
+                    if (memcmp(&a, &b, sizeof a) != 0 || memcmp(&x, &b.x, sizeof x) != 0)
                         fail_msg("%s (%u, %u) dim %u index %u: (%a, %a) != (%a, %a)", ts_sampler_type_name(s.type), px,
                                  py, dim, index, (double)a.x, (double)a.y, (double)b.x, (double)b.y);
                 }

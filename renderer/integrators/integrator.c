@@ -100,19 +100,39 @@ static float power_heuristic(float f_pdf, float g_pdf) { return ts_power_heurist
 /* Whether the sample should end now (ts_counters.stop). */
 static bool stopped(const ts_counters *c) { return c->stop && atomic_load_explicit(c->stop, memory_order_relaxed); }
 
+static bool is_delta_light(const ts_light *light)
+{
+    return light->type == TS_LIGHT_POINT || light->type == TS_LIGHT_SPOT || light->type == TS_LIGHT_DISTANT;
+}
+
+/* EstimateDirect's light sample (u_light), if it takes one: false if it does not or the
+ * sample is empty. Pure, so it may run ahead of the rest of its estimate. */
+static bool direct_light_sample(const ts_scene *s, const ts_interaction *si, const ts_light *light, ts_vec2 u_light,
+                                ts_light_sample *ls)
+{
+    if (!is_delta_light(light) && s->integrator.sampling == TS_SAMPLING_BSDF) {
+        *ls = (ts_light_sample){0};
+        return false;
+    }
+    return ts_light_sample_li(light, s->shapes, si, u_light, ls);
+}
+
 /* pbrt's EstimateDirect: light `li` sampled with u_light, the BSDF with (u_lobe, u_bsdf),
  * combined by the power heuristic; delta lights get light sampling only. The BSDF here
  * samples all its lobes; a specular pick adds nothing (specular transport is handled by
- * the caller), which stays unbiased because the returned pdf includes the lobe choice. */
-static ts_rgb estimate_direct(const ts_scene *s, const ts_interaction *si, const ts_bsdf *bsdf, uint32_t li,
-                              ts_vec2 u_light, float u_lobe, ts_vec2 u_bsdf, ts_counters *c)
+ * the caller), which stays unbiased because the returned pdf includes the lobe choice.
+ * The light sample comes made (direct_light_sample: sampled, and ls): sample_all_lights
+ * makes a batch of them first. */
+static ts_rgb estimate_direct_sampled(const ts_scene *s, const ts_interaction *si, const ts_bsdf *bsdf, uint32_t li,
+                                      bool sampled, const ts_light_sample *ls_made, float u_lobe, ts_vec2 u_bsdf,
+                                      ts_counters *c)
 {
     const ts_light *light = &s->lights[li];
     const ts_direct_sampling sampling = s->integrator.sampling;
-    bool delta = light->type == TS_LIGHT_POINT || light->type == TS_LIGHT_SPOT || light->type == TS_LIGHT_DISTANT;
+    bool delta = is_delta_light(light);
     ts_rgb Ld = ts_rgb_gray(0);
-    ts_light_sample ls = {0};
-    if ((delta || sampling != TS_SAMPLING_BSDF) && ts_light_sample_li(light, s->shapes, si, u_light, &ls)) {
+    const ts_light_sample ls = *ls_made;
+    if (sampled) {
         ts_rgb f = ts_rgb_scale(ts_bsdf_f(bsdf, si->wo, ls.wi), ts_vec3_absdot(ls.wi, si->ns));
         if (!ts_rgb_is_black(f)) {
             ts_ray shadow = ts_spawn_ray_to(si, s->shapes, ls.p_light, ls.p_light_error, ls.n_light);
@@ -135,6 +155,8 @@ static ts_rgb estimate_direct(const ts_scene *s, const ts_interaction *si, const
     ts_ray ray = ts_spawn_ray(si, s->shapes, bs.wi);
     ts_interaction hit;
     c->other_rays++;
+    ts_light_query query; /* an environment map's texels are fetched while the ray is traced */
+    if (light->type == TS_LIGHT_INFINITE) ts_light_query_begin(light, bs.wi, &query);
     ts_rgb Li = ts_rgb_gray(0);
     float light_pdf = 0;
     if (ts_accel_intersect(s->accel, &ray, &hit)) {
@@ -145,11 +167,19 @@ static ts_rgb estimate_direct(const ts_scene *s, const ts_interaction *si, const
             Li = ts_area_light_l(light, &hit, ts_vec3_neg(bs.wi));
         }
     } else if (light->type == TS_LIGHT_INFINITE) {
-        Li = ts_light_le_pdf(light, bs.wi, &light_pdf); /* the ray's direction is bs.wi */
+        Li = ts_light_query_le_pdf(light, &query, &light_pdf); /* the ray's direction is bs.wi */
     }
     if (ts_rgb_is_black(Li) || !(light_pdf > 0)) return Ld;
     float w = sampling == TS_SAMPLING_BSDF ? 1.0f : power_heuristic(bs.pdf, light_pdf);
     return ts_rgb_add(Ld, ts_rgb_scale(ts_rgb_mul(f, Li), w / bs.pdf));
+}
+
+static ts_rgb estimate_direct(const ts_scene *s, const ts_interaction *si, const ts_bsdf *bsdf, uint32_t li,
+                              ts_vec2 u_light, float u_lobe, ts_vec2 u_bsdf, ts_counters *c)
+{
+    ts_light_sample ls;
+    bool sampled = direct_light_sample(s, si, &s->lights[li], u_light, &ls);
+    return estimate_direct_sampled(s, si, bsdf, li, sampled, &ls, u_lobe, u_bsdf, c);
 }
 
 /* The random numbers of what the effects rule out are not computed; their dimensions are
@@ -195,6 +225,8 @@ static uint32_t light_samples(const ts_scene *s, uint32_t li)
     return n ? n : (uint32_t)s->integrator.samples_per_light;
 }
 
+#define LIGHT_BATCH 8 /* light samples made ahead in sample_all_lights */
+
 /* pbrt's UniformSampleAllLights: each light's samples (light_samples), drawn as arrays
  * (consecutive sequence indices of one dimension) so that they are stratified together. */
 static ts_rgb sample_all_lights(const ts_scene *s, uint32_t fx, const ts_interaction *si, const ts_bsdf *bsdf,
@@ -211,16 +243,27 @@ static ts_rgb sample_all_lights(const ts_scene *s, uint32_t fx, const ts_interac
         ts_sampler_dim_init(&sampler, st->px, st->py, dim + 1, &d_lobe);
         ts_sampler_dim_init(&sampler, st->px, st->py, dim + 2, &d_bsdf);
         ts_rgb Ll = ts_rgb_gray(0);
-        for (uint32_t j = 0; j < n; j++) {
-            uint32_t index = st->index * n + j;
-            ts_vec2 u_light = ts_sampler_dim_value_2d(&d_light, index);
-            float u_lobe = 0;
-            ts_vec2 u_bsdf = {0, 0};
-            if (nee_samples_bsdf(fx)) {
-                if (fx & TS_EFFECT_LOBE_CHOICE) u_lobe = ts_sampler_dim_value_2d(&d_lobe, index).x;
-                u_bsdf = ts_sampler_dim_value_2d(&d_bsdf, index);
+        /* The light samples of a batch are made first, then their estimates in order: the
+         * same values and sum, but a batch's environment-map searches, independent of each
+         * other, overlap their cache misses. */
+        for (uint32_t j0 = 0; j0 < n; j0 += LIGHT_BATCH) {
+            uint32_t nb = n - j0 < LIGHT_BATCH ? n - j0 : LIGHT_BATCH;
+            ts_light_sample ls[LIGHT_BATCH];
+            bool sampled[LIGHT_BATCH];
+            for (uint32_t k = 0; k < nb; k++) {
+                ts_vec2 u_light = ts_sampler_dim_value_2d(&d_light, st->index * n + j0 + k);
+                sampled[k] = direct_light_sample(s, si, &s->lights[li], u_light, &ls[k]);
             }
-            Ll = ts_rgb_add(Ll, estimate_direct(s, si, bsdf, li, u_light, u_lobe, u_bsdf, c));
+            for (uint32_t k = 0; k < nb; k++) {
+                uint32_t index = st->index * n + j0 + k;
+                float u_lobe = 0;
+                ts_vec2 u_bsdf = {0, 0};
+                if (nee_samples_bsdf(fx)) {
+                    if (fx & TS_EFFECT_LOBE_CHOICE) u_lobe = ts_sampler_dim_value_1d(&d_lobe, index);
+                    u_bsdf = ts_sampler_dim_value_2d(&d_bsdf, index);
+                }
+                Ll = ts_rgb_add(Ll, estimate_direct_sampled(s, si, bsdf, li, sampled[k], &ls[k], u_lobe, u_bsdf, c));
+            }
         }
         L = ts_rgb_add(L, ts_rgb_scale(Ll, 1.0f / (float)n));
     }

@@ -82,7 +82,8 @@ ts_vec3 ts_envmap_uv_to_dir(ts_vec2 uv)
 
 ts_rgb ts_envmap_lookup(const ts_envmap *m, ts_vec3 w) { return ts_envmap_lookup_uv(m, ts_envmap_dir_to_uv(w)); }
 
-bool ts_envmap_sample(const ts_envmap *m, ts_vec2 u, ts_vec3 *w, float *pdf)
+/* uv_out: the sampled (u, v) (set when true is returned). */
+static bool sample_uv(const ts_envmap *m, ts_vec2 u, ts_vec3 *w, float *pdf, ts_vec2 *uv_out)
 {
     *pdf = 0;
     if (!(ts_distribution2d_integral(&m->distrib) > 0)) return false;
@@ -96,6 +97,22 @@ bool ts_envmap_sample(const ts_envmap *m, ts_vec2 u, ts_vec3 *w, float *pdf)
     double p = pdf_uv / (2 * TS_PI_D * TS_PI_D * st);
     if (!(p < FLT_MAX)) return false;
     *pdf = (float)p;
+    *uv_out = uv;
+    return true;
+}
+
+bool ts_envmap_sample(const ts_envmap *m, ts_vec2 u, ts_vec3 *w, float *pdf)
+{
+    ts_vec2 uv;
+    return sample_uv(m, u, w, pdf, &uv);
+}
+
+bool ts_envmap_sample_li(const ts_envmap *m, ts_vec2 u, ts_vec3 *w, float *pdf, ts_rgb *L)
+{
+    ts_vec2 uv;
+    *L = ts_rgb_gray(0);
+    if (!sample_uv(m, u, w, pdf, &uv)) return false;
+    *L = ts_envmap_lookup_uv(m, uv);
     return true;
 }
 
@@ -116,11 +133,31 @@ static float pdf_at(const ts_envmap *m, ts_vec3 w, ts_vec2 uv)
 
 float ts_envmap_pdf(const ts_envmap *m, ts_vec3 w) { return pdf_at(m, w, ts_envmap_dir_to_uv(w)); }
 
+void ts_envmap_query_begin(const ts_envmap *m, ts_vec3 w, ts_envmap_query *q)
+{
+    q->w = w;
+    q->uv = ts_envmap_dir_to_uv(w);
+    /* The texel of the pdf's cell and its row neighbour towards (u, v), which with the
+     * column neighbours in their cache lines are what the bilinear lookup reads. Only a
+     * hint: nothing depends on it but the time. */
+    float x = q->uv.x * m->width, y = q->uv.y * m->height;
+    uint32_t i = x < m->width ? (uint32_t)x : m->width - 1, j = y < m->height ? (uint32_t)y : m->height - 1;
+    uint32_t j2 = y - j >= 0.5f ? (j + 1 < m->height ? j + 1 : j) : (j > 0 ? j - 1 : j);
+    __builtin_prefetch(m->texels + (size_t)j * m->width + i);
+    __builtin_prefetch(m->texels + (size_t)j2 * m->width + i);
+}
+
+ts_rgb ts_envmap_query_lookup_pdf(const ts_envmap *m, const ts_envmap_query *q, float *pdf)
+{
+    *pdf = pdf_at(m, q->w, q->uv);
+    return ts_envmap_lookup_uv(m, q->uv);
+}
+
 ts_rgb ts_envmap_lookup_pdf(const ts_envmap *m, ts_vec3 w, float *pdf)
 {
-    ts_vec2 uv = ts_envmap_dir_to_uv(w);
-    *pdf = pdf_at(m, w, uv);
-    return ts_envmap_lookup_uv(m, uv);
+    ts_envmap_query q;
+    ts_envmap_query_begin(m, w, &q);
+    return ts_envmap_query_lookup_pdf(m, &q, pdf);
 }
 
 ts_status ts_envmap_create(const ts_rgb *texels, uint32_t width, uint32_t height, ts_envmap **out, ts_error *err)

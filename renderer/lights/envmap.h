@@ -67,12 +67,26 @@ ts_rgb ts_envmap_lookup_uv(const ts_envmap *m, ts_vec2 uv);
 /* Direction (light space) sampled with density *pdf per solid angle; false (pdf 0) in the
  * measure-zero case sinθ = 0 or for an all-black map. */
 bool ts_envmap_sample(const ts_envmap *m, ts_vec2 u, ts_vec3 *w, float *pdf);
+/* ts_envmap_sample with *L the radiance there, looked up at the sampled (u, v) itself
+ * (pbrt-v3's Sample_Li: Lmap->Lookup(uv)), not at the (u, v) of the float direction
+ * *w, which differs from it by rounding and costs two atan2. */
+bool ts_envmap_sample_li(const ts_envmap *m, ts_vec2 u, ts_vec3 *w, float *pdf, ts_rgb *L);
 /* Density per solid angle of ts_envmap_sample for unit direction w (light space). */
 float ts_envmap_pdf(const ts_envmap *m, ts_vec3 w);
 
 /* ts_envmap_lookup(m, w) with *pdf = ts_envmap_pdf(m, w), bit for bit, w's (u, v)
  * computed once (the MIS weight of a BSDF sample that escapes needs both). */
 ts_rgb ts_envmap_lookup_pdf(const ts_envmap *m, ts_vec3 w, float *pdf);
+/* The same in two halves, so the texels' cache lines can be fetched while the caller does
+ * other work (traces the BSDF ray that may escape): ts_envmap_query_begin finds w's (u, v) and
+ * prefetches the texels the lookup reads; ts_envmap_query_lookup_pdf is then
+ * ts_envmap_lookup_pdf(m, w, pdf), bit for bit. */
+typedef struct ts_envmap_query {
+    ts_vec3 w;
+    ts_vec2 uv;
+} ts_envmap_query;
+void ts_envmap_query_begin(const ts_envmap *m, ts_vec3 w, ts_envmap_query *q);
+ts_rgb ts_envmap_query_lookup_pdf(const ts_envmap *m, const ts_envmap_query *q, float *pdf);
 
 /* Lat-long coordinates of a unit direction and back. */
 ts_vec2 ts_envmap_dir_to_uv(ts_vec3 w);

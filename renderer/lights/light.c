@@ -161,14 +161,15 @@ bool ts_light_sample_li(const ts_light *l, const ts_shape *shapes, const ts_inte
         if (l->map) {
             ts_vec3 wm;
             float pdf_map;
-            if (!ts_envmap_sample(l->map, u, &wm, &pdf_map)) return false;
+            ts_rgb L_map;
+            if (!ts_envmap_sample_li(l->map, u, &wm, &pdf_map, &L_map)) return false;
             ts_dvec3 ww = ts_xform_vector(&l->to_world, ts_dvec3_from(wm));
             double len = ts_dvec3_length(ww);
             double pdf = pdf_map * len * len * len / fabs(linear_det(&l->to_world));
             if (!(pdf > 0) || !(pdf < FLT_MAX)) return false;
             out->wi = ts_dvec3_to_vec3(ts_dvec3_scale(ww, 1 / len));
             out->pdf = (float)pdf;
-            out->L = ts_rgb_mul(l->color, ts_envmap_lookup(l->map, wm));
+            out->L = ts_rgb_mul(l->color, L_map);
         } else {
             out->wi = ts_sample_uniform_sphere(u);
             out->pdf = ts_uniform_sphere_pdf();
@@ -215,7 +216,14 @@ ts_rgb ts_light_le(const ts_light *l, const ts_ray *ray)
     return ts_rgb_mul(l->color, ts_envmap_lookup(l->map, world_to_map(l, ray->d, NULL)));
 }
 
-ts_rgb ts_light_le_pdf(const ts_light *l, ts_vec3 wi, float *pdf)
+void ts_light_query_begin(const ts_light *l, ts_vec3 wi, ts_light_query *q)
+{
+    q->wi = wi;
+    q->jac = 0;
+    if (l->type == TS_LIGHT_INFINITE && l->map) ts_envmap_query_begin(l->map, world_to_map(l, wi, &q->jac), &q->map);
+}
+
+ts_rgb ts_light_query_le_pdf(const ts_light *l, const ts_light_query *q, float *pdf)
 {
     *pdf = 0;
     if (l->type != TS_LIGHT_INFINITE) return ts_rgb_gray(0);
@@ -223,12 +231,18 @@ ts_rgb ts_light_le_pdf(const ts_light *l, ts_vec3 wi, float *pdf)
         *pdf = ts_uniform_sphere_pdf();
         return l->color;
     }
-    double jac;
     float pdf_map;
-    ts_rgb L = ts_envmap_lookup_pdf(l->map, world_to_map(l, wi, &jac), &pdf_map);
-    double p = pdf_map * jac;
+    ts_rgb L = ts_envmap_query_lookup_pdf(l->map, &q->map, &pdf_map);
+    double p = pdf_map * q->jac;
     *pdf = p < FLT_MAX ? (float)p : 0.0f;
     return ts_rgb_mul(l->color, L);
+}
+
+ts_rgb ts_light_le_pdf(const ts_light *l, ts_vec3 wi, float *pdf)
+{
+    ts_light_query q;
+    ts_light_query_begin(l, wi, &q);
+    return ts_light_query_le_pdf(l, &q, pdf);
 }
 
 ts_rgb ts_light_power(const ts_light *l, const ts_shape *shapes)

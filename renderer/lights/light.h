@@ -33,6 +33,7 @@
 #include "geometry/interaction.h"
 #include "geometry/shape.h"
 #include "geometry/shape_sample.h"
+#include "lights/envmap.h"
 #include "sampling/distribution.h"
 
 struct ts_envmap; /* envmap.h */
@@ -120,6 +121,16 @@ ts_rgb ts_light_le(const ts_light *l, const ts_ray *ray);
 /* Infinite lights: ts_light_le along direction wi with *pdf = ts_light_pdf_li(l, …, wi),
  * bit for bit, the map's coordinates of wi found once; black and 0 for other types. */
 ts_rgb ts_light_le_pdf(const ts_light *l, ts_vec3 wi, float *pdf);
+/* The same in two halves (envmap.h's ts_envmap_query): ts_light_query_begin before the ray
+ * along wi is traced starts fetching the map's texels; ts_light_query_le_pdf after it
+ * escaped is ts_light_le_pdf(l, wi, pdf), bit for bit. */
+typedef struct ts_light_query {
+    ts_vec3 wi;
+    double jac;
+    ts_envmap_query map;
+} ts_light_query;
+void ts_light_query_begin(const ts_light *l, ts_vec3 wi, ts_light_query *q);
+ts_rgb ts_light_query_le_pdf(const ts_light *l, const ts_light_query *q, float *pdf);
 /* Area lights: emitted radiance from a hit si on its shape towards w (black behind a
  * one-sided emitter). */
 ts_rgb ts_area_light_l(const ts_light *l, const ts_interaction *si, ts_vec3 w);

@@ -203,6 +203,13 @@ ts_vec2 ts_sampler_dim_value_2d(const ts_sampler_dim *d, uint32_t index)
     return sobol_value_reversed(d->seeds, reverse_bits(index));
 }
 
+float ts_sampler_dim_value_1d(const ts_sampler_dim *d, uint32_t index)
+{
+    if (d->type == TS_SAMPLER_INDEPENDENT) return independent_value(d->seed, d->px, d->py, index, d->dim).x;
+    uint32_t shuffled = reverse_bits(lk_permute(reverse_bits(index), d->seeds[0]));
+    return bits_to_unit(reverse_bits(lk_permute(shuffled, d->seeds[1])));
+}
+
 const char *ts_sampler_type_name(ts_sampler_type type)
 {
     switch (type) {

@@ -99,6 +99,9 @@ void ts_sampler_dim_init(const ts_sampler *s, uint32_t px, uint32_t py, uint32_t
 /* Pure: ts_sampler_value_2d(s, px, py, index, dim) of d's sampler, pixel and dimension,
  * bit for bit. */
 ts_vec2 ts_sampler_dim_value_2d(const ts_sampler_dim *d, uint32_t index);
+/* Pure: its x alone, ts_sampler_dim_value_2d(d, index).x bit for bit (the y's scramble
+ * is not computed). */
+float ts_sampler_dim_value_1d(const ts_sampler_dim *d, uint32_t index);
 
 /* Name used in the scene format ("sobol", "independent"). */
 const char *ts_sampler_type_name(ts_sampler_type type);
