@@ -44,6 +44,7 @@ struct srv_http {
     bool stopping;               /* guarded by conns_mu */
     pthread_t deadline_thread;
     bool deadline_started;
+    MHD_socket quiesced_fd;      /* the listen socket after srv_http_quiesce, closed at stop */
 };
 
 static double mono_now(void)
@@ -450,6 +451,7 @@ srv_http *srv_http_start(const srv_http_config *cfg, const srv_http_handlers *ha
     }
     h->cfg = *cfg;
     h->handlers = *handlers;
+    h->quiesced_fd = MHD_INVALID_SOCKET;
     pthread_mutex_init(&h->conns_mu, NULL);
     pthread_cond_init(&h->conns_cv, NULL);
     struct sockaddr_storage ss;
@@ -466,7 +468,13 @@ srv_http *srv_http_start(const srv_http_config *cfg, const srv_http_handlers *ha
         a->sin_port = htons((uint16_t)h->cfg.port);
         if (inet_pton(AF_INET, bind, &a->sin_addr) != 1) goto bad_addr;
     }
-    unsigned flags = MHD_USE_AUTO | MHD_USE_INTERNAL_POLLING_THREAD | MHD_ALLOW_SUSPEND_RESUME;
+    /* poll(), not epoll (which MHD_USE_AUTO picks on Linux): libmicrohttpd 0.9.75's
+     * MHD_quiesce_daemon removes the listen socket from each worker's epoll set while the
+     * worker may be removing it too, and the loser's epoll_ctl(DEL) fails with ENOENT, which
+     * it answers with MHD_PANIC, an abort ("Failed to remove listen FD from epoll set", seen
+     * at shutdown: server_security, 1 run in ~20). With poll() quiescing only signals the
+     * workers through their inter-thread channel (MHD_USE_ITC, which quiescing needs). */
+    unsigned flags = MHD_USE_POLL | MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_ITC | MHD_ALLOW_SUSPEND_RESUME;
     if (strchr(bind, ':')) flags |= MHD_USE_IPv6;
     h->d = MHD_start_daemon(flags, (uint16_t)h->cfg.port, NULL, NULL, handler, h,
                             MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&ss,
@@ -508,8 +516,12 @@ fail:
 void srv_http_quiesce(srv_http *h)
 {
     if (!h || !h->d) return;
-    MHD_socket fd = MHD_quiesce_daemon(h->d);
-    if (fd != MHD_INVALID_SOCKET) close(fd);
+    if (h->quiesced_fd != MHD_INVALID_SOCKET) return;
+    /* The socket stays open until MHD_stop_daemon has joined the workers: a worker that
+     * has not yet seen the quiesce may still poll it, and a closed number could be reused
+     * by a file meanwhile. Connections that arrive in between wait in the backlog and are
+     * reset when it closes. */
+    h->quiesced_fd = MHD_quiesce_daemon(h->d);
 }
 
 unsigned srv_http_connections(srv_http *h)
@@ -529,6 +541,7 @@ void srv_http_stop(srv_http *h)
         pthread_join(h->deadline_thread, NULL);
     }
     if (h->d) MHD_stop_daemon(h->d); /* its CLOSED notifications empty the list */
+    if (h->quiesced_fd != MHD_INVALID_SOCKET) close(h->quiesced_fd);
     pthread_cond_destroy(&h->conns_cv);
     pthread_mutex_destroy(&h->conns_mu);
     free(h);
