@@ -29,7 +29,7 @@
 
 #include "integrators/effects.h"
 #include "render/render.h"
-#include "scene/scene_json.h"
+#include "json/scene_json.h"
 
 static int cmp_double(const void *a, const void *b)
 {

@@ -36,8 +36,8 @@
 
 #include "geometry/accel.h"
 #include "scene/scene.h"
-#include "scene/scene_builder.h"
-#include "scene/scene_load.h"
+#include "build/scene_builder.h"
+#include "load/scene_load.h"
 
 /* ---- the child: load one scene, report ---- */
 

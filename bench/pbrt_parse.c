@@ -1,4 +1,4 @@
-/* pbrt_parse.c — speed of the pbrt-v3 parsing layer (renderer/scene/pbrt_parser.h).
+/* pbrt_parse.c — speed of the pbrt-v3 parsing layer (renderer/pbrt3/pbrt_parser.h).
  *
  * Writes a ~100 MB pbrt-v3 scene into a temporary folder — one big "trianglemesh" (a
  * grid: positions, normals, uv and indices, several million numbers in one file) that
@@ -19,7 +19,7 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "scene/pbrt_parser.h"
+#include "pbrt3/pbrt_parser.h"
 
 static double clock_s(clockid_t id)
 {

@@ -1,4 +1,4 @@
-/* ply_load.c — speed of loading a large binary PLY mesh (renderer/scene/mesh_ply.h).
+/* ply_load.c — speed of loading a large binary PLY mesh (renderer/mesh/mesh_ply.h).
  *
  * Writes a binary little-endian PLY of about a million triangles (a curved grid: float
  * x y z, nx ny nz, u v per vertex; faces as a uchar count and int indices, the layout
@@ -24,8 +24,8 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "scene/mesh_file.h"
-#include "scene/scene_load.h"
+#include "mesh/mesh_file.h"
+#include "load/scene_load.h"
 
 static double clock_s(clockid_t id)
 {

@@ -41,7 +41,7 @@
 #include "film/film.h"
 #include "render/render.h"
 #include "scene/scene.h"
-#include "scene/scene_json.h"
+#include "json/scene_json.h"
 
 #define MAX_THREADS 16
 #define MAX_REPS 50

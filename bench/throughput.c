@@ -53,7 +53,7 @@
 #include "integrators/integrator.h"
 #include "render/render.h"
 #include "scene/scene.h"
-#include "scene/scene_json.h"
+#include "json/scene_json.h"
 
 #define MAX_REPS        15
 #define MAX_INTEGRATORS 8

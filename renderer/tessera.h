@@ -19,7 +19,7 @@
 #include "render/scheduler.h"
 #include "render/shard.h"
 #include "scene/scene.h"
-#include "scene/scene_json.h"
-#include "scene/scene_load.h"
+#include "json/scene_json.h"
+#include "load/scene_load.h"
 
 #endif

@@ -16,8 +16,8 @@
 #include "materials/bsdf.h"
 #include "materials/material.h"
 #include "scene/scene.h"
-#include "scene/scene_json.h"
-#include "scene/scene_load.h"
+#include "json/scene_json.h"
+#include "load/scene_load.h"
 #include "textures/texture.h"
 
 #define HEAD "{\"tessera\":1,\"camera\":{\"from\":[0,0,9],\"to\":[0,0,0]},\"film\":{\"width\":4,\"height\":4},"

@@ -25,7 +25,7 @@
 #include "integrators/differential.h"
 #include "render/render.h"
 #include "scene/scene.h"
-#include "scene/scene_json.h"
+#include "json/scene_json.h"
 
 static void near3(ts_vec3 got, ts_vec3 want, float tol, const char *what)
 {

@@ -11,7 +11,7 @@
 
 #include "integrators/effects.h"
 #include "render/render.h"
-#include "scene/scene_json.h"
+#include "json/scene_json.h"
 
 static ts_scene *load(const char *doc)
 {

@@ -33,7 +33,7 @@
 #include "film/film_image.h"
 #include "image/exr.h"
 #include "render/shard.h"
-#include "scene/scene_digest.h"
+#include "json/scene_digest.h"
 
 static char tmpdir[256];
 static char errlog[512];

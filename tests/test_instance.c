@@ -31,8 +31,8 @@
 #include "camera/camera.h"
 #include "geometry/accel.h"
 #include "render/render.h"
-#include "scene/scene_builder.h"
-#include "scene/scene_json.h"
+#include "build/scene_builder.h"
+#include "json/scene_json.h"
 
 static ts_scene *load(const char *doc)
 {

@@ -27,7 +27,7 @@
 #include "materials/fresnel.h"
 #include "render/render.h"
 #include "render_stats.h"
-#include "scene/scene_json.h"
+#include "json/scene_json.h"
 
 typedef struct result { double mean, se; uint64_t nonfinite; int k; } result;
 

@@ -44,7 +44,7 @@
 #include <string.h>
 
 #include "render_stats.h"
-#include "scene/scene_json.h"
+#include "json/scene_json.h"
 
 #define ALPHA 1e-3 /* family-wise false-failure rate of each test */
 #define K     16   /* renders per estimate */

@@ -19,7 +19,7 @@
 #include "lights/envmap.h"
 #include "lights/light.h"
 #include "integrators/integrator.h"
-#include "scene/scene_json.h"
+#include "json/scene_json.h"
 #include "sampling/sampling.h"
 
 static void assert_rel(double a, double b, double rel, const char *what)

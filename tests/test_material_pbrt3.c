@@ -26,7 +26,7 @@
 #include "materials/microfacet.h"
 #include "sampling/sampling.h"
 #include "scene/scene.h"
-#include "scene/scene_json.h"
+#include "json/scene_json.h"
 
 static const ts_rgb gold_eta = {0.143f, 0.374f, 1.442f}, gold_k = {3.983f, 2.385f, 1.603f};
 

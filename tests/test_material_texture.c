@@ -24,8 +24,8 @@
 #include "materials/material.h"
 #include "render/render.h"
 #include "scene/scene.h"
-#include "scene/scene_builder.h"
-#include "scene/scene_json.h"
+#include "build/scene_builder.h"
+#include "json/scene_json.h"
 #include "textures/texture.h"
 
 #define HEAD                                                                                                 \

@@ -23,7 +23,7 @@
 #include <unistd.h>
 
 #include "core/hash.h"
-#include "scene/mesh_file.h"
+#include "mesh/mesh_file.h"
 
 static char g_dir[64], g_outside[64];
 

@@ -1,4 +1,4 @@
-/* test_mesh_subdiv.c — pbrt-v3's Loop subdivision (scene/mesh_subdiv.h): closed-form limit
+/* test_mesh_subdiv.c — pbrt-v3's Loop subdivision (mesh/mesh_subdiv.h): closed-form limit
  * positions, counts, watertightness, limit normals, boundaries, refusals, JSON v1.
  *
  * Closed forms. A limit position does not depend on the level it is computed from (the
@@ -21,8 +21,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "scene/mesh_subdiv.h"
-#include "scene/scene_json.h"
+#include "mesh/mesh_subdiv.h"
+#include "json/scene_json.h"
 
 static const float oct_p[] = {1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1};
 /* Counter-clockwise seen from outside. */

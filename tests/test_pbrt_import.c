@@ -1,4 +1,4 @@
-/* test_pbrt_import.c — the pbrt-v3 front end's mapping (renderer/scene/pbrt_import.h,
+/* test_pbrt_import.c — the pbrt-v3 front end's mapping (renderer/pbrt3/pbrt_import.h,
  * scene_load.h, spectrum.h): small pbrt-v3 scenes written inline, each mapping checked
  * against pbrt-v3's definitions in closed form — camera rays against pbrt-v3's
  * raster → screen → camera chain, filters against their formulas, spectra against the
@@ -23,9 +23,9 @@
 #include "geometry/interaction.h"
 #include "image/exr.h"
 #include "render/render.h"
-#include "scene/scene_json.h"
-#include "scene/scene_load.h"
-#include "scene/spectrum.h"
+#include "json/scene_json.h"
+#include "load/scene_load.h"
+#include "spectrum/spectrum.h"
 #include "render_stats.h"
 #include "tmp_folder.h"
 

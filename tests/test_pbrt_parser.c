@@ -1,4 +1,4 @@
-/* test_pbrt_parser.c — the pbrt-v3 parsing layer (renderer/scene/pbrt_*.h): tokens and
+/* test_pbrt_parser.c — the pbrt-v3 parsing layer (renderer/pbrt3/pbrt_*.h): tokens and
  * their positions (also across the lexer's 1 MiB chunks), every parameter type and the
  * lookup API, the transform conventions checked numerically against pbrt-v3's
  * definitions, attribute and name scoping, object instancing, Include (relative paths,
@@ -18,7 +18,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "scene/pbrt_parser.h"
+#include "pbrt3/pbrt_parser.h"
 #include "tmp_folder.h"
 
 /* Writes ts_tmp_dir/rel (folders made as needed). */

@@ -14,7 +14,7 @@
 #include "film/film_image.h"
 #include "image/image.h"
 #include "render/render.h"
-#include "scene/scene_json.h"
+#include "json/scene_json.h"
 
 static ts_film *render(const ts_scene *s, int threads, const uint32_t *passes, int n_passes)
 {

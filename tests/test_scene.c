@@ -12,7 +12,7 @@
 #include <string.h>
 
 #include "scene/scene.h"
-#include "scene/scene_json.h"
+#include "json/scene_json.h"
 
 static const char *source_dir(void)
 {

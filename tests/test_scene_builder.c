@@ -15,8 +15,8 @@
 #include <string.h>
 
 #include "integrators/effects.h"
-#include "scene/scene_builder.h"
-#include "scene/scene_json.h"
+#include "build/scene_builder.h"
+#include "json/scene_json.h"
 
 static const char digest[] = "00112233445566778899aabbccddeeff00112233445566778899aabbccddeeff";
 

@@ -15,7 +15,7 @@
 #include <time.h>
 
 #include "render/scheduler.h"
-#include "scene/scene_json.h"
+#include "json/scene_json.h"
 
 static ts_scene *load(int x0, int x1, int y0, int y1)
 {

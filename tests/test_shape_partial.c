@@ -30,7 +30,7 @@
 #include "geometry/shape_sample.h"
 #include "lights/light.h"
 #include "geometry/accel.h"
-#include "scene/scene_builder.h"
+#include "build/scene_builder.h"
 
 static double rnd(ts_pcg32 *g) { return ts_pcg32_double(g); }
 

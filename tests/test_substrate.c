@@ -32,8 +32,8 @@
 #include "render/render.h"
 #include "sampling/sampling.h"
 #include "scene/scene.h"
-#include "scene/scene_json.h"
-#include "scene/scene_load.h"
+#include "json/scene_json.h"
+#include "load/scene_load.h"
 #include "textures/texture_mapping.h"
 #include "tmp_folder.h"
 

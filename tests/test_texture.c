@@ -30,7 +30,7 @@
 #include "image/exr.h"
 #include "image/image.h"
 #include "image/png_encode.h"
-#include "scene/pbrt_parser.h"
+#include "pbrt3/pbrt_parser.h"
 #include "textures/mipmap.h"
 #include "textures/noise.h"
 #include "textures/pfm.h"
@@ -39,7 +39,7 @@
 #include "textures/texture_cache.h"
 #include "textures/texture_image.h"
 #include "textures/texture_mapping.h"
-#include "textures/texture_pbrt.h"
+#include "pbrt3/texture_pbrt.h"
 #include "textures/tga.h"
 #include "tmp_folder.h"
 

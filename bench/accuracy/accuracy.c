@@ -71,7 +71,7 @@
 #include "lights/light.h"
 #include "render/render.h"
 #include "scene/scene.h"
-#include "scene/scene_json.h"
+#include "json/scene_json.h"
 
 #define MAX_LEVELS  24
 #define MAX_CONFIGS 16

@@ -6,7 +6,7 @@
  * "color"/"spectrum"); one evaluator serves both, float textures carrying their value in
  * all three channels, so ts_texture_eval_float is the red channel of the same code.
  * What each type computes at a context c (textures/texture_mapping.h), with pbrt-v3's
- * parameter names and defaults in textures/texture_pbrt.h:
+ * parameter names and defaults in pbrt3/texture_pbrt.h:
  *   constant        value
  *   scale           tex1 · tex2 (both of the texture's kind)
  *   mix             (1 − amount)·tex1 + amount·tex2 (amount a float texture)
@@ -36,7 +36,7 @@
  * average is the parity of its cell, the limit of the formula.
  *
  * Lifetime: textures are made once per scene by ts_texture_make (copied into the
- * scene's arena, children and image maps referenced, not owned; textures/texture_pbrt.h
+ * scene's arena, children and image maps referenced, not owned; pbrt3/texture_pbrt.h
  * makes them from a pbrt-v3 scene), and are immutable afterwards. Evaluation allocates
  * nothing, takes no lock, cannot fail and is thread-safe; nesting is at most
  * TS_TEXTURE_MAX_DEPTH deep, so its recursion is bounded. */

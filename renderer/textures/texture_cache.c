@@ -8,7 +8,7 @@
 #include <string.h>
 
 #include "image/image.h"
-#include "scene/scene_path.h"
+#include "core/scene_path.h"
 #include "textures/texture_image.h"
 
 typedef struct cache_entry {

@@ -5,7 +5,7 @@
  * canonical path (textures naming one file by two spellings share it), the channel count
  * (1 for float textures, 3 for RGB), the wrap mode (it shapes the pyramid), scale and
  * gamma. Filtering (trilinear or EWA, max anisotropy) is the texture's, not the map's.
- * Files are found through renderer/scene/scene_path.h — relative to the scene's folder
+ * Files are found through renderer/core/scene_path.h — relative to the scene's folder
  * and confined to it, at most max_file_bytes each — then decoded
  * (textures/texture_image.h) and MIP-mapped (textures/mipmap.h).
  *
@@ -51,7 +51,7 @@ ts_status ts_texture_cache_get(ts_texture_cache *c, const char *base_dir, const 
 
 /* Where map (one of c's) came from: the file name as the first texture naming it wrote
  * it (valid while c lives) and the options it was built with; false when c holds no such
- * map. For writing a scene's textures back out (scene/scene_json_texture_write.h). */
+ * map. For writing a scene's textures back out (json/scene_json_texture_write.h). */
 bool ts_texture_cache_source(const ts_texture_cache *c, const ts_mipmap *map, const char **filename,
                              ts_texture_image_options *opt);
 

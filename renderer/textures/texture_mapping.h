@@ -27,7 +27,7 @@
  * world→texture = the inverse of the texture's CTM, but passes the CTM itself (texture→
  * world) as world→texture to the 3D mapping of every solid texture (the 3D checkerboard,
  * fbm, wrinkled, windy, marble). The mapping here takes whatever
- * matrix it is given; textures/texture_pbrt.c passes what pbrt-v3 passes, so a solid
+ * matrix it is given; pbrt3/texture_pbrt.c passes what pbrt-v3 passes, so a solid
  * texture under a `Scale 4 4 4` gets finer, as in pbrt-v3 (docs/design.md §4b).
  *
  * Transforms are held in double (core/transform.h) and applied in double; everything

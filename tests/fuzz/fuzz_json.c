@@ -12,9 +12,9 @@
 #include <stdbool.h>
 
 #include "render/shard.h"
-#include "scene/json_check.h"
-#include "scene/scene_digest.h"
-#include "scene/scene_path.h"
+#include "json/json_check.h"
+#include "json/scene_digest.h"
+#include "core/scene_path.h"
 
 static int g_calls;
 

@@ -6,7 +6,7 @@
 
 #include <math.h>
 
-#include "scene/mesh_file.h"
+#include "mesh/mesh_file.h"
 
 #ifndef FUZZ_MESH_NAME
 #define FUZZ_MESH_NAME "fuzz.obj"

@@ -1,4 +1,4 @@
-/* fuzz_pbrt.c — libFuzzer harness: pbrt-v3 scene text (scene/pbrt_parser.h), the surface
+/* fuzz_pbrt.c — libFuzzer harness: pbrt-v3 scene text (pbrt3/pbrt_parser.h), the surface
  * of the pbrt-v3 front end: tokens, parameter lists, every directive and the graphics
  * state, Include and .spd files (resolved in this process's private folder, which holds
  * inc.pbrt, loop.pbrt — it includes itself — deep1.pbrt … deep9.pbrt, and k.spd), under
@@ -9,7 +9,7 @@
  * crashing, after which none is left unused. */
 #include "fuzz_common.h"
 
-#include "scene/pbrt_parser.h"
+#include "pbrt3/pbrt_parser.h"
 
 int LLVMFuzzerInitialize(int *argc, char ***argv)
 {

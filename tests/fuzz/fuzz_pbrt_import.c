@@ -1,5 +1,5 @@
 /* fuzz_pbrt_import.c — libFuzzer harness: pbrt-v3 scene text through the whole pbrt-v3
- * front end (scene/scene_load.h): parsing, the mapping onto the scene builder
+ * front end (load/scene_load.h): parsing, the mapping onto the scene builder
  * (pbrt_import.h: every camera, film, filter, sampler, integrator, shape, light and
  * material mapping, spectra), the files a scene names (this process's private folder holds
  * mesh.ply, sky.exr, table.bsdf, k.spd and inc.pbrt), and the build, under a server's kind
@@ -18,9 +18,9 @@
 #include "image/exr.h"
 #include "image/image.h"
 #include "render/render.h"
-#include "scene/pbrt_lexer.h"
-#include "scene/scene_json.h"
-#include "scene/scene_load.h"
+#include "pbrt3/pbrt_lexer.h"
+#include "json/scene_json.h"
+#include "load/scene_load.h"
 
 static const char quad_ply[] = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
                                "property float z\nproperty float nx\nproperty float ny\nproperty float nz\n"

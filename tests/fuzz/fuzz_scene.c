@@ -13,7 +13,7 @@
 #include "integrators/integrator.h"
 #include "render/render.h"
 #include "scene/scene.h"
-#include "scene/scene_json.h"
+#include "json/scene_json.h"
 
 static const char cube_obj[] = "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\n"
                                "v -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\nvt 0 0\nvt 1 1\n"

@@ -18,8 +18,8 @@
 #include <sys/stat.h>
 
 #include "render/render.h"
-#include "scene/scene_json.h"
-#include "scene/scene_load.h"
+#include "json/scene_json.h"
+#include "load/scene_load.h"
 
 static void quiet(void *ctx, const char *msg) { (void)ctx, (void)msg; }
 

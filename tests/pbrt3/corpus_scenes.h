@@ -11,7 +11,7 @@
 #include <stdint.h>
 
 #include "render/render.h"
-#include "scene/scene_load.h"
+#include "load/scene_load.h"
 
 typedef struct corpus_scene {
     const char *name;     /* DIR/NAME/NAME.pbrt, NAME-pbrt3.exr */

@@ -1,0 +1,319 @@
+/* scene_builder.h — the one way a ts_scene is made: a front end describes the scene call by
+ * call, the builder checks what it is handed and builds the immutable scene.
+ *
+ * Design note: front ends (the JSON loader, scene_json.h; a pbrt-v3 importer) parse their
+ * own text and check it in their own terms (JSON paths, file lines); the builder checks
+ * every value it is handed — ranges, references to materials and files, the resource
+ * limits — so every front end gets the same guarantees, and builds: mesh vertices to world
+ * space, area lights for emitting shapes, the Embree accelerator, the light distribution,
+ * the effects analysis (effects.h). Descriptors are in the renderer's own terms: object
+ * space plus an object-to-world transform (the JSON v1 conveniences — a sphere's centre, a
+ * disk's normal, a cylinder's p0/p1 — are the front end's to turn into a transform).
+ *
+ * Errors. Calls about the scene's settings (film, camera, sampler, integrator, job) write
+ * sentences that name the setting ("film.crop: the window holds no pixel"). Calls that add
+ * an element (material, shape, light) or read a file write a sentence that names no place;
+ * the front end puts where the element came from in front with ts_error_prefix
+ * ("shapes[3]: a transformed vertex is not a finite float"). Some values are checked where
+ * the renderer's own components check them: the camera by ts_camera_init (at set_camera);
+ * at finish, the finiteness of light colours, positions, directions and map transforms by
+ * ts_lights_prepare ("lights[i]: …", i counting the lights in the order added, then one area
+ * light per emitting sphere, disk or cylinder and per emitting mesh triangle, in shape
+ * order), and shape sizes and transforms beyond the float range by the scene's bounds
+ * ("shapes: the scene reaches beyond ±1e15 units …").
+ *
+ * Memory. The scene's arena (limits->max_memory) is made at create; names and mesh arrays
+ * go into it as they are added, the material, shape and light lists grow in the builder's
+ * own memory and are copied into the arena by finish. Files read through the builder
+ * (Fourier tables, environment maps) belong to it, then to the scene. Whatever happens,
+ * the caller calls ts_scene_builder_destroy once, which frees everything the scene did not
+ * take: a failed call leaves the builder usable (the element was not added) and nothing is
+ * half-built, so a front end may stop at its first error.
+ *
+ * Extension points: the elements are addressed by id (material id, shape id), descriptors
+ * are tagged structs whose per-type parts are unions, so new kinds (textures, partial
+ * quadrics, object instances, bump maps) come as new tags, fields and calls.
+ *
+ * A builder is used by one thread; its scene is immutable and thread-safe after finish. */
+#ifndef TS_SCENE_BUILDER_H
+#define TS_SCENE_BUILDER_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "camera/camera.h"
+#include "core/error.h"
+#include "core/transform.h"
+#include "core/vecmath.h"
+#include "film/filter.h"
+#include "geometry/shape.h"
+#include "lights/light.h"
+#include "materials/material.h"
+#include "sampling/sampler.h"
+#include "mesh/mesh_read.h"
+#include "scene/scene.h"
+#include "textures/texture.h"
+#include "textures/texture_cache.h"
+
+/* Resource limits, checked before any large allocation. */
+typedef struct ts_scene_limits {
+    uint32_t max_width, max_height; /* film */
+    uint64_t max_pixels;
+    uint32_t max_spp;
+    uint64_t max_triangles;                         /* all meshes together */
+    uint32_t max_shapes, max_lights, max_materials; /* max_lights counts area lights too */
+    uint64_t max_file_bytes;                        /* each referenced file */
+    uint64_t max_memory;                            /* the scene arena */
+} ts_scene_limits;
+
+/* Generous defaults for the CLI (a server sets its own). */
+void ts_scene_limits_default(ts_scene_limits *l);
+
+typedef struct ts_scene_builder ts_scene_builder;
+
+/* A new, empty builder (limits NULL: the defaults; copied). base_dir: the folder the
+ * files a scene names are read from, with every path confined to it (scene_path.h), or
+ * NULL to refuse every file reference. TS_ERR_NOMEM; *out NULL on failure. */
+ts_status ts_scene_builder_create(const ts_scene_limits *limits, const char *base_dir, ts_scene_builder **out,
+                                  ts_error *err);
+/* Frees the builder and everything it holds that no finished scene took. NULL is fine. */
+void ts_scene_builder_destroy(ts_scene_builder *b);
+
+/* ---- settings: each may be set again (the last call wins); finish requires the film, the
+ * camera, the sampler, the integrator and the digest. */
+
+/* The scene's name (copied); without one the scene is "untitled". */
+ts_status ts_scene_builder_set_name(ts_scene_builder *b, const char *name, ts_error *err);
+
+/* The scene digest: 64 lower-case hex digits (copied), the front end's identity of its
+ * document — the JSON front end's SHA-256 of the canonical document (scene_digest.h).
+ * Farm shards refuse to merge across digests, so a scene has one. */
+ts_status ts_scene_builder_set_digest(ts_scene_builder *b, const char *hex, ts_error *err);
+
+typedef struct ts_film_desc {
+    uint32_t width, height; /* pixels, within the limits */
+    float crop[4];          /* x0, x1, y0, y1 in [0, 1], x0 < x1, y0 < y1 ({0, 1, 0, 1}: all);
+                               the pixels [ceil(width·x0), ceil(width·x1)) × … (pbrt's rule) */
+    ts_filter_type filter;
+    float filter_radius; /* pixels, in (0, 16] */
+    ts_filter_params filter_params; /* gaussian α, Mitchell B and C (filter.h); all zero: the defaults */
+} ts_film_desc;
+ts_status ts_scene_builder_set_film(ts_scene_builder *b, const ts_film_desc *film, ts_error *err);
+
+/* Checked now (ts_camera_init's checks, then lens_radius finite ≥ 0 and focus_distance
+ * finite > 0); the camera is set up at finish for the film's size. */
+ts_status ts_scene_builder_set_camera(ts_scene_builder *b, const ts_camera_desc *camera, ts_error *err);
+
+/* Sampler type and seed, and the samples per pixel, in [1, limits.max_spp]. */
+ts_status ts_scene_builder_set_sampler(ts_scene_builder *b, const ts_sampler *sampler, uint32_t spp,
+                                       ts_error *err);
+
+/* Ranges of the fields the type uses: path max_depth and rr_depth in [0, 65535]; direct
+ * max_depth in [0, 1000] and samples_per_light in [1, 4096]; ao_distance > 0 (∞: any). */
+ts_status ts_scene_builder_set_integrator(ts_scene_builder *b, const ts_integrator_desc *integrator,
+                                          ts_error *err);
+
+/* Optional (default: all zero). effects_off may hold TS_EFFECT_INDIRECT and
+ * TS_EFFECT_DEPTH_OF_FIELD only; priority in [-1e6, 1e6]; spp 0 or in [1, max_spp];
+ * time_limit_s and target_error finite ≥ 0; the name is copied. */
+ts_status ts_scene_builder_set_job(ts_scene_builder *b, const ts_job_desc *job, ts_error *err);
+
+/* ---- files a scene names (relative to base_dir, confined to it, each at most
+ * limits.max_file_bytes), owned by the builder and then by the scene. Errors name the
+ * file as written ("Fourier BSDF file 'x.bsdf': …", "environment map 'sky.exr': …",
+ * "mesh file 'bunny.ply', line 3: …"); the caller prefixes where it was named. */
+
+ts_status ts_scene_builder_load_fourier(ts_scene_builder *b, const char *rel_path,
+                                        const struct ts_fourier_table **out, ts_error *err);
+/* A lat-long environment map from an EXR file (envmap.h). */
+ts_status ts_scene_builder_load_envmap(ts_scene_builder *b, const char *rel_path,
+                                       const struct ts_envmap **out, ts_error *err);
+/* An OBJ or PLY mesh (mesh_file.h) into *out, in the file's object space, owned by the
+ * caller (ts_mesh_data_free) and meant for ts_scene_builder_add_shape; bounded by what is
+ * left of limits.max_triangles ("the scene's triangles exceed the limit of N"). */
+ts_status ts_scene_builder_load_mesh(ts_scene_builder *b, const char *rel_path, ts_mesh_data *out,
+                                     ts_error *err);
+
+/* pbrt-v3's `loopsubdiv` (mesh_subdiv.h): the limit surface of the control mesh (object
+ * space; its positions and indices only) after `levels` Loop refinements, into *out
+ * (object space, with normals; owned by the caller, ts_mesh_data_free) for
+ * ts_scene_builder_add_shape, bounded by what is left of limits.max_triangles. */
+ts_status ts_scene_builder_loop_subdivide(ts_scene_builder *b, const ts_mesh *control, uint32_t levels,
+                                          ts_mesh_data *out, ts_error *err);
+
+/* ---- textures (textures/texture.h; docs/design.md §4b, §4d). Textures live in the
+ * scene's arena and their image maps in the scene's texture cache, both freed with the
+ * scene. A front end makes them with ts_scene_builder_add_texture, or hands the arena,
+ * the cache, the base folder and the file limit to another maker (the pbrt-v3 importer:
+ * ts_texture_pbrt_build(tp, scene, ts_scene_builder_texture_arena(b), cache,
+ * ts_scene_builder_base_dir(b), ts_scene_builder_limits(b)->max_file_bytes, err)), then
+ * refers to them from material parameters (materials/material.h). */
+
+/* The scene's arena, for textures (and only for what the scene keeps). */
+ts_arena *ts_scene_builder_texture_arena(ts_scene_builder *b);
+/* The scene's texture cache, made on the first call (its maps may take
+ * limits.max_memory bytes together); TS_ERR_NOMEM. */
+ts_status ts_scene_builder_texture_cache(ts_scene_builder *b, ts_texture_cache **out, ts_error *err);
+/* The folder files are read from (NULL: none may be), and the limits in force. */
+const char *ts_scene_builder_base_dir(const ts_scene_builder *b);
+const ts_scene_limits *ts_scene_builder_limits(const ts_scene_builder *b);
+
+/* Checks proto and copies it into the scene's arena (ts_texture_make: children and image
+ * maps must be the scene's); *out the copy. Errors name the field ("tex1: …"). */
+ts_status ts_scene_builder_add_texture(ts_scene_builder *b, const ts_texture *proto, const ts_texture **out,
+                                       ts_error *err);
+/* The MIP map of an image file (relative to base_dir, confined there, at most
+ * limits.max_file_bytes) through the scene's cache: errors name the file as written
+ * ("texture image 'x.png': …"). */
+ts_status ts_scene_builder_load_texture_image(ts_scene_builder *b, const char *rel_path,
+                                              const ts_texture_image_options *opt, const ts_mipmap **out,
+                                              ts_error *err);
+
+/* ---- elements */
+
+/* Adds a material (copied) under name (copied; unique; NULL: an anonymous material no
+ * name finds) and writes its id to *id (may be NULL). Checked: the type; constant colours
+ * in [0, 1] (conductor eta and k finite ≥ 0); sigma in [0, 90] degrees; eta and roughness
+ * finite (eta > 0, roughness ≥ 0); the distribution; a Fourier material's table loaded by
+ * this builder; a textured parameter's texture (made for this scene, see above) of the
+ * right kind: float parameters (sigma, eta, roughness) take float textures ("roughness:
+ * expected a float texture, got an RGB one"), colour parameters either kind. The
+ * material's `textured` flag is set here (the caller's is ignored). pbrt-v3's materials
+ * (material.h lists their parameters and pbrt-v3's defaults, which the caller fills): a
+ * mix names two materials added before by id (mix_id; mix[] is set by the builder) and
+ * may have at most TS_BSDF_MAX_BXDFS lobes with them ("materials: the two materials mixed
+ * have up to 9 lobes together, more than a BSDF's 8"); vroughness (has_vroughness) only
+ * on conductor, dielectric, substrate and uber. At most limits.max_materials. */
+ts_status ts_scene_builder_add_material(ts_scene_builder *b, const char *name, const ts_material *m,
+                                        uint32_t *id, ts_error *err);
+/* The id of the material added under name, or TS_NONE (also for name NULL). */
+uint32_t ts_scene_builder_find_material(const ts_scene_builder *b, const char *name);
+
+/* pbrt-v3's partial quadrics: its Sphere (zmin, zmax, phimax), Disk (phimax) and
+ * Cylinder (zmin, zmax, phimax) parameters with pbrt-v3's semantics. `partial` false (the
+ * zero value): the whole shape, the other fields unread. true: all three fields are read
+ * (a front end passes pbrt-v3's defaults for the ones a file leaves out: zmin −radius,
+ * zmax radius for a sphere, −1 and 1 for a cylinder, phimax 360):
+ *   - phi_max: degrees, clamped to [0, 360] as pbrt-v3 does; the shape is the part with
+ *     φ = atan2(y, x) in [0, phi_max] (object space);
+ *   - sphere: z_min, z_max in either order, clamped to [−radius, radius] (pbrt-v3);
+ *   - cylinder: the tube spans z from min(z_min, z_max) to max(z_min, z_max) (pbrt-v3),
+ *     replacing the desc's 0 … height; the builder folds the offset into to_world;
+ *   - disk: z_min and z_max unread (its height is the desc's own field).
+ * A cut that leaves no area (phi_max 0, z_min = z_max after clamping) is refused; one that
+ * keeps the whole shape is stored as the whole shape (same pixels, and the whole sphere's
+ * cone sampling). */
+typedef struct ts_shape_cut {
+    bool partial;
+    double z_min, z_max, phi_max;
+} ts_shape_cut;
+
+typedef struct ts_shape_desc {
+    ts_shape_type type;
+    uint32_t material; /* an id from ts_scene_builder_add_material */
+    ts_xform to_world; /* object → world (shape.h's object spaces) */
+    ts_rgb emission;   /* radiance, each channel ≥ 0; not black: a diffuse area light */
+    bool two_sided;    /* an emitter emits on both sides */
+    uint32_t light_samples; /* an emitter: its samples per camera sample under direct's strategy all
+                               (pbrt-v3's nsamples), in [1, 4096]; 0: the integrator's samples_per_light */
+    /* pbrt-v3's ReverseOrientation: the front side (where a one-sided emitter emits, where
+     * the normal points) becomes the other side. The builder applies exactly this flag; a
+     * front end gives it as pbrt-v3's graphics state holds it (ReverseOrientation toggled
+     * per attribute block) and must NOT fold in the handedness of to_world: the builder
+     * already keeps every shape facing the way it faces in object space under a mirroring
+     * transform, which is what pbrt-v3's XOR with TransformSwapsHandedness achieves. So
+     * the world front side is: analytic shapes M^-T·n_obj (outwards, the disk's +z),
+     * negated when set; meshes the object-space winding's side, reversed when set (the
+     * builder swaps two indices of every triangle). */
+    bool reverse_orientation;
+    ts_shape_cut cut;  /* sphere, disk, cylinder only (zero for meshes) */
+    /* Meshes only: pbrt-v3's alpha cut-outs (geometry/shape.h), float textures of this scene
+     * (ts_scene_builder_add_texture), or NULL (opaque). A hit where alpha evaluates to
+     * exactly 0 is no hit for any ray, one where shadow_alpha does none for shadow rays; a
+     * front end turns a constant 0 into a constant texture and any other constant into
+     * NULL (pbrt-v3's CreateTriangleMeshShape). An emitting mesh stays a light over all its
+     * triangles (pbrt-v3 samples them whole). "alpha: expected a float texture, got an RGB
+     * one"; "alpha: only meshes take alpha textures". */
+    const ts_texture *alpha, *shadow_alpha;
+    /* clang-format off */
+    union {
+        struct { double radius; } sphere;              /* > 0 */
+        /* > 0; in [0, radius); pbrt-v3's height: the disk lies in the plane z = height */
+        struct { double radius, inner_radius, height; } disk;
+        struct { double radius, height; } cylinder;    /* > 0; > 0 unless cut.partial */
+        ts_mesh mesh; /* object space, copied: n_vertices, n_triangles ≥ 1, finite positions,
+                         indices < n_vertices, finite non-zero normals (or NULL), finite uvs
+                         (or NULL) */
+    };
+    /* clang-format on */
+} ts_shape_desc;
+
+/* Adds a shape and writes its id to *id (may be NULL). A mesh is copied into the arena and
+ * taken to world space (normals by the inverse transpose, their lengths kept: they weight
+ * the interpolation as in pbrt-v3; a mirroring transform reverses the winding,
+ * so each triangle keeps facing the way it faced in object space); "a transformed vertex is
+ * not a finite float" when the transform takes a vertex beyond the float range. At most
+ * limits.max_shapes shapes and limits.max_triangles triangles. */
+ts_status ts_scene_builder_add_shape(ts_scene_builder *b, const ts_shape_desc *shape, uint32_t *id,
+                                     ts_error *err);
+
+/* ---- object instancing (pbrt-v3's ObjectBegin/End, ObjectInstance; geometry/accel.h)
+ *
+ * begin_object opens the definition of a named object (names unique; *id may be NULL):
+ * until end_object every ts_scene_builder_add_shape adds to it, the shape's to_world
+ * placing it in the object's own space (pbrt-v3: the CTM at the Shape inside
+ * ObjectBegin/End); add_instance's to_world is pbrt-v3's CTM at ObjectInstance, so a point
+ * of the shape lands at to_world(shape to_world(p)), as in pbrt-v3. add_instance places
+ * the object in the world by to_world (finite and invertible); any number of instances
+ * share the object's geometry. Refused: a definition or an instance inside a definition
+ * (TS_ERR_UNSUPPORTED: no nesting, as in pbrt-v3), an emitting shape inside a definition
+ * (TS_ERR_UNSUPPORTED; pbrt-v3 warns "area lights not supported with object instancing"
+ * and keeps the shape without its emission — the pbrt-v3 front end does that, with the
+ * warning), finish with a definition open. Instances count against limits.max_shapes with
+ * the shapes; an object's triangles count once. */
+ts_status ts_scene_builder_begin_object(ts_scene_builder *b, const char *name, uint32_t *id, ts_error *err);
+ts_status ts_scene_builder_end_object(ts_scene_builder *b, ts_error *err);
+/* The id of the object named name, or TS_NONE. */
+uint32_t ts_scene_builder_find_object(const ts_scene_builder *b, const char *name);
+ts_status ts_scene_builder_add_instance(ts_scene_builder *b, uint32_t object, const ts_xform *to_world,
+                                        ts_error *err);
+
+typedef struct ts_light_desc {
+    ts_light_type type;          /* point, spot, distant or infinite (area lights come from shapes) */
+    ts_rgb color;                /* point/spot intensity, distant irradiance, infinite radiance (or
+                                    the map's scale); each channel ≥ 0 */
+    ts_vec3 from, to;            /* point: from is the position; spot: from is the apex, aimed at
+                                    to; distant: the light travels from → to (from ≠ to) */
+    double cone_angle_deg;       /* spot: in (0, 180] */
+    double cone_delta_deg;       /* spot: in [0, cone_angle_deg] */
+    const struct ts_envmap *map; /* infinite: from ts_scene_builder_load_envmap, or NULL */
+    ts_xform to_world;           /* infinite: map space → world */
+    uint32_t samples;            /* its samples per camera sample under direct's strategy all
+                                    (pbrt-v3's nsamples), in [1, 4096]; 0: the integrator's
+                                    samples_per_light */
+} ts_light_desc;
+
+/* Adds a light (with the area lights of the shapes added so far, at most
+ * limits.max_lights). */
+ts_status ts_scene_builder_add_light(ts_scene_builder *b, const ts_light_desc *light, ts_error *err);
+
+/* What has been added so far. */
+typedef struct ts_scene_counts {
+    uint32_t materials, shapes, lights; /* lights: added with add_light */
+    uint64_t triangles;                 /* of every mesh */
+    uint64_t area_lights;               /* emitting analytic shapes + emitting triangles */
+    uint32_t objects, instances;
+} ts_scene_counts;
+void ts_scene_builder_counts(const ts_scene_builder *b, ts_scene_counts *out);
+
+/* ---- the scene */
+
+/* Builds the scene: the area lights, the camera for the film, the accelerator (and its
+ * bounds, which must stay within ±1e15 units, as must the camera), the lights
+ * (ts_lights_prepare), the light distribution (uniform for a path integrator that asks for
+ * it, else by power), the effects analysis less the job's switches. On success *out is the
+ * scene (the caller destroys it with ts_scene_destroy); on failure *out is NULL. Either
+ * way the builder accepts no more calls but ts_scene_builder_destroy. */
+ts_status ts_scene_builder_finish(ts_scene_builder *b, ts_scene **out, ts_error *err);
+
+#endif

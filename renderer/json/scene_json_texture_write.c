@@ -1,0 +1,257 @@
+/* scene_json_texture_write.c — textures as scene format v1 (see scene_json_texture_write.h).
+ * The keys are those scene_json_texture.c reads. */
+#include "json/scene_json_texture_write.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define TRY(expr)                                                                                            \
+    do {                                                                                                     \
+        ts_status st_ = (expr);                                                                              \
+        if (st_ != TS_OK) return st_;                                                                        \
+    } while (0)
+
+void ts_json_texture_writer_init(ts_json_texture_writer *w, cJSON *textures, const ts_texture_cache *cache)
+{
+    *w = (ts_json_texture_writer){.textures = textures, .cache = cache};
+}
+
+void ts_json_texture_writer_fini(ts_json_texture_writer *w)
+{
+    for (uint32_t i = 0; i < w->n; i++)
+        free(w->names[i]);
+    free(w->names);
+    free(w->written);
+    *w = (ts_json_texture_writer){0};
+}
+
+const char *ts_json_texture_writer_name(const ts_json_texture_writer *w, const ts_texture *t)
+{
+    for (uint32_t i = 0; i < w->n; i++)
+        if (w->written[i] == t) return w->names[i];
+    return NULL;
+}
+
+static ts_status nomem(ts_error *err)
+{
+    return ts_error_set(err, TS_ERR_NOMEM, "out of memory while writing the textures");
+}
+
+static ts_status remember(ts_json_texture_writer *w, const ts_texture *t, const char *name, ts_error *err)
+{
+    if (w->n == w->cap) {
+        uint32_t cap = w->cap ? 2 * w->cap : 16;
+        char **n = realloc(w->names, cap * sizeof *n);
+        if (n) w->names = n;
+        const ts_texture **x = n ? realloc(w->written, cap * sizeof *x) : NULL;
+        if (!x) return nomem(err);
+        w->written = x;
+        w->cap = cap;
+    }
+    char *copy = strdup(name);
+    if (!copy) return nomem(err);
+    w->names[w->n] = copy;
+    w->written[w->n] = t;
+    w->n++;
+    return TS_OK;
+}
+
+/* Adds item as obj[key]; false (item freed) when out of memory. */
+static bool add(cJSON *obj, const char *key, cJSON *item)
+{
+    if (!item) return false;
+    if (!cJSON_AddItemToObject(obj, key, item)) {
+        cJSON_Delete(item);
+        return false;
+    }
+    return true;
+}
+
+static cJSON *numbers(const double *v, int n)
+{
+    cJSON *a = cJSON_CreateArray();
+    for (int i = 0; a && i < n; i++) {
+        cJSON *x = cJSON_CreateNumber(v[i]);
+        if (!x || !cJSON_AddItemToArray(a, x)) {
+            cJSON_Delete(x);
+            cJSON_Delete(a);
+            return NULL;
+        }
+    }
+    return a;
+}
+
+static bool vec3(cJSON *obj, const char *key, ts_vec3 v)
+{
+    double d[3] = {v.x, v.y, v.z};
+    return add(obj, key, numbers(d, 3));
+}
+
+static bool number(cJSON *obj, const char *key, double v) { return add(obj, key, cJSON_CreateNumber(v)); }
+
+static bool matrix(cJSON *obj, const char *key, const ts_mat4 *m)
+{
+    return add(obj, key, numbers(&m->m[0][0], 16));
+}
+
+/* A constant of the texture's kind: a number for float textures and for greys, else an
+ * array; v1's colour constants are ≥ 0. */
+static ts_status value(cJSON *obj, const char *key, bool rgb, ts_rgb v, const char *name, ts_error *err)
+{
+    if (rgb && !(v.r >= 0 && v.g >= 0 && v.b >= 0))
+        return ts_error_set(err, TS_ERR_UNSUPPORTED,
+                            "texture \"%s\": its %s (%g, %g, %g) is a negative colour, which scene format v1 "
+                            "cannot hold",
+                            name, key, (double)v.r, (double)v.g, (double)v.b);
+    bool ok = !rgb || (v.r == v.g && v.g == v.b) ? number(obj, key, v.r) : vec3(obj, key, (ts_vec3){v.r, v.g, v.b});
+    return ok ? TS_OK : nomem(err);
+}
+
+/* A child texture as obj[key]: its name, or its constant in place. */
+static ts_status child(ts_json_texture_writer *w, cJSON *obj, const char *key, const ts_texture *c,
+                       const char *parent, ts_error *err)
+{
+    const char *name = ts_json_texture_writer_name(w, c);
+    if (!name && c->type == TS_TEXTURE_CONSTANT) return value(obj, key, c->is_rgb, c->constant.value, parent, err);
+    if (!name) {
+        char sub[400];
+        snprintf(sub, sizeof sub, "%.300s.%s", parent, key);
+        TRY(ts_json_texture_write(w, c, sub, err));
+        name = ts_json_texture_writer_name(w, c);
+    }
+    return add(obj, key, cJSON_CreateString(name)) ? TS_OK : nomem(err);
+}
+
+/* A 2D mapping as obj.mapping (uv with its defaults written out), and a spherical or
+ * cylindrical one's world → texture as obj.world_to_texture. */
+static bool mapping2d(cJSON *obj, const ts_texture_mapping2d *m)
+{
+    static const char *const types[] = {"uv", "spherical", "cylindrical", "planar"};
+    cJSON *j = cJSON_CreateObject();
+    if (!add(obj, "mapping", j) || !add(j, "type", cJSON_CreateString(types[m->type]))) return false;
+    switch (m->type) {
+    case TS_TEXTURE_MAPPING_UV:
+        return number(j, "uscale", m->su) && number(j, "vscale", m->sv) && number(j, "udelta", m->du) &&
+               number(j, "vdelta", m->dv);
+    case TS_TEXTURE_MAPPING_PLANAR:
+        return vec3(j, "v1", m->vs) && vec3(j, "v2", m->vt) && number(j, "udelta", m->du) &&
+               number(j, "vdelta", m->dv);
+    case TS_TEXTURE_MAPPING_SPHERICAL:
+    case TS_TEXTURE_MAPPING_CYLINDRICAL:
+        return matrix(obj, "world_to_texture", &m->world_to_texture);
+    }
+    return false;
+}
+
+static ts_status fill(ts_json_texture_writer *w, cJSON *j, const ts_texture *t, const char *name, ts_error *err)
+{
+    static const char *const types[] = {
+        [TS_TEXTURE_CONSTANT] = "constant",     [TS_TEXTURE_SCALE] = "scale",
+        [TS_TEXTURE_MIX] = "mix",               [TS_TEXTURE_BILERP] = "bilerp",
+        [TS_TEXTURE_UV] = "uv",                 [TS_TEXTURE_CHECKERBOARD2D] = "checkerboard",
+        [TS_TEXTURE_CHECKERBOARD3D] = "checkerboard", [TS_TEXTURE_DOTS] = "dots",
+        [TS_TEXTURE_FBM] = "fbm",               [TS_TEXTURE_WRINKLED] = "wrinkled",
+        [TS_TEXTURE_WINDY] = "windy",           [TS_TEXTURE_MARBLE] = "marble",
+        [TS_TEXTURE_IMAGEMAP] = "imagemap",
+    };
+    if (!add(j, "type", cJSON_CreateString(types[t->type])) ||
+        !add(j, "kind", cJSON_CreateString(t->is_rgb ? "rgb" : "float")))
+        return nomem(err);
+    bool rgb = t->is_rgb, ok = true;
+    switch (t->type) {
+    case TS_TEXTURE_CONSTANT:
+        return value(j, "value", rgb, t->constant.value, name, err);
+    case TS_TEXTURE_SCALE:
+        TRY(child(w, j, "tex1", t->scale.tex1, name, err));
+        return child(w, j, "tex2", t->scale.tex2, name, err);
+    case TS_TEXTURE_MIX:
+        TRY(child(w, j, "tex1", t->mix.tex1, name, err));
+        TRY(child(w, j, "tex2", t->mix.tex2, name, err));
+        return child(w, j, "amount", t->mix.amount, name, err);
+    case TS_TEXTURE_BILERP:
+        if (!mapping2d(j, &t->bilerp.map)) return nomem(err);
+        TRY(value(j, "v00", rgb, t->bilerp.v00, name, err));
+        TRY(value(j, "v01", rgb, t->bilerp.v01, name, err));
+        TRY(value(j, "v10", rgb, t->bilerp.v10, name, err));
+        return value(j, "v11", rgb, t->bilerp.v11, name, err);
+    case TS_TEXTURE_UV:
+        ok = mapping2d(j, &t->uv.map);
+        break;
+    case TS_TEXTURE_CHECKERBOARD2D:
+        TRY(child(w, j, "tex1", t->checkerboard2d.tex1, name, err));
+        TRY(child(w, j, "tex2", t->checkerboard2d.tex2, name, err));
+        ok = number(j, "dimension", 2) && mapping2d(j, &t->checkerboard2d.map) &&
+             add(j, "aamode", cJSON_CreateString(t->checkerboard2d.closed_form ? "closedform" : "none"));
+        break;
+    case TS_TEXTURE_CHECKERBOARD3D:
+        TRY(child(w, j, "tex1", t->checkerboard3d.tex1, name, err));
+        TRY(child(w, j, "tex2", t->checkerboard3d.tex2, name, err));
+        ok = number(j, "dimension", 3) && matrix(j, "world_to_texture", &t->checkerboard3d.map.world_to_texture);
+        break;
+    case TS_TEXTURE_DOTS:
+        TRY(child(w, j, "inside", t->dots.inside, name, err));
+        TRY(child(w, j, "outside", t->dots.outside, name, err));
+        ok = mapping2d(j, &t->dots.map);
+        break;
+    case TS_TEXTURE_FBM:
+    case TS_TEXTURE_WRINKLED:
+        ok = number(j, "octaves", t->fbm.octaves) && number(j, "roughness", t->fbm.omega) &&
+             matrix(j, "world_to_texture", &t->fbm.map.world_to_texture);
+        break;
+    case TS_TEXTURE_WINDY:
+        ok = matrix(j, "world_to_texture", &t->windy.map.world_to_texture);
+        break;
+    case TS_TEXTURE_MARBLE:
+        ok = number(j, "octaves", t->marble.octaves) && number(j, "roughness", t->marble.omega) &&
+             number(j, "scale", t->marble.scale) && number(j, "variation", t->marble.variation) &&
+             matrix(j, "world_to_texture", &t->marble.map.world_to_texture);
+        break;
+    case TS_TEXTURE_IMAGEMAP: {
+        const char *file;
+        ts_texture_image_options opt;
+        if (!ts_texture_cache_source(w->cache, t->image.mipmap, &file, &opt))
+            return ts_error_set(err, TS_ERR_INTERNAL,
+                                "texture \"%s\": its image map is not one of the scene's texture cache", name);
+        static const char *const wraps[] = {"repeat", "black", "clamp"};
+        ok = mapping2d(j, &t->image.map) && add(j, "file", cJSON_CreateString(file)) &&
+             add(j, "wrap", cJSON_CreateString(wraps[opt.wrap])) &&
+             add(j, "trilinear", cJSON_CreateBool(t->image.trilinear)) &&
+             number(j, "max_anisotropy", t->image.max_anisotropy) && number(j, "scale", opt.scale) &&
+             add(j, "gamma", cJSON_CreateBool(opt.gamma)) && add(j, "invert", cJSON_CreateBool(t->image.invert));
+        break;
+    }
+    }
+    return ok ? TS_OK : nomem(err);
+}
+
+ts_status ts_json_texture_write(ts_json_texture_writer *w, const ts_texture *t, const char *want, ts_error *err)
+{
+    if (ts_json_texture_writer_name(w, t)) return TS_OK;
+    /* A name the document has already (a texture named like a generated one) gets "#k". */
+    char name[420];
+    snprintf(name, sizeof name, "%.400s", want);
+    for (int k = 2; cJSON_GetObjectItemCaseSensitive(w->textures, name); k++)
+        snprintf(name, sizeof name, "%.400s#%d", want, k);
+    cJSON *j = cJSON_CreateObject();
+    if (!j) return nomem(err);
+    /* Children are written (into w->textures) before the texture itself is added. */
+    ts_status st = fill(w, j, t, name, err);
+    if (st) {
+        cJSON_Delete(j);
+        return st;
+    }
+    if (!cJSON_AddItemToObject(w->textures, name, j)) {
+        cJSON_Delete(j);
+        return nomem(err);
+    }
+    return remember(w, t, name, err);
+}
+
+cJSON *ts_json_texture_ref(ts_json_texture_writer *w, const ts_texture *t, const char *hint, ts_error *err)
+{
+    if (ts_json_texture_write(w, t, hint, err)) return NULL;
+    cJSON *s = cJSON_CreateString(ts_json_texture_writer_name(w, t));
+    if (!s) nomem(err);
+    return s;
+}
