@@ -18,10 +18,17 @@ typedef struct corpus_scene {
     int spp;              /* per render of pbrt3_corpus (K renders, seeds 0 … K − 1) */
     const char *expected; /* the missing feature it needs, or NULL: must pass */
     uint32_t light_cap;   /* the K renders' samples per light at most (0: 1), ts_corpus_cap_lights */
+    bool refused;         /* expected is a refusal at load: pbrt3_corpus_http and pbrt3_convert
+                           * expect the scene refused too (and fail loudly when it loads) */
 } corpus_scene;
 
-extern const corpus_scene ts_corpus_scenes[];
-extern const int ts_corpus_scene_count;
+/* The scenes of the collection in DIR, known by DIR's last name: "pbrt-v3" (the scenes
+ * by others) or "pbrt-v3-next" (the next steps' scenes, ../shared/scenes/pbrt-v3-next);
+ * *count their number. NULL (and a sentence on stdout) for any other folder. */
+const corpus_scene *ts_corpus_scenes_of(const char *dir, int *count);
+
+/* The entry named name in DIR's table, or NULL. */
+const corpus_scene *ts_corpus_scene_named(const char *dir, const char *name);
 
 /* True when DIR holds the collection (its REFERENCES.md); else prints "SKIPPED: …" (the
  * test then exits 77, ctest's SKIP_RETURN_CODE). */
