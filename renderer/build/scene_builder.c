@@ -61,6 +61,18 @@ struct ts_scene_builder {
     size_t cap_envmaps;
 };
 
+ts_integrator_desc ts_integrator_desc_default(void)
+{
+    return (ts_integrator_desc){.type = TS_INTEGRATOR_PATH,
+                                .max_depth = 5,
+                                .rr_depth = 3,
+                                .light_sampling = TS_LIGHT_SELECT_POWER,
+                                .strategy = TS_LIGHTS_ALL,
+                                .sampling = TS_SAMPLING_MIS,
+                                .samples_per_light = 1,
+                                .ao_distance = INFINITY};
+}
+
 void ts_scene_limits_default(ts_scene_limits *l)
 {
     l->max_width = 16384;

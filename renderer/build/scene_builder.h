@@ -108,6 +108,11 @@ ts_status ts_scene_builder_set_camera(ts_scene_builder *b, const ts_camera_desc 
 ts_status ts_scene_builder_set_sampler(ts_scene_builder *b, const ts_sampler *sampler, uint32_t spp,
                                        ts_error *err);
 
+/* The integrator a scene has when it names none, and the defaults of each field both front
+ * ends start from: path, max_depth 5, rr_depth 3, lights selected by power, direct's
+ * strategy "all" with MIS and one sample per light, ao_distance ∞. */
+ts_integrator_desc ts_integrator_desc_default(void);
+
 /* Ranges of the fields the type uses: path max_depth and rr_depth in [0, 65535]; direct
  * max_depth in [0, 1000] and samples_per_light in [1, 4096]; ao_distance > 0 (∞: any). */
 ts_status ts_scene_builder_set_integrator(ts_scene_builder *b, const ts_integrator_desc *integrator,

@@ -285,14 +285,7 @@ static ts_status parse_sampler(loader *ld, const cJSON *doc)
 
 static ts_status parse_integrator(loader *ld, const cJSON *doc)
 {
-    ts_integrator_desc desc = {.type = TS_INTEGRATOR_PATH,
-                               .max_depth = 5,
-                               .rr_depth = 3,
-                               .light_sampling = TS_LIGHT_SELECT_POWER,
-                               .strategy = TS_LIGHTS_ALL,
-                               .sampling = TS_SAMPLING_MIS,
-                               .samples_per_light = 1,
-                               .ao_distance = INFINITY};
+    ts_integrator_desc desc = ts_integrator_desc_default();
     ts_integrator_desc *in = &desc;
     const cJSON *it;
     TRY(ts_json_object(doc, "", "integrator", false, &it, ld->err));

@@ -2,6 +2,8 @@
  * The keys are those scene_json_texture.c reads. */
 #include "json/scene_json_texture_write.h"
 
+#include "json/json_write.h"
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -57,43 +59,6 @@ static ts_status remember(ts_json_texture_writer *w, const ts_texture *t, const 
     return TS_OK;
 }
 
-/* Adds item as obj[key]; false (item freed) when out of memory. */
-static bool add(cJSON *obj, const char *key, cJSON *item)
-{
-    if (!item) return false;
-    if (!cJSON_AddItemToObject(obj, key, item)) {
-        cJSON_Delete(item);
-        return false;
-    }
-    return true;
-}
-
-static cJSON *numbers(const double *v, int n)
-{
-    cJSON *a = cJSON_CreateArray();
-    for (int i = 0; a && i < n; i++) {
-        cJSON *x = cJSON_CreateNumber(v[i]);
-        if (!x || !cJSON_AddItemToArray(a, x)) {
-            cJSON_Delete(x);
-            cJSON_Delete(a);
-            return NULL;
-        }
-    }
-    return a;
-}
-
-static bool vec3(cJSON *obj, const char *key, ts_vec3 v)
-{
-    double d[3] = {v.x, v.y, v.z};
-    return add(obj, key, numbers(d, 3));
-}
-
-static bool number(cJSON *obj, const char *key, double v) { return add(obj, key, cJSON_CreateNumber(v)); }
-
-static bool matrix(cJSON *obj, const char *key, const ts_mat4 *m)
-{
-    return add(obj, key, numbers(&m->m[0][0], 16));
-}
 
 /* A constant of the texture's kind: a number for float textures and for greys, else an
  * array; v1's colour constants are ≥ 0. */
@@ -104,7 +69,7 @@ static ts_status value(cJSON *obj, const char *key, bool rgb, ts_rgb v, const ch
                             "texture \"%s\": its %s (%g, %g, %g) is a negative colour, which scene format v1 "
                             "cannot hold",
                             name, key, (double)v.r, (double)v.g, (double)v.b);
-    bool ok = !rgb || (v.r == v.g && v.g == v.b) ? number(obj, key, v.r) : vec3(obj, key, (ts_vec3){v.r, v.g, v.b});
+    bool ok = !rgb || (v.r == v.g && v.g == v.b) ? ts_jw_number(obj, key, v.r) : ts_jw_vec3(obj, key, (ts_vec3){v.r, v.g, v.b});
     return ok ? TS_OK : nomem(err);
 }
 
@@ -120,7 +85,7 @@ static ts_status child(ts_json_texture_writer *w, cJSON *obj, const char *key, c
         TRY(ts_json_texture_write(w, c, sub, err));
         name = ts_json_texture_writer_name(w, c);
     }
-    return add(obj, key, cJSON_CreateString(name)) ? TS_OK : nomem(err);
+    return ts_jw_add(obj, key, cJSON_CreateString(name)) ? TS_OK : nomem(err);
 }
 
 /* A 2D mapping as obj.mapping (uv with its defaults written out), and a spherical or
@@ -129,17 +94,17 @@ static bool mapping2d(cJSON *obj, const ts_texture_mapping2d *m)
 {
     static const char *const types[] = {"uv", "spherical", "cylindrical", "planar"};
     cJSON *j = cJSON_CreateObject();
-    if (!add(obj, "mapping", j) || !add(j, "type", cJSON_CreateString(types[m->type]))) return false;
+    if (!ts_jw_add(obj, "mapping", j) || !ts_jw_add(j, "type", cJSON_CreateString(types[m->type]))) return false;
     switch (m->type) {
     case TS_TEXTURE_MAPPING_UV:
-        return number(j, "uscale", m->su) && number(j, "vscale", m->sv) && number(j, "udelta", m->du) &&
-               number(j, "vdelta", m->dv);
+        return ts_jw_number(j, "uscale", m->su) && ts_jw_number(j, "vscale", m->sv) && ts_jw_number(j, "udelta", m->du) &&
+               ts_jw_number(j, "vdelta", m->dv);
     case TS_TEXTURE_MAPPING_PLANAR:
-        return vec3(j, "v1", m->vs) && vec3(j, "v2", m->vt) && number(j, "udelta", m->du) &&
-               number(j, "vdelta", m->dv);
+        return ts_jw_vec3(j, "v1", m->vs) && ts_jw_vec3(j, "v2", m->vt) && ts_jw_number(j, "udelta", m->du) &&
+               ts_jw_number(j, "vdelta", m->dv);
     case TS_TEXTURE_MAPPING_SPHERICAL:
     case TS_TEXTURE_MAPPING_CYLINDRICAL:
-        return matrix(obj, "world_to_texture", &m->world_to_texture);
+        return ts_jw_matrix(obj, "world_to_texture", &m->world_to_texture);
     }
     return false;
 }
@@ -155,8 +120,8 @@ static ts_status fill(ts_json_texture_writer *w, cJSON *j, const ts_texture *t, 
         [TS_TEXTURE_WINDY] = "windy",           [TS_TEXTURE_MARBLE] = "marble",
         [TS_TEXTURE_IMAGEMAP] = "imagemap",
     };
-    if (!add(j, "type", cJSON_CreateString(types[t->type])) ||
-        !add(j, "kind", cJSON_CreateString(t->is_rgb ? "rgb" : "float")))
+    if (!ts_jw_add(j, "type", cJSON_CreateString(types[t->type])) ||
+        !ts_jw_add(j, "kind", cJSON_CreateString(t->is_rgb ? "rgb" : "float")))
         return nomem(err);
     bool rgb = t->is_rgb, ok = true;
     switch (t->type) {
@@ -181,13 +146,13 @@ static ts_status fill(ts_json_texture_writer *w, cJSON *j, const ts_texture *t, 
     case TS_TEXTURE_CHECKERBOARD2D:
         TRY(child(w, j, "tex1", t->checkerboard2d.tex1, name, err));
         TRY(child(w, j, "tex2", t->checkerboard2d.tex2, name, err));
-        ok = number(j, "dimension", 2) && mapping2d(j, &t->checkerboard2d.map) &&
-             add(j, "aamode", cJSON_CreateString(t->checkerboard2d.closed_form ? "closedform" : "none"));
+        ok = ts_jw_number(j, "dimension", 2) && mapping2d(j, &t->checkerboard2d.map) &&
+             ts_jw_add(j, "aamode", cJSON_CreateString(t->checkerboard2d.closed_form ? "closedform" : "none"));
         break;
     case TS_TEXTURE_CHECKERBOARD3D:
         TRY(child(w, j, "tex1", t->checkerboard3d.tex1, name, err));
         TRY(child(w, j, "tex2", t->checkerboard3d.tex2, name, err));
-        ok = number(j, "dimension", 3) && matrix(j, "world_to_texture", &t->checkerboard3d.map.world_to_texture);
+        ok = ts_jw_number(j, "dimension", 3) && ts_jw_matrix(j, "world_to_texture", &t->checkerboard3d.map.world_to_texture);
         break;
     case TS_TEXTURE_DOTS:
         TRY(child(w, j, "inside", t->dots.inside, name, err));
@@ -196,16 +161,16 @@ static ts_status fill(ts_json_texture_writer *w, cJSON *j, const ts_texture *t, 
         break;
     case TS_TEXTURE_FBM:
     case TS_TEXTURE_WRINKLED:
-        ok = number(j, "octaves", t->fbm.octaves) && number(j, "roughness", t->fbm.omega) &&
-             matrix(j, "world_to_texture", &t->fbm.map.world_to_texture);
+        ok = ts_jw_number(j, "octaves", t->fbm.octaves) && ts_jw_number(j, "roughness", t->fbm.omega) &&
+             ts_jw_matrix(j, "world_to_texture", &t->fbm.map.world_to_texture);
         break;
     case TS_TEXTURE_WINDY:
-        ok = matrix(j, "world_to_texture", &t->windy.map.world_to_texture);
+        ok = ts_jw_matrix(j, "world_to_texture", &t->windy.map.world_to_texture);
         break;
     case TS_TEXTURE_MARBLE:
-        ok = number(j, "octaves", t->marble.octaves) && number(j, "roughness", t->marble.omega) &&
-             number(j, "scale", t->marble.scale) && number(j, "variation", t->marble.variation) &&
-             matrix(j, "world_to_texture", &t->marble.map.world_to_texture);
+        ok = ts_jw_number(j, "octaves", t->marble.octaves) && ts_jw_number(j, "roughness", t->marble.omega) &&
+             ts_jw_number(j, "scale", t->marble.scale) && ts_jw_number(j, "variation", t->marble.variation) &&
+             ts_jw_matrix(j, "world_to_texture", &t->marble.map.world_to_texture);
         break;
     case TS_TEXTURE_IMAGEMAP: {
         const char *file;
@@ -214,11 +179,11 @@ static ts_status fill(ts_json_texture_writer *w, cJSON *j, const ts_texture *t, 
             return ts_error_set(err, TS_ERR_INTERNAL,
                                 "texture \"%s\": its image map is not one of the scene's texture cache", name);
         static const char *const wraps[] = {"repeat", "black", "clamp"};
-        ok = mapping2d(j, &t->image.map) && add(j, "file", cJSON_CreateString(file)) &&
-             add(j, "wrap", cJSON_CreateString(wraps[opt.wrap])) &&
-             add(j, "trilinear", cJSON_CreateBool(t->image.trilinear)) &&
-             number(j, "max_anisotropy", t->image.max_anisotropy) && number(j, "scale", opt.scale) &&
-             add(j, "gamma", cJSON_CreateBool(opt.gamma)) && add(j, "invert", cJSON_CreateBool(t->image.invert));
+        ok = mapping2d(j, &t->image.map) && ts_jw_add(j, "file", cJSON_CreateString(file)) &&
+             ts_jw_add(j, "wrap", cJSON_CreateString(wraps[opt.wrap])) &&
+             ts_jw_add(j, "trilinear", cJSON_CreateBool(t->image.trilinear)) &&
+             ts_jw_number(j, "max_anisotropy", t->image.max_anisotropy) && ts_jw_number(j, "scale", opt.scale) &&
+             ts_jw_add(j, "gamma", cJSON_CreateBool(opt.gamma)) && ts_jw_add(j, "invert", cJSON_CreateBool(t->image.invert));
         break;
     }
     }

@@ -19,6 +19,7 @@
 #include "mesh/mesh_read.h"
 #include "mesh/mesh_subdiv.h"
 #include "spectrum/spectrum.h"
+#include "json/json_write.h"
 #include "json/scene_json_texture_write.h"
 #include "pbrt3/texture_pbrt.h"
 
@@ -302,63 +303,6 @@ static ts_status constant_texture(imp *im, ts_pbrt_params *ps, ts_pbrt_param *p,
 
 /* ---------------------------------------------------------------- JSON helpers */
 
-static cJSON *jnum_array(const double *v, size_t n)
-{
-    cJSON *a = cJSON_CreateArray();
-    for (size_t i = 0; a && i < n; i++) {
-        cJSON *x = cJSON_CreateNumber(v[i]);
-        if (!x || !cJSON_AddItemToArray(a, x)) {
-            cJSON_Delete(x);
-            cJSON_Delete(a);
-            return NULL;
-        }
-    }
-    return a;
-}
-
-static bool jadd(cJSON *obj, const char *key, cJSON *item)
-{
-    if (!item) return false;
-    if (!cJSON_AddItemToObject(obj, key, item)) {
-        cJSON_Delete(item);
-        return false;
-    }
-    return true;
-}
-
-static bool jrgb(cJSON *obj, const char *key, ts_rgb c)
-{
-    double v[3] = {c.r, c.g, c.b};
-    return jadd(obj, key, jnum_array(v, 3));
-}
-
-static bool jvec3(cJSON *obj, const char *key, ts_vec3 c)
-{
-    double v[3] = {c.x, c.y, c.z};
-    return jadd(obj, key, jnum_array(v, 3));
-}
-
-static bool jnumber(cJSON *obj, const char *key, double v) { return jadd(obj, key, cJSON_CreateNumber(v)); }
-static bool jstring(cJSON *obj, const char *key, const char *v)
-{
-    return jadd(obj, key, cJSON_CreateString(v));
-}
-static bool jbool(cJSON *obj, const char *key, bool v) { return jadd(obj, key, cJSON_CreateBool(v)); }
-
-/* [{"matrix": the 16 numbers of m, row-major}] */
-static cJSON *jtransform(const ts_mat4 *m)
-{
-    double v[16];
-    for (int k = 0; k < 16; k++)
-        v[k] = m->m[k / 4][k % 4];
-    cJSON *list = cJSON_CreateArray(), *step = cJSON_CreateObject();
-    if (!list || !step || !jadd(step, "matrix", jnum_array(v, 16)) || !cJSON_AddItemToArray(list, step)) {
-        cJSON_Delete(step);
-        cJSON_Delete(list);
-        return NULL;
-    }
-    return list;
-}
 
 /* The transform the JSON front end makes of a one-matrix "transform" list (its order of
  * composition, so both front ends hold the same bits). false: the matrix is singular. */
@@ -468,22 +412,22 @@ static ts_status map_film(imp *im, uint32_t *width, uint32_t *height)
     *height = f.height;
     if (im->doc) {
         cJSON *film = cJSON_CreateObject(), *filter = cJSON_CreateObject();
-        bool ok = film && filter && jnumber(film, "width", f.width) && jnumber(film, "height", f.height) &&
-                  jstring(filter, "type", ts_filter_type_name(f.filter)) &&
-                  jnumber(filter, "radius", f.filter_radius);
+        bool ok = film && filter && ts_jw_number(film, "width", f.width) && ts_jw_number(film, "height", f.height) &&
+                  ts_jw_string(filter, "type", ts_filter_type_name(f.filter)) &&
+                  ts_jw_number(filter, "radius", f.filter_radius);
         if (ok && f.filter == TS_FILTER_GAUSSIAN)
-            ok = jnumber(filter, "alpha", f.filter_params.gaussian_alpha);
+            ok = ts_jw_number(filter, "alpha", f.filter_params.gaussian_alpha);
         if (ok && f.filter == TS_FILTER_MITCHELL)
-            ok = jnumber(filter, "b", f.filter_params.mitchell_b) &&
-                 jnumber(filter, "c", f.filter_params.mitchell_c);
-        ok = ok && jadd(film, "filter", filter);
+            ok = ts_jw_number(filter, "b", f.filter_params.mitchell_b) &&
+                 ts_jw_number(filter, "c", f.filter_params.mitchell_c);
+        ok = ok && ts_jw_add(film, "filter", filter);
         if (!ok) cJSON_Delete(filter);
         filter = NULL;
         if (ok && (f.crop[0] != 0 || f.crop[1] != 1 || f.crop[2] != 0 || f.crop[3] != 1)) {
             double c[4] = {f.crop[0], f.crop[1], f.crop[2], f.crop[3]};
-            ok = jadd(film, "crop", jnum_array(c, 4));
+            ok = ts_jw_add(film, "crop", ts_jw_doubles(c, 4));
         }
-        if (!ok || !jadd(im->doc, "film", film)) {
+        if (!ok || !ts_jw_add(im->doc, "film", film)) {
             if (!ok) cJSON_Delete(film);
             return nomem(im);
         }
@@ -571,16 +515,16 @@ static ts_status map_camera(imp *im, uint32_t width, uint32_t height)
     TRY(at(im, ts_scene_builder_set_camera(im->b, &d, im->err), ps, o->loc));
     if (im->doc) {
         cJSON *cam = cJSON_CreateObject();
-        bool ok = cam && jstring(cam, "type", persp ? "perspective" : "orthographic") &&
-                  jvec3(cam, "from", d.from) && jvec3(cam, "to", d.to) && jvec3(cam, "up", d.up) &&
-                  (!persp || jnumber(cam, "fov", d.fov_deg)) && jnumber(cam, "lens_radius", d.lens_radius) &&
-                  jnumber(cam, "focus_distance", d.focus_distance);
-        if (ok && d.mirror) ok = jbool(cam, "mirror", true);
+        bool ok = cam && ts_jw_string(cam, "type", persp ? "perspective" : "orthographic") &&
+                  ts_jw_vec3(cam, "from", d.from) && ts_jw_vec3(cam, "to", d.to) && ts_jw_vec3(cam, "up", d.up) &&
+                  (!persp || ts_jw_number(cam, "fov", d.fov_deg)) && ts_jw_number(cam, "lens_radius", d.lens_radius) &&
+                  ts_jw_number(cam, "focus_distance", d.focus_distance);
+        if (ok && d.mirror) ok = ts_jw_bool(cam, "mirror", true);
         if (ok && d.has_window) {
             double w[4] = {d.screen_window[0], d.screen_window[1], d.screen_window[2], d.screen_window[3]};
-            ok = jadd(cam, "screen_window", jnum_array(w, 4));
+            ok = ts_jw_add(cam, "screen_window", ts_jw_doubles(w, 4));
         }
-        if (!ok || !jadd(im->doc, "camera", cam)) {
+        if (!ok || !ts_jw_add(im->doc, "camera", cam)) {
             if (!ok) cJSON_Delete(cam);
             return nomem(im);
         }
@@ -626,8 +570,8 @@ static ts_status map_sampler(imp *im)
     TRY(at(im, ts_scene_builder_set_sampler(im->b, &smp, (uint32_t)spp, im->err), ps, o->loc));
     if (im->doc) {
         cJSON *j = cJSON_CreateObject();
-        if (!j || !jstring(j, "type", "sobol") || !jnumber(j, "spp", spp) || !jnumber(j, "seed", 0) ||
-            !jadd(im->doc, "sampler", j)) {
+        if (!j || !ts_jw_string(j, "type", "sobol") || !ts_jw_number(j, "spp", spp) || !ts_jw_number(j, "seed", 0) ||
+            !ts_jw_add(im->doc, "sampler", j)) {
             cJSON_Delete(j);
             return nomem(im);
         }
@@ -639,14 +583,7 @@ static ts_status map_integrator(imp *im)
 {
     ts_pbrt_option *o = &im->s->integrator;
     ts_pbrt_params *ps = &o->params;
-    ts_integrator_desc d = {.type = TS_INTEGRATOR_PATH,
-                            .max_depth = 5,
-                            .rr_depth = 3,
-                            .light_sampling = TS_LIGHT_SELECT_POWER,
-                            .strategy = TS_LIGHTS_ALL,
-                            .sampling = TS_SAMPLING_MIS,
-                            .samples_per_light = 1,
-                            .ao_distance = INFINITY};
+    ts_integrator_desc d = ts_integrator_desc_default();
     const char *t = o->type;
     bool path_like = strcmp(t, "path") == 0;
     if (!path_like && (strcmp(t, "bdpt") == 0 || strcmp(t, "mlt") == 0 || strcmp(t, "sppm") == 0 ||
@@ -720,19 +657,19 @@ static ts_status map_integrator(imp *im)
     TRY(at(im, ts_scene_builder_set_integrator(im->b, &d, im->err), ps, o->loc));
     if (im->doc) {
         cJSON *j = cJSON_CreateObject();
-        bool ok = j && jstring(j, "type", d.type == TS_INTEGRATOR_PATH ? "path" : "direct") &&
-                  jnumber(j, "max_depth", d.max_depth);
+        bool ok = j && ts_jw_string(j, "type", d.type == TS_INTEGRATOR_PATH ? "path" : "direct") &&
+                  ts_jw_number(j, "max_depth", d.max_depth);
         if (ok && d.type == TS_INTEGRATOR_PATH)
-            ok = jnumber(j, "rr_depth", d.rr_depth) &&
-                 jstring(j, "light_sampling",
+            ok = ts_jw_number(j, "rr_depth", d.rr_depth) &&
+                 ts_jw_string(j, "light_sampling",
                          d.light_sampling == TS_LIGHT_SELECT_UNIFORM   ? "uniform"
                          : d.light_sampling == TS_LIGHT_SELECT_SPATIAL ? "spatial"
                                                                        : "power");
         if (ok && d.type == TS_INTEGRATOR_DIRECT)
-            ok = jstring(j, "strategy", d.strategy == TS_LIGHTS_ONE ? "one" : "all") &&
+            ok = ts_jw_string(j, "strategy", d.strategy == TS_LIGHTS_ONE ? "one" : "all") &&
                  (d.strategy != TS_LIGHTS_ONE ||
-                  jstring(j, "light_sampling", d.light_sampling == TS_LIGHT_SELECT_UNIFORM ? "uniform" : "power"));
-        if (!ok || !jadd(im->doc, "integrator", j)) {
+                  ts_jw_string(j, "light_sampling", d.light_sampling == TS_LIGHT_SELECT_UNIFORM ? "uniform" : "power"));
+        if (!ok || !ts_jw_add(im->doc, "integrator", j)) {
             if (!ok) cJSON_Delete(j);
             return nomem(im);
         }
@@ -947,13 +884,13 @@ static ts_status jparam(imp *im, cJSON *j, const char *mname, const char *key, c
         constant = ts_json_texture_ref(&im->jtex, tex, hint, im->err);
         if (!constant) return im->err->status;
     }
-    return jadd(j, key, constant) ? TS_OK : nomem(im);
+    return ts_jw_add(j, key, constant) ? TS_OK : nomem(im);
 }
 
 static cJSON *jrgb_item(ts_rgb c)
 {
     const double v[3] = {c.r, c.g, c.b};
-    return jnum_array(v, 3);
+    return ts_jw_doubles(v, 3);
 }
 
 static ts_status jmrgb(imp *im, cJSON *j, const char *mname, const char *key, const ts_material_rgb *p)
@@ -978,7 +915,7 @@ static ts_status jroughness(imp *im, cJSON *j, const char *mname, const ts_mater
 static ts_status json_material_fill(imp *im, cJSON *j, int32_t mi, const char *name, const char *type,
                                     const ts_material *m)
 {
-    if (!jstring(j, "type", type)) return nomem(im);
+    if (!ts_jw_string(j, "type", type)) return nomem(im);
     if (m->bump) TRY(jparam(im, j, name, "bumpmap", m->bump, NULL));
     switch (m->type) {
     case TS_MATERIAL_DIFFUSE:
@@ -998,7 +935,7 @@ static ts_status json_material_fill(imp *im, cJSON *j, int32_t mi, const char *n
         TRY(jmrgb(im, j, name, "eta", &m->conductor_eta));
         TRY(jmrgb(im, j, name, "k", &m->conductor_k));
         TRY(jroughness(im, j, name, m));
-        if (!jstring(j, "distribution", "ggx")) return nomem(im);
+        if (!ts_jw_string(j, "distribution", "ggx")) return nomem(im);
         break;
     case TS_MATERIAL_PLASTIC:
     case TS_MATERIAL_SUBSTRATE:
@@ -1023,7 +960,7 @@ static ts_status json_material_fill(imp *im, cJSON *j, int32_t mi, const char *n
         break;
     case TS_MATERIAL_MIX: {
         cJSON *list = cJSON_CreateArray();
-        if (!jadd(j, "materials", list)) return nomem(im); /* jadd frees list when it fails */
+        if (!ts_jw_add(j, "materials", list)) return nomem(im); /* jadd frees list when it fails */
         for (int k = 0; k < 2; k++) {
             char sub[300];
             material_name(im, im->s->materials[mi].mix[k], sub, sizeof sub);
@@ -1045,7 +982,7 @@ static ts_status json_material(imp *im, int32_t mi, const char *name, const char
     cJSON *j = cJSON_CreateObject();
     if (!j) return nomem(im);
     ts_status st = json_material_fill(im, j, mi, name, type, m);
-    if (!st && !jadd(im->jmaterials, name, j)) return nomem(im); /* jadd frees j */
+    if (!st && !ts_jw_add(im->jmaterials, name, j)) return nomem(im); /* jadd frees j */
     if (st) cJSON_Delete(j);
     return st;
 }
@@ -1087,7 +1024,7 @@ static ts_status material_id(imp *im, int32_t mi, uint32_t *id, bool *no_surface
         if (m.type == TS_MATERIAL_FOURIER) {
             const char *file = NULL;
             ts_pbrt_find_string(ps, "bsdffile", NULL, &file, im->err);
-            if (!jstring(cJSON_GetObjectItemCaseSensitive(im->jmaterials, name), "file", file))
+            if (!ts_jw_string(cJSON_GetObjectItemCaseSensitive(im->jmaterials, name), "file", file))
                 return nomem(im);
         }
     }
@@ -1244,33 +1181,6 @@ static ts_status read_loopsubdiv(imp *im, ts_pbrt_shape *sh, ts_mesh_data *md)
     return TS_OK;
 }
 
-static cJSON *jfloats(const float *v, size_t n)
-{
-    cJSON *a = cJSON_CreateArray();
-    for (size_t i = 0; a && i < n; i++) {
-        cJSON *x = cJSON_CreateNumber(v[i]);
-        if (!x || !cJSON_AddItemToArray(a, x)) {
-            cJSON_Delete(x);
-            cJSON_Delete(a);
-            return NULL;
-        }
-    }
-    return a;
-}
-
-static cJSON *juints(const uint32_t *v, size_t n)
-{
-    cJSON *a = cJSON_CreateArray();
-    for (size_t i = 0; a && i < n; i++) {
-        cJSON *x = cJSON_CreateNumber(v[i]);
-        if (!x || !cJSON_AddItemToArray(a, x)) {
-            cJSON_Delete(x);
-            cJSON_Delete(a);
-            return NULL;
-        }
-    }
-    return a;
-}
 
 /* A mesh's alpha cut-out texture as the builder takes it (scene_builder.h): NULL for
  * opaque; zero: the constant 0 (written to JSON as the number 0). */
@@ -1334,7 +1244,7 @@ static ts_status jcutout(imp *im, cJSON *j, const char *key, const cutout *c)
     snprintf(hint, sizeof hint, "%s", key);
     cJSON *ref = ts_json_texture_ref(&im->jtex, c->tex, hint, im->err);
     if (!ref) return im->err->status;
-    return jadd(j, key, ref) ? TS_OK : nomem(im);
+    return ts_jw_add(j, key, ref) ? TS_OK : nomem(im);
 }
 
 static ts_status map_shape(imp *im, size_t si)
@@ -1436,10 +1346,10 @@ static ts_status map_shape(imp *im, size_t si)
             if (phimax < 360 || fminf(zmin, zmax) > -radius || fmaxf(zmin, zmax) < radius)
                 d.cut = (ts_shape_cut){true, zmin, zmax, phimax};
             if (j) {
-                jok = jstring(j, "type", "sphere") && jnumber(j, "radius", radius);
+                jok = ts_jw_string(j, "type", "sphere") && ts_jw_number(j, "radius", radius);
                 if (jok && d.cut.partial)
-                    jok = jnumber(j, "z_min", zmin) && jnumber(j, "z_max", zmax) &&
-                          jnumber(j, "phi_max", phimax);
+                    jok = ts_jw_number(j, "z_min", zmin) && ts_jw_number(j, "z_max", zmax) &&
+                          ts_jw_number(j, "phi_max", phimax);
             }
         } else if (t[0] == 'd') {
             float height, inner;
@@ -1458,9 +1368,9 @@ static ts_status map_shape(imp *im, size_t si)
             d.disk.inner_radius = inner;
             if (phimax < 360) d.cut = (ts_shape_cut){true, 0, 0, phimax};
             if (j)
-                jok = jstring(j, "type", "disk") && jvec3(j, "center", center) &&
-                      jnumber(j, "radius", radius) && (inner == 0 || jnumber(j, "inner_radius", inner)) &&
-                      (!d.cut.partial || jnumber(j, "phi_max", phimax));
+                jok = ts_jw_string(j, "type", "disk") && ts_jw_vec3(j, "center", center) &&
+                      ts_jw_number(j, "radius", radius) && (inner == 0 || ts_jw_number(j, "inner_radius", inner)) &&
+                      (!d.cut.partial || ts_jw_number(j, "phi_max", phimax));
         } else {
             float zmin, zmax;
             if ((st = ts_pbrt_find_float(ps, "zmin", -1, &zmin, im->err)) ||
@@ -1481,10 +1391,10 @@ static ts_status map_shape(imp *im, size_t si)
             /* as the JSON front end gives it: the tube from p0 to p1 */
             if (phimax < 360) d.cut = (ts_shape_cut){true, 0, d.cylinder.height, phimax};
             if (j)
-                jok = jstring(j, "type", "cylinder") && jvec3(j, "p0", p0) && jvec3(j, "p1", p1) &&
-                      jnumber(j, "radius", radius) && (!d.cut.partial || jnumber(j, "phi_max", phimax));
+                jok = ts_jw_string(j, "type", "cylinder") && ts_jw_vec3(j, "p0", p0) && ts_jw_vec3(j, "p1", p1) &&
+                      ts_jw_number(j, "radius", radius) && (!d.cut.partial || ts_jw_number(j, "phi_max", phimax));
         }
-        if (j && d.reverse_orientation) jok = jok && jbool(j, "reverse_orientation", true);
+        if (j && d.reverse_orientation) jok = jok && ts_jw_bool(j, "reverse_orientation", true);
         d.to_world = ts_xform_compose(&user, &place);
     } else {
         d.type = TS_SHAPE_MESH;
@@ -1507,11 +1417,11 @@ static ts_status map_shape(imp *im, size_t si)
             orient_mesh(&md, sh->reverse_orientation);
             d.mesh = (ts_mesh){md.n_vertices, md.n_triangles, md.p, md.n, md.uv, md.index};
             if (j) {
-                jok = jstring(j, "type", "mesh") &&
-                      jadd(j, "positions", jfloats(md.p, 3 * (size_t)md.n_vertices)) &&
-                      jadd(j, "indices", juints(md.index, 3 * (size_t)md.n_triangles)) &&
-                      (!md.n || jadd(j, "normals", jfloats(md.n, 3 * (size_t)md.n_vertices))) &&
-                      (!md.uv || jadd(j, "uvs", jfloats(md.uv, 2 * (size_t)md.n_vertices)));
+                jok = ts_jw_string(j, "type", "mesh") &&
+                      ts_jw_add(j, "positions", ts_jw_floats(md.p, 3 * (size_t)md.n_vertices)) &&
+                      ts_jw_add(j, "indices", ts_jw_uints(md.index, 3 * (size_t)md.n_triangles)) &&
+                      (!md.n || ts_jw_add(j, "normals", ts_jw_floats(md.n, 3 * (size_t)md.n_vertices))) &&
+                      (!md.uv || ts_jw_add(j, "uvs", ts_jw_floats(md.uv, 2 * (size_t)md.n_vertices)));
             }
         }
     }
@@ -1533,10 +1443,10 @@ static ts_status map_shape(imp *im, size_t si)
         else
             snprintf(name, sizeof name, "default-matte");
         mname = name;
-        jok = jok && jstring(j, "material", mname) && jadd(j, "transform", jtransform(sh->object_to_world));
+        jok = jok && ts_jw_string(j, "material", mname) && ts_jw_add(j, "transform", ts_jw_transform(sh->object_to_world));
         if (jok && emits)
-            jok = jrgb(j, "emission", d.emission) && (!d.two_sided || jbool(j, "two_sided", true)) &&
-                  (!d.light_samples || jnumber(j, "light_samples", d.light_samples));
+            jok = ts_jw_rgb(j, "emission", d.emission) && (!d.two_sided || ts_jw_bool(j, "two_sided", true)) &&
+                  (!d.light_samples || ts_jw_number(j, "light_samples", d.light_samples));
         if (!jok || !cJSON_AddItemToArray(im->jtarget, j))
             st = nomem(im);
         else
@@ -1603,12 +1513,12 @@ static ts_status map_light(imp *im, size_t li)
             d.cone_angle_deg = angle;
             d.cone_delta_deg = delta;
             if (j)
-                jok = jstring(j, "type", "spot") && jvec3(j, "from", d.from) && jvec3(j, "to", d.to) &&
-                      jrgb(j, "intensity", d.color) && jnumber(j, "cone_angle", angle) &&
-                      jnumber(j, "cone_delta", delta);
+                jok = ts_jw_string(j, "type", "spot") && ts_jw_vec3(j, "from", d.from) && ts_jw_vec3(j, "to", d.to) &&
+                      ts_jw_rgb(j, "intensity", d.color) && ts_jw_number(j, "cone_angle", angle) &&
+                      ts_jw_number(j, "cone_delta", delta);
         } else if (j) {
             jok =
-                jstring(j, "type", "point") && jvec3(j, "position", d.from) && jrgb(j, "intensity", d.color);
+                ts_jw_string(j, "type", "point") && ts_jw_vec3(j, "position", d.from) && ts_jw_rgb(j, "intensity", d.color);
         }
     } else if (strcmp(t, "distant") == 0) {
         ts_rgb L;
@@ -1625,8 +1535,8 @@ static ts_status map_light(imp *im, size_t li)
             return derr(im, ps, l->loc, TS_ERR_INVALID, "\"point from\" and \"point to\" must differ");
         }
         if (j)
-            jok = jstring(j, "type", "distant") && jvec3(j, "from", d.from) && jvec3(j, "to", d.to) &&
-                  jrgb(j, "irradiance", d.color);
+            jok = ts_jw_string(j, "type", "distant") && ts_jw_vec3(j, "from", d.from) && ts_jw_vec3(j, "to", d.to) &&
+                  ts_jw_rgb(j, "irradiance", d.color);
     } else if (strcmp(t, "infinite") == 0) {
         ts_rgb L;
         TRY(get_rgb(im, ps, "L", ts_rgb_gray(1), &L));
@@ -1648,11 +1558,11 @@ static ts_status map_light(imp *im, size_t li)
             }
         }
         if (j) {
-            jok = jstring(j, "type", "infinite") &&
-                  (map[0] ? jstring(j, "map", map) && jrgb(j, "scale", d.color)
-                          : jrgb(j, "radiance", d.color)) &&
-                  jadd(j, "transform", jtransform(l->light_to_world)) &&
-                  (!d.samples || jnumber(j, "samples", d.samples));
+            jok = ts_jw_string(j, "type", "infinite") &&
+                  (map[0] ? ts_jw_string(j, "map", map) && ts_jw_rgb(j, "scale", d.color)
+                          : ts_jw_rgb(j, "radiance", d.color)) &&
+                  ts_jw_add(j, "transform", ts_jw_transform(l->light_to_world)) &&
+                  (!d.samples || ts_jw_number(j, "samples", d.samples));
         }
     } else {
         cJSON_Delete(j);
@@ -1725,8 +1635,8 @@ static ts_status map_objects(imp *im)
             char name[300];
             snprintf(name, sizeof name, "%.200s#%d", s->objects[in->object].name, (int)in->object);
             cJSON *j = cJSON_CreateObject();
-            if (!j || !jstring(j, "object", name) ||
-                !jadd(j, "transform", jtransform(in->instance_to_world)) ||
+            if (!j || !ts_jw_string(j, "object", name) ||
+                !ts_jw_add(j, "transform", ts_jw_transform(in->instance_to_world)) ||
                 !cJSON_AddItemToArray(im->jinstances, j)) {
                 cJSON_Delete(j);
                 st = nomem(im);
@@ -1779,7 +1689,7 @@ static ts_status run(imp *im)
             /* Every texture in definition order (children before parents, as v1 wants),
              * under its name; a name given again in another scope gets "#k". */
             cJSON *jt = cJSON_CreateObject();
-            if (!jadd(im->doc, "textures", jt)) return nomem(im);
+            if (!ts_jw_add(im->doc, "textures", jt)) return nomem(im);
             ts_json_texture_writer_init(&im->jtex, jt, cache);
             for (size_t i = 0; i < s->texture_count; i++) {
                 ts_status st = ts_json_texture_write(&im->jtex, im->tp.textures[i], s->textures[i].name, im->err);
@@ -1827,7 +1737,7 @@ ts_status ts_pbrt_import(ts_pbrt_scene *scene, ts_scene_builder *b, cJSON *doc, 
         im.jobjects = cJSON_CreateObject();
         im.jinstances = cJSON_CreateArray();
         im.jlights = cJSON_CreateArray();
-        bool ok = jnumber(doc, "tessera", 1);
+        bool ok = ts_jw_number(doc, "tessera", 1);
         /* film, camera, sampler and integrator are added by their mappings, then these. */
         if (!ok || !im.jmaterials || !im.jshapes || !im.jlights || !im.jobjects || !im.jinstances)
             st = nomem(&im);
@@ -1835,8 +1745,8 @@ ts_status ts_pbrt_import(ts_pbrt_scene *scene, ts_scene_builder *b, cJSON *doc, 
     if (!st) st = run(&im);
     if (doc) {
         bool objects = !st && im.jobjects && im.jobjects->child;
-        if (!st && !(jadd(doc, "materials", im.jmaterials) && jadd(doc, "shapes", im.jshapes) &&
-                     jadd(doc, "lights", im.jlights)))
+        if (!st && !(ts_jw_add(doc, "materials", im.jmaterials) && ts_jw_add(doc, "shapes", im.jshapes) &&
+                     ts_jw_add(doc, "lights", im.jlights)))
             st = nomem(&im);
         else if (st) {
             cJSON_Delete(im.jmaterials);
@@ -1844,7 +1754,7 @@ ts_status ts_pbrt_import(ts_pbrt_scene *scene, ts_scene_builder *b, cJSON *doc, 
             cJSON_Delete(im.jlights);
         }
         if (objects) {
-            if (!(jadd(doc, "objects", im.jobjects) && jadd(doc, "instances", im.jinstances)))
+            if (!(ts_jw_add(doc, "objects", im.jobjects) && ts_jw_add(doc, "instances", im.jinstances)))
                 st = nomem(&im);
         } else {
             cJSON_Delete(im.jobjects);
