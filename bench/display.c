@@ -30,26 +30,13 @@
 #include <unistd.h>
 
 #include "display.h"
-
-static double now_s(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
+#include "bench_util.h"
 
 /* ---------------------------------------------------------------- a viewer that reads */
 static atomic_bool g_stop;
 static atomic_ullong g_bytes;
 static atomic_ullong g_viewer_cpu_ns; /* CPU time of the viewer thread (not the renderer's) */
 static atomic_int g_connections_done;
-
-static double cpu_s(clockid_t c)
-{
-    struct timespec t;
-    clock_gettime(c, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
 
 static void *viewer(void *arg)
 {
@@ -66,7 +53,7 @@ static void *viewer(void *arg)
             atomic_fetch_add(&g_bytes, (unsigned long long)r);
         }
         close(fd);
-        atomic_store(&g_viewer_cpu_ns, (unsigned long long)(cpu_s(CLOCK_THREAD_CPUTIME_ID) * 1e9));
+        atomic_store(&g_viewer_cpu_ns, (unsigned long long)(clock_s(CLOCK_THREAD_CPUTIME_ID) * 1e9));
         atomic_fetch_add(&g_connections_done, 1);
     }
     return NULL;
@@ -89,12 +76,12 @@ static void on_tile(void *user, ts_sched_job *j, const ts_tile_event *ev)
     /* The workers' own CPU time, summed between consecutive tiles of this run per thread. */
     static _Thread_local const run *seen;
     static _Thread_local double last_cpu;
-    double cpu = cpu_s(CLOCK_THREAD_CPUTIME_ID);
+    double cpu = clock_s(CLOCK_THREAD_CPUTIME_ID);
     if (seen == r) atomic_fetch_add(&r->worker_cpu_ns, (unsigned long long)((cpu - last_cpu) * 1e9));
     seen = r, last_cpu = cpu;
-    double t = now_s();
+    double t = clock_s(CLOCK_MONOTONIC);
     if (r->d) srv_display_tile(r->d, j, ev); /* without a display: the timing alone, as a baseline */
-    unsigned long long ns = (unsigned long long)((now_s() - t) * 1e9), m = atomic_load(&r->max_ns);
+    unsigned long long ns = (unsigned long long)((clock_s(CLOCK_MONOTONIC) - t) * 1e9), m = atomic_load(&r->max_ns);
     atomic_fetch_add(&r->callback_ns, ns);
     while (ns > m && !atomic_compare_exchange_weak(&r->max_ns, &m, ns)) {}
 }
@@ -116,7 +103,7 @@ static double render(ts_scheduler *s, const char *address, uint32_t spp, double 
 {
     g_display_cpu = 0;
     int conns = atomic_load(&g_connections_done);
-    double viewer0 = (double)atomic_load(&g_viewer_cpu_ns) * 1e-9, cpu0 = cpu_s(CLOCK_PROCESS_CPUTIME_ID);
+    double viewer0 = (double)atomic_load(&g_viewer_cpu_ns) * 1e-9, cpu0 = clock_s(CLOCK_PROCESS_CPUTIME_ID);
     ts_error err = {0};
     ts_scene *scene = NULL;
     if (ts_scene_load_builtin(NULL, &scene, &err)) {
@@ -133,7 +120,7 @@ static double render(ts_scheduler *s, const char *address, uint32_t spp, double 
     desc.settings.integrator = TS_INTEGRATOR_PATH;
     desc.settings.spp = spp;
     desc.callbacks = (ts_job_callbacks){on_tile, NULL, on_done, &r};
-    double t0 = now_s();
+    double t0 = clock_s(CLOCK_MONOTONIC);
     ts_sched_job *j = ts_scheduler_submit(s, &desc, &err);
     if (!j) {
         fprintf(stderr, "bench_display: %s\n", err.message);
@@ -142,7 +129,7 @@ static double render(ts_scheduler *s, const char *address, uint32_t spp, double 
     pthread_mutex_lock(&r.mu);
     while (!r.done) pthread_cond_wait(&r.cv, &r.mu);
     pthread_mutex_unlock(&r.mu);
-    double t = now_s() - t0;
+    double t = clock_s(CLOCK_MONOTONIC) - t0;
     if (r.d) {
         if (!srv_display_flush(r.d, 30)) fprintf(stderr, "bench_display: the display did not drain\n");
         srv_display_stats st;
@@ -152,7 +139,7 @@ static double render(ts_scheduler *s, const char *address, uint32_t spp, double 
         srv_display_destroy(r.d);
         while (atomic_load(&g_connections_done) == conns) poll(NULL, 0, 5); /* the viewer saw EOF */
     }
-    *cpu = cpu_s(CLOCK_PROCESS_CPUTIME_ID) - cpu0 - ((double)atomic_load(&g_viewer_cpu_ns) * 1e-9 - viewer0);
+    *cpu = clock_s(CLOCK_PROCESS_CPUTIME_ID) - cpu0 - ((double)atomic_load(&g_viewer_cpu_ns) * 1e-9 - viewer0);
     ts_sched_job_release(j);
     *cb_s = (double)atomic_load(&r.callback_ns) * 1e-9;
     if (getenv("BENCH_DISPLAY_VERBOSE"))
@@ -160,17 +147,6 @@ static double render(ts_scheduler *s, const char *address, uint32_t spp, double 
                 address ? "with" : "without", (double)atomic_load(&r.callback_ns) * 1e-6,
                 (double)atomic_load(&r.max_ns) * 1e-6, (double)atomic_load(&r.worker_cpu_ns) * 1e-9, *cpu);
     return t;
-}
-
-static int cmp(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, cmp);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
 int main(int argc, char **argv)

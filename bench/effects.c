@@ -30,18 +30,7 @@
 #include "integrators/effects.h"
 #include "render/render.h"
 #include "json/scene_json.h"
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
+#include "bench_util.h"
 
 /* Quartiles of v (sorted in place): q[0] = 25 %, q[1] = median, q[2] = 75 %. */
 static void quartiles(double *v, int n, double q[3])

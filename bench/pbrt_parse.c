@@ -20,19 +20,7 @@
 #include <unistd.h>
 
 #include "pbrt3/pbrt_parser.h"
-
-static double clock_s(clockid_t id)
-{
-    struct timespec ts;
-    clock_gettime(id, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
+#include "bench_util.h"
 
 /* The mesh file: a (side+1)² vertex grid on a gently curved surface, 2·side² triangles. */
 static long write_mesh(const char *path, int side)

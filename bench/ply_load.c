@@ -26,19 +26,7 @@
 
 #include "mesh/mesh_file.h"
 #include "load/scene_load.h"
-
-static double clock_s(clockid_t id)
-{
-    struct timespec ts;
-    clock_gettime(id, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
+#include "bench_util.h"
 
 /* A (side+1)² vertex grid, 2·side² triangles; returns the file's size or -1. */
 static long write_ply(const char *path, int side)

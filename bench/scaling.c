@@ -42,16 +42,10 @@
 #include "render/render.h"
 #include "scene/scene.h"
 #include "json/scene_json.h"
+#include "bench_util.h"
 
 #define MAX_THREADS 16
 #define MAX_REPS 50
-
-static double now_s(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
 
 /* What one worker of one render did, as of its last finished tile. */
 typedef struct slot {
@@ -89,7 +83,7 @@ static void on_tile(void *user, int x, int y, int w, int h)
     }
     slot *s = &tr->slots[my_slot]; /* written by this thread only; read after the join */
     read_schedstat(&s->cpu_s, &s->wait_s);
-    s->t_last = now_s();
+    s->t_last = clock_s(CLOCK_MONOTONIC);
     s->tiles++;
 }
 
@@ -135,9 +129,9 @@ static int render(const ts_scene *s, uint32_t spp, int threads, run_result *out,
                              .on_tile = on_tile,
                              .user = &tr};
     ts_render_stats stats = {0};
-    double st0 = steal_s(), r0 = rusage_cpu(), t0 = now_s();
+    double st0 = steal_s(), r0 = rusage_cpu(), t0 = clock_s(CLOCK_MONOTONIC);
     ts_status st = ts_render(&req, &stats, err);
-    double t1 = now_s(), r1 = rusage_cpu(), st1 = steal_s();
+    double t1 = clock_s(CLOCK_MONOTONIC), r1 = rusage_cpu(), st1 = steal_s();
     ts_film_destroy(film);
     if (st != TS_OK) return -1;
     memset(out, 0, sizeof *out);
@@ -164,18 +158,6 @@ static int render(const ts_scene *s, uint32_t spp, int threads, run_result *out,
     }
     out->busy = proj_sum > 0 ? out->cpu / proj_sum : 0;
     return 0;
-}
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
 static int bench_scene(const char *path, int reps, double seconds, int threads)

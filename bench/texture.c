@@ -22,13 +22,7 @@
 #include "textures/mipmap.h"
 #include "textures/noise.h"
 #include "textures/texture.h"
-
-static double cpu_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
+#include "bench_util.h"
 
 typedef struct query {
     ts_vec2 st, dx, dy;
@@ -42,7 +36,7 @@ static double run(int kind, const ts_mipmap *m, const ts_texture *tex, const que
 {
     double best = 1e30;
     for (int r = 0; r < runs; r++) {
-        double sum = 0, t0 = cpu_s();
+        double sum = 0, t0 = clock_s(CLOCK_THREAD_CPUTIME_ID);
         for (int i = 0; i < n; i++) {
             ts_rgb v = {0, 0, 0};
             ts_vec2 dx = {q[i].dx.x * scale, q[i].dx.y * scale}, dy = {q[i].dy.x * scale, q[i].dy.y * scale};
@@ -67,7 +61,7 @@ static double run(int kind, const ts_mipmap *m, const ts_texture *tex, const que
             }
             sum += v.r + v.g + v.b;
         }
-        double t = cpu_s() - t0;
+        double t = clock_s(CLOCK_THREAD_CPUTIME_ID) - t0;
         if (t < best) best = t;
         *checksum += sum;
     }

@@ -54,6 +54,7 @@
 #include "render/render.h"
 #include "scene/scene.h"
 #include "json/scene_json.h"
+#include "bench_util.h"
 
 #define MAX_REPS        15
 #define MAX_INTEGRATORS 8
@@ -265,18 +266,6 @@ static int render(const ts_scene *s, ts_integrator_type integ, uint32_t spp, int
 
 /* ---------------------------------------------------------------- one scene */
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 static const char *integrator_name(ts_integrator_type t)
 {
     switch (t) {
@@ -408,12 +397,11 @@ static int parse_integrator(const char *name, size_t len, const ts_scene *s, ts_
                  {"ao", TS_INTEGRATOR_AO},
                  {"normals", TS_INTEGRATOR_NORMALS}};
     if (len == 5 && strncmp(name, "scene", 5) == 0) {
-        *out = ts_integrator_available(s->integrator.type) ? s->integrator.type : TS_INTEGRATOR_AO;
+        *out = s->integrator.type;
         return 0;
     }
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
         if (strlen(names[i].name) == len && strncmp(name, names[i].name, len) == 0) {
-            if (!ts_integrator_available(names[i].type)) return 1; /* skipped */
             *out = names[i].type;
             return 0;
         }
@@ -423,8 +411,7 @@ static int parse_integrator(const char *name, size_t len, const ts_scene *s, ts_
 enum { CHILD_SKIPPED = 3, CHILD_END = 4, CHILD_LOAD_FAILED = 5 };
 
 /* Child process: entry j of the integrator list on scene `path`. Exit status 0 (done), 1
- * (failed), 2 (bad list), CHILD_SKIPPED (unavailable, or the same integrator as an
- * earlier entry), CHILD_END (no entry j), CHILD_LOAD_FAILED. */
+ * (failed), 2 (bad list), CHILD_SKIPPED (the same integrator as an earlier entry), CHILD_END (no entry j), CHILD_LOAD_FAILED. */
 static int run_child(const char *path, int j, const options *o)
 {
     ts_scene *s = NULL;
@@ -446,7 +433,7 @@ static int run_child(const char *path, int j, const options *o)
             break;
         }
         if (k < j) continue;
-        rc = r == 1 ? CHILD_SKIPPED : 0;
+        rc = 0;
         for (int m = 0; m < k && rc == 0; m++)
             if (types[m] == types[k]) rc = CHILD_SKIPPED;
         if (rc == 0) rc = bench_integrator(path, s, types[k], o) == 0 ? 0 : 1;

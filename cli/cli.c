@@ -419,11 +419,6 @@ static int prepare_render(const render_opts *o, ts_scene **scene_out, ts_job_set
     }
     *range = ts_shard_range(shard_i, shard_n, js->spp);
     *shard_i_out = shard_i, *shard_n_out = shard_n;
-    if (!ts_integrator_available(js->integrator)) {
-        fprintf(stderr, "tessera: note: the '%s' integrator is not implemented yet; rendering the 'ao' debugging view\n",
-                ts_integrator_name(js->integrator));
-        js->integrator = TS_INTEGRATOR_AO;
-    }
     if (!o->quiet) {
         char on[400], off[400];
         ts_effects_format(scene->effects, on, sizeof on);

@@ -546,11 +546,6 @@ static srv_job *submit(srv_store *st, const char *text, size_t len, const srv_su
                      cfg->limits.max_spp);
         goto fail_scene;
     }
-    if (!ts_integrator_available(s->integrator.type)) {
-        ts_error_set(err, TS_ERR_UNSUPPORTED, "integrator.type: the '%s' integrator is not available in this build",
-                     ts_integrator_name(s->integrator.type));
-        goto fail_scene;
-    }
     /* The work a job may ask for: an upper bound on the rays it traces. */
     double rays = ts_integrator_rays_per_sample(s, js.integrator, s->effects);
     double work = rays * (double)spp * (double)pixels;

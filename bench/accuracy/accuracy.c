@@ -72,6 +72,7 @@
 #include "render/render.h"
 #include "scene/scene.h"
 #include "json/scene_json.h"
+#include "../bench_util.h"
 
 #define MAX_LEVELS  24
 #define MAX_CONFIGS 16
@@ -239,12 +240,6 @@ static double render_pass(const ts_scene *s, ts_film *f, uint32_t b, uint32_t e,
         return -1;
     }
     return ts_now_seconds() - t0;
-}
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
 }
 
 /* relMSE, MSE, and relMSE without the 0.1% largest per-value terms (fireflies), each

@@ -19,12 +19,6 @@ const char *ts_integrator_name(ts_integrator_type type)
     return "unknown";
 }
 
-bool ts_integrator_available(ts_integrator_type type)
-{
-    (void)type;
-    return true;
-}
-
 /* Ambient occlusion: the cosine-weighted fraction of the hemisphere around the shading
  * normal (turned to face the viewer) that is open within ao_distance. One shadow ray per
  * sample, so the estimate is 0 or 1 and its mean is the occlusion integral ∫V cosθ/π. */

@@ -50,9 +50,6 @@ typedef struct ts_counters {
 /* The scene-format name of an integrator type ("path", "direct", "ao", "normals"). */
 const char *ts_integrator_name(ts_integrator_type type);
 
-/* True when the integrator type is implemented in this build. */
-bool ts_integrator_available(ts_integrator_type type);
-
 /* An upper bound on the rays one camera sample of this integrator traces in scene s with
  * these effects (the camera ray included): path 1 + 2·max_depth (a continuation and a
  * shadow ray a bounce), direct (1 + shadow and BSDF rays of its light sampling) at each

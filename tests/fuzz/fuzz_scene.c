@@ -80,7 +80,6 @@ int LLVMFuzzerInitialize(int *argc, char ***argv)
 
 static void render_centre(const ts_scene *s)
 {
-    if (!ts_integrator_available(s->integrator.type)) return;
     int w = s->crop_x1 - s->crop_x0, h = s->crop_y1 - s->crop_y0;
     FUZZ_CHECK(w >= 1 && h >= 1 && s->crop_x0 >= 0 && s->crop_y0 >= 0 && s->crop_x1 <= s->width &&
                s->crop_y1 <= s->height);
