@@ -319,10 +319,7 @@ static void encode_task(void *arg)
     ts_image_fini(&img);
     ts_film_destroy(film);
     if (st) {
-        char msg[700];
-        snprintf(msg, sizeof msg, "{\"error\":\"encoding failed: %s\",\"status\":500}", err.message);
-        r->reply_body = (unsigned char *)strdup(msg);
-        r->reply_len = r->reply_body ? strlen(msg) : 0;
+        srv_http_set_error(r, 500, "encoding failed: %s", err.message);
     } else {
         r->reply_status = 200;
         r->reply_type = t->png ? "image/png" : "image/x-exr";
@@ -808,11 +805,8 @@ static int handle(srv_request *r)
     if (p.route == SRV_ROUTE_OTHER) return srv_http_error(r, 404, "no such resource: %s", r->url);
     bool get = !strcmp(m, "GET") || !strcmp(m, "HEAD");
     if (p.route != SRV_ROUTE_UI && p.route != SRV_ROUTE_HEALTHZ && !authorised(r)) {
-        const char *msg = "{\"error\":\"this server needs a bearer token: Authorization: Bearer <token>\",\"status\":401}";
-        struct MHD_Response *resp = MHD_create_response_from_buffer(strlen(msg), (void *)msg, MHD_RESPMEM_PERSISTENT);
-        MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, "application/json");
-        MHD_add_response_header(resp, MHD_HTTP_HEADER_WWW_AUTHENTICATE, "Bearer realm=\"tessera\"");
-        return srv_http_queue(r, 401, resp);
+        return srv_http_error_header(r, 401, MHD_HTTP_HEADER_WWW_AUTHENTICATE, "Bearer realm=\"tessera\"",
+                                     "this server needs a bearer token: Authorization: Bearer <token>");
     }
     if (!strcmp(m, "POST") && !post_type_ok(r, p.route)) {
         const char *type = MHD_lookup_connection_value(r->conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_TYPE);

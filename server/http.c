@@ -188,56 +188,59 @@ static void utf8_clean(const char *s, char *out, size_t out_len)
     out[at] = '\0';
 }
 
-void srv_http_set_error(srv_request *r, unsigned status, const char *fmt, ...)
+/* The one error body of every reply: {"error": the message as valid UTF-8, "status": status},
+ * malloc'd; NULL when out of memory (the caller then answers 500 with OOM_BODY). */
+#define OOM_BODY "{\"error\":\"out of memory\",\"status\":500}"
+static char *error_body(unsigned status, const char *fmt, va_list ap)
 {
     char text[1024], msg[1024];
-    va_list ap;
-    va_start(ap, fmt);
     vsnprintf(text, sizeof text, fmt, ap);
-    va_end(ap);
     utf8_clean(text, msg, sizeof msg);
     cJSON *o = cJSON_CreateObject();
-    cJSON_AddStringToObject(o, "error", msg);
-    cJSON_AddNumberToObject(o, "status", status);
-    char *s = cJSON_PrintUnformatted(o);
+    char *s = NULL;
+    if (o && cJSON_AddStringToObject(o, "error", msg) && cJSON_AddNumberToObject(o, "status", status))
+        s = cJSON_PrintUnformatted(o);
     cJSON_Delete(o);
+    return s;
+}
+
+/* Sets r's reply to body (taken), or to the out-of-memory 500 when body is NULL. */
+static void set_json_reply(srv_request *r, unsigned status, char *body)
+{
     free(r->reply_body);
-    r->reply_status = s ? status : 500;
+    r->reply_status = body ? status : 500;
     r->reply_type = "application/json";
-    r->reply_body = (unsigned char *)(s ? s : strdup("{\"error\":\"out of memory\",\"status\":500}"));
+    r->reply_body = (unsigned char *)(body ? body : strdup(OOM_BODY));
     r->reply_len = r->reply_body ? strlen((char *)r->reply_body) : 0;
+}
+
+void srv_http_set_error(srv_request *r, unsigned status, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    char *s = error_body(status, fmt, ap);
+    va_end(ap);
+    set_json_reply(r, status, s);
 }
 
 int srv_http_error(srv_request *r, unsigned status, const char *fmt, ...)
 {
-    char text[1024], msg[1024];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(text, sizeof text, fmt, ap);
+    char *s = error_body(status, fmt, ap);
     va_end(ap);
-    utf8_clean(text, msg, sizeof msg);
-    cJSON *o = cJSON_CreateObject();
-    cJSON_AddStringToObject(o, "error", msg);
-    cJSON_AddNumberToObject(o, "status", status);
-    char *s = cJSON_PrintUnformatted(o);
-    cJSON_Delete(o);
-    int ret = srv_http_reply_json(r, status, s ? s : "{\"error\":\"out of memory\"}");
+    int ret = srv_http_reply_json(r, s ? status : 500, s ? s : OOM_BODY);
     free(s);
     return ret;
 }
 
-int srv_http_method_not_allowed(srv_request *r, const char *allow)
+int srv_http_error_header(srv_request *r, unsigned status, const char *header, const char *value, const char *fmt,
+                          ...)
 {
-    /* The method is the client's: through cJSON, so quotes and backslashes in it are escaped
-     * (found by tests/fuzz/fuzz_http.c). */
-    char text[256], clean[256];
-    snprintf(text, sizeof text, "method %s is not allowed here; allowed: %s", r->method, allow);
-    utf8_clean(text, clean, sizeof clean);
-    cJSON *o = cJSON_CreateObject();
-    cJSON_AddStringToObject(o, "error", clean);
-    cJSON_AddNumberToObject(o, "status", 405);
-    char *msg = cJSON_PrintUnformatted(o);
-    cJSON_Delete(o);
+    va_list ap;
+    va_start(ap, fmt);
+    char *msg = error_body(status, fmt, ap);
+    va_end(ap);
     if (!msg) return MHD_NO;
     struct MHD_Response *resp = MHD_create_response_from_buffer(strlen(msg), msg, MHD_RESPMEM_MUST_FREE);
     if (!resp) {
@@ -245,8 +248,16 @@ int srv_http_method_not_allowed(srv_request *r, const char *allow)
         return MHD_NO;
     }
     MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, "application/json");
-    MHD_add_response_header(resp, MHD_HTTP_HEADER_ALLOW, allow);
-    return srv_http_queue(r, 405, resp);
+    MHD_add_response_header(resp, header, value);
+    return srv_http_queue(r, status, resp);
+}
+
+int srv_http_method_not_allowed(srv_request *r, const char *allow)
+{
+    /* The method is the client's: through cJSON, so quotes and backslashes in it are escaped
+     * (found by tests/fuzz/fuzz_http.c). */
+    return srv_http_error_header(r, 405, MHD_HTTP_HEADER_ALLOW, allow, "method %s is not allowed here; allowed: %s",
+                                 r->method, allow);
 }
 
 
@@ -270,11 +281,7 @@ int srv_http_defer(srv_request *r, void (*fn)(void *r))
     MHD_suspend_connection(r->conn);
     if (!srv_offload_submit(r->http->cfg.offload, run_deferred, d)) {
         free(d);
-        r->reply_status = 503;
-        r->reply_type = "application/json";
-        const char *m = "{\"error\":\"the server is shutting down\",\"status\":503}";
-        r->reply_body = (unsigned char *)strdup(m);
-        r->reply_len = r->reply_body ? strlen(m) : 0;
+        srv_http_set_error(r, 503, "the server is shutting down");
         srv_http_complete(r);
     }
     return MHD_YES;

@@ -95,11 +95,16 @@ const srv_http_config *srv_http_config_of(const srv_http *h);
 
 /* Replies (from a handler). body is copied. Adds CORS headers when configured. */
 int srv_http_reply(srv_request *r, unsigned status, const char *type, const void *body, size_t len);
-/* Replies with a JSON document ({"error": message} for srv_http_error). */
+/* Replies with a JSON document. srv_http_error, srv_http_set_error and srv_http_error_header
+ * write every error body of the server the one way: {"error": the message (valid UTF-8,
+ * escaped by cJSON), "status": status}; out of memory, a 500 of the same shape. */
 int srv_http_reply_json(srv_request *r, unsigned status, const char *json);
 int srv_http_error(srv_request *r, unsigned status, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 /* For a deferred task: sets the reply to that error document (as srv_http_error's). */
 void srv_http_set_error(srv_request *r, unsigned status, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+/* The error document with one more header (header: value), e.g. 401's WWW-Authenticate. */
+int srv_http_error_header(srv_request *r, unsigned status, const char *header, const char *value, const char *fmt,
+                          ...) __attribute__((format(printf, 5, 6)));
 /* 405 with Allow. */
 int srv_http_method_not_allowed(srv_request *r, const char *allow);
 /* Queues a prepared response (takes ownership). */

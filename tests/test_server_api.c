@@ -540,6 +540,18 @@ static void expect(const test_server *s, const char *method, const char *path, c
 }
 
 /* Every bad-request class, then the server is still healthy. */
+/* Every error reply has the one error body: {"error": a sentence, "status": the reply's status}. */
+static void assert_error_body(const http_resp *r)
+{
+    cJSON *o = cJSON_Parse(r->body);
+    assert_non_null(o);
+    const cJSON *e = cJSON_GetObjectItemCaseSensitive(o, "error"), *st = cJSON_GetObjectItemCaseSensitive(o, "status");
+    assert_true(cJSON_IsString(e) && e->valuestring[0]);
+    assert_true(cJSON_IsNumber(st));
+    assert_int_equal((long)st->valuedouble, r->status);
+    cJSON_Delete(o);
+}
+
 static void test_bad_requests(void **state)
 {
     (void)state;
@@ -575,6 +587,7 @@ static void test_bad_requests(void **state)
     ts_http(&s, "PUT", "/api/v1/jobs", "{}", 2, NULL, &r);
     assert_int_equal(r.status, 405);
     assert_non_null(strstr(r.headers, "Allow: GET, HEAD, POST"));
+    assert_error_body(&r);
     ts_http_free(&r);
     ts_http(&s, "POST", "/healthz", "{}", 2, NULL, &r);
     assert_int_equal(r.status, 405);
@@ -597,6 +610,7 @@ static void test_auth(void **state)
     ts_http(&s, "GET", "/api/v1/jobs", NULL, 0, NULL, &r);
     assert_int_equal(r.status, 401);
     assert_non_null(strstr(r.headers, "WWW-Authenticate: Bearer"));
+    assert_error_body(&r);
     ts_http_free(&r);
     ts_http(&s, "GET", "/api/v1/jobs", NULL, 0, "Authorization: Bearer wrong", &r);
     assert_int_equal(r.status, 401);
