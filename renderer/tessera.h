@@ -8,6 +8,7 @@
 #ifndef TS_TESSERA_H
 #define TS_TESSERA_H
 
+#include "core/cancel.h"
 #include "core/error.h"
 #include "film/film.h"
 #include "film/film_image.h"

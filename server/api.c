@@ -17,6 +17,7 @@
 #include "assets.h"
 #include "bundle.h"
 #include "job_store.h"
+#include "offload.h"
 #include "persist.h"
 #include "tessera.h"
 
@@ -269,13 +270,14 @@ static bool origin_allowed(srv_request *r)
 
 /* ---------------------------------------------------------------- images (deferred) */
 
-/* A deferred request's state (r->task, freed by request_done): an image's, or a bundle's
- * (job NULL, spp its ?spp=). */
+/* A deferred request's state (r->task, freed by request_done): an image's, or a load's
+ * (job NULL; a bundle's spp its ?spp=; load its bound, from the request's arrival). */
 typedef struct image_task {
     srv_job *job;
     bool tile, png;
     int tx, ty;
     uint32_t spp;
+    ts_cancel load;
 } image_task;
 
 
@@ -432,37 +434,27 @@ static int get_events(srv_request *r, srv_job *j)
 
 static bool parse_decimal(const char *s, size_t n, uint64_t *out);
 
+static void json_task(void *arg);
+
+/* The state of a load (a posted scene or bundle) about to go to the loader pool: its time
+ * (--max-load-seconds) runs from now, so waiting in the queue counts. */
+static image_task *load_state(srv_request *r)
+{
+    const srv_api *a = r->app;
+    image_task *t = calloc(1, sizeof *t);
+    if (!t) return NULL;
+    ts_cancel_init(&t->load, a->loads_stop, a->max_load_s);
+    r->task = t;
+    return t;
+}
+
 static int post_job(srv_request *r)
 {
     if (MHD_lookup_connection_value(r->conn, MHD_GET_ARGUMENT_KIND, "spp"))
         return srv_http_error(r, 400, "spp: the query parameter is for bundles; a JSON scene sets job.spp");
     if (!r->body_len) return srv_http_error(r, 400, "the request body is empty: send a scene document (JSON)");
-    ts_error err = {0};
-    int status = 500;
-    srv_job *j = srv_store_submit(((srv_api *)r->app)->store, r->body, r->body_len, &status, &err);
-    if (!j) return srv_http_error(r, (unsigned)status, "%s", err.message);
-    if (((srv_api *)r->app)->data_dir) {
-        /* On disk before the 201: an accepted job is not lost to a crash before its first
-         * checkpoint. If that fails the job renders on and its status says why. */
-        ts_error perr = {0};
-        if (srv_persist_save_submitted(((srv_api *)r->app)->data_dir, j, &perr) && srv_job_set_checkpoint_error(j, perr.message))
-            fprintf(stderr, "tessera: recording job %s failed, it renders on unrecorded: %s\n", j->id, perr.message);
-    }
-    cJSON *o = srv_job_status_json(j);
-    char loc[96];
-    snprintf(loc, sizeof loc, API_PREFIX "/%s", j->id);
-    srv_job_release(j);
-    char *s = cJSON_PrintUnformatted(o);
-    cJSON_Delete(o);
-    if (!s) return srv_http_error(r, 500, "out of memory");
-    struct MHD_Response *resp = MHD_create_response_from_buffer(strlen(s), s, MHD_RESPMEM_MUST_FREE);
-    if (!resp) {
-        free(s);
-        return MHD_NO;
-    }
-    MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, "application/json");
-    MHD_add_response_header(resp, MHD_HTTP_HEADER_LOCATION, loc);
-    return srv_http_queue(r, 201, resp);
+    if (!load_state(r)) return srv_http_error(r, 500, "out of memory");
+    return srv_http_defer_to(r, ((srv_api *)r->app)->loaders, json_task);
 }
 
 /* ---------------------------------------------------------------- bundles */
@@ -489,6 +481,62 @@ static void accepted(srv_request *r, srv_job *j)
     r->reply_body = (unsigned char *)s;
     r->reply_len = strlen(s);
     snprintf(r->reply_location, sizeof r->reply_location, API_PREFIX "/%s", j->id);
+}
+
+/* At a load's start on a loader thread: false, with the reply set, when the server is
+ * shutting down or the request's time ran out while it waited in the queue. */
+static bool load_begin(srv_request *r, image_task *t)
+{
+    const srv_api *a = r->app;
+    if (!ts_cancel_requested(&t->load)) {
+        atomic_fetch_add(&a->loads->started, 1);
+        return true;
+    }
+    if (atomic_load(&t->load.timed_out)) {
+        atomic_fetch_add(&a->loads->timed_out, 1);
+        srv_http_set_error(r, 503, "the server's scene loaders were busy for this request's whole --max-load-seconds "
+                                   "(%g s); try again later", a->max_load_s);
+    } else {
+        atomic_fetch_add(&a->loads->cancelled, 1);
+        srv_http_set_error(r, 503, "the server is shutting down");
+    }
+    return false;
+}
+
+/* A load that failed with status: counts a stop, and says a time-out in the server's terms. */
+static void load_failed(srv_request *r, image_task *t, int status, ts_error *err)
+{
+    const srv_api *a = r->app;
+    if (err->status != TS_ERR_CANCELLED) return;
+    if (atomic_load(&t->load.timed_out)) {
+        atomic_fetch_add(&a->loads->timed_out, 1);
+        ts_error_set(err, TS_ERR_CANCELLED, "the scene did not load within this server's --max-load-seconds (%g s): it "
+                                            "is too costly to load here", a->max_load_s);
+    } else if (status == 503) {
+        atomic_fetch_add(&a->loads->cancelled, 1);
+        ts_error_set(err, TS_ERR_CANCELLED, "the server is shutting down; the scene was not loaded");
+    }
+}
+
+/* On a loader thread: a posted JSON document, loaded and queued. */
+static void json_task(void *arg)
+{
+    srv_request *r = arg;
+    image_task *t = r->task;
+    if (load_begin(r, t)) {
+        ts_error err = {0};
+        int status = 500;
+        srv_job *j = srv_store_submit_cancellable(((srv_api *)r->app)->store, r->body, r->body_len, NULL, &t->load,
+                                                  &status, &err);
+        if (j) {
+            accepted(r, j);
+            srv_job_release(j);
+        } else {
+            load_failed(r, t, status, &err);
+            srv_http_set_error(r, (unsigned)status, "%s", err.message);
+        }
+    }
+    srv_http_complete(r);
 }
 
 /* Reads a regular file of at most max bytes (NUL-terminated); NULL with errno. */
@@ -532,6 +580,8 @@ static void bundle_task(void *arg)
     int status = 500;
     char staging[4096] = "";
     unsigned char rnd[8];
+    image_task *t = r->task;
+    if (!load_begin(r, t)) goto done;
     if (!srv_store_has_room(a->store)) {
         srv_http_set_error(r, 503, "this server already holds as many jobs as its limit (--max-jobs); no new job can be "
                                    "queued");
@@ -568,11 +618,11 @@ static void bundle_task(void *arg)
         srv_http_set_error(r, 500, "the bundle's %s cannot be read back: %s", info.scene_file, strerror(errno));
         goto done;
     }
-    srv_submit_files files = {!strcmp(info.scene_file, "scene.pbrt"), staging, root,
-                              r->task ? ((image_task *)r->task)->spp : 0};
-    srv_job *j = srv_store_submit_files(a->store, text, len, &files, &status, &err);
+    srv_submit_files files = {!strcmp(info.scene_file, "scene.pbrt"), staging, root, t->spp};
+    srv_job *j = srv_store_submit_cancellable(a->store, text, len, &files, &t->load, &status, &err);
     free(text);
     if (!j) {
+        load_failed(r, t, status, &err);
         /* The sentence names the scene file: scene.json then the JSON path, or the pbrt-v3
          * position (scene.pbrt:LINE:COLUMN, or an included file's) when it has one. */
         size_t n = strlen(info.scene_file);
@@ -601,16 +651,13 @@ static int post_bundle(srv_request *r)
     /* ?spp=N: the job's spp target, the job.spp a scene.pbrt has no place for (its
      * sampler's spp, which scales ray differentials, stays the file's). */
     const char *spp = MHD_lookup_connection_value(r->conn, MHD_GET_ARGUMENT_KIND, "spp");
-    if (spp) {
-        uint64_t v = 0;
-        if (!parse_decimal(spp, strlen(spp), &v) || v < 1 || v > UINT32_MAX)
-            return srv_http_error(r, 400, "spp: expected a whole number of samples per pixel from 1 (canonical decimal)");
-        image_task *t = calloc(1, sizeof *t);
-        if (!t) return srv_http_error(r, 500, "out of memory");
-        t->spp = (uint32_t)v;
-        r->task = t;
-    }
-    return srv_http_defer(r, bundle_task);
+    uint64_t v = 0;
+    if (spp && (!parse_decimal(spp, strlen(spp), &v) || v < 1 || v > UINT32_MAX))
+        return srv_http_error(r, 400, "spp: expected a whole number of samples per pixel from 1 (canonical decimal)");
+    image_task *t = load_state(r);
+    if (!t) return srv_http_error(r, 500, "out of memory");
+    t->spp = (uint32_t)v;
+    return srv_http_defer_to(r, a->loaders, bundle_task);
 }
 
 /* GET /api/v1/jobs is paginated (API v1.2): a page of at most `limit` jobs (default
@@ -704,6 +751,46 @@ static int list_jobs(srv_request *r)
     return reply_cjson(r, 200, o);
 }
 
+/* A pool's state for /healthz and /metrics (its bound: what a task may take). */
+static void pool_status(const srv_api *a, bool loaders, srv_offload_status *out)
+{
+    srv_offload *o = loaders ? a->loaders : a->encoders;
+    if (!o) {
+        *out = (srv_offload_status){0};
+        return;
+    }
+    srv_offload_get_status(o, loaders ? a->max_load_s + SRV_LOAD_GRACE_S : SRV_ENCODE_BOUND_S, out);
+}
+
+static cJSON *pool_json(const srv_offload_status *p, double bound_s)
+{
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddNumberToObject(o, "threads", p->threads);
+    cJSON_AddNumberToObject(o, "busy", p->busy);
+    cJSON_AddNumberToObject(o, "queued", p->queued);
+    cJSON_AddNumberToObject(o, "oldest_task_s", p->oldest_task_s);
+    cJSON_AddNumberToObject(o, "bound_s", bound_s);
+    cJSON_AddNumberToObject(o, "stuck", p->stuck);
+    return o;
+}
+
+/* Liveness that tells the truth: 503 "stuck" when a task of the encoder or loader pool has
+ * run longer than its bound (the pool no longer answers its requests); reads only the
+ * pools' states under their short locks. */
+static int healthz(srv_request *r)
+{
+    const srv_api *a = r->app;
+    srv_offload_status enc, load;
+    pool_status(a, false, &enc);
+    pool_status(a, true, &load);
+    bool stuck = enc.stuck || load.stuck;
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddStringToObject(o, "status", stuck ? "stuck" : "ok");
+    cJSON_AddItemToObject(o, "encoders", pool_json(&enc, SRV_ENCODE_BOUND_S));
+    cJSON_AddItemToObject(o, "loaders", pool_json(&load, a->max_load_s + SRV_LOAD_GRACE_S));
+    return reply_cjson(r, stuck ? 503 : 200, o);
+}
+
 static int metrics(srv_request *r)
 {
     srv_api *srv = r->app;
@@ -758,6 +845,30 @@ static int metrics(srv_request *r)
                        (unsigned long long)atomic_load(&srv->persist->stray_entries),
                        (unsigned long long)atomic_load(&srv->persist->damaged),
                        (unsigned long long)atomic_load(&srv->persist->failures));
+    srv_offload_status pools[2];
+    pool_status(srv, false, &pools[0]);
+    pool_status(srv, true, &pools[1]);
+    srv_buf_printf(&buf, &len, &cap,
+                   "# HELP tessera_loads_total Posted scenes (JSON and bundles) whose load began on a loader thread.\n"
+                   "# TYPE tessera_loads_total counter\ntessera_loads_total %llu\n"
+                   "# HELP tessera_loads_timed_out_total Loads stopped at --max-load-seconds, or whose time ran out while queued.\n"
+                   "# TYPE tessera_loads_timed_out_total counter\ntessera_loads_timed_out_total %llu\n"
+                   "# HELP tessera_loads_cancelled_total Loads stopped by the server's shutdown.\n"
+                   "# TYPE tessera_loads_cancelled_total counter\ntessera_loads_cancelled_total %llu\n"
+                   "# HELP tessera_loads_stuck Loads running longer than --max-load-seconds and its grace (/healthz: stuck).\n"
+                   "# TYPE tessera_loads_stuck gauge\ntessera_loads_stuck %d\n",
+                   srv->loads ? (unsigned long long)atomic_load(&srv->loads->started) : 0ull,
+                   srv->loads ? (unsigned long long)atomic_load(&srv->loads->timed_out) : 0ull,
+                   srv->loads ? (unsigned long long)atomic_load(&srv->loads->cancelled) : 0ull, pools[1].stuck);
+    srv_buf_printf(&buf, &len, &cap, "# HELP tessera_pool_busy Threads of the pool running a task.\n# TYPE tessera_pool_busy gauge\n");
+    for (int k = 0; k < 2; k++)
+        srv_buf_printf(&buf, &len, &cap, "tessera_pool_busy{pool=\"%s\"} %d\n", k ? "loader" : "encoder", pools[k].busy);
+    srv_buf_printf(&buf, &len, &cap, "# HELP tessera_pool_queued Tasks waiting for a thread of the pool.\n# TYPE tessera_pool_queued gauge\n");
+    for (int k = 0; k < 2; k++)
+        srv_buf_printf(&buf, &len, &cap, "tessera_pool_queued{pool=\"%s\"} %d\n", k ? "loader" : "encoder", pools[k].queued);
+    srv_buf_printf(&buf, &len, &cap, "# HELP tessera_pool_stuck_tasks Tasks running longer than the pool's bound.\n# TYPE tessera_pool_stuck_tasks gauge\n");
+    for (int k = 0; k < 2; k++)
+        srv_buf_printf(&buf, &len, &cap, "tessera_pool_stuck_tasks{pool=\"%s\"} %d\n", k ? "loader" : "encoder", pools[k].stuck);
     srv_metrics_format(srv->metrics, &buf, &len, &cap);
     if (!buf) return srv_http_error(r, 500, "out of memory");
     int ret = srv_http_reply(r, 200, "text/plain; version=0.0.4; charset=utf-8", buf, len);
@@ -808,7 +919,11 @@ static int handle(srv_request *r)
         return srv_http_error_header(r, 401, MHD_HTTP_HEADER_WWW_AUTHENTICATE, "Bearer realm=\"tessera\"",
                                      "this server needs a bearer token: Authorization: Bearer <token>");
     }
-    if (!strcmp(m, "POST") && !post_type_ok(r, p.route)) {
+    /* A cancel carries nothing: with no body and no Content-Type it is accepted (a page of
+     * another site that sends it names its Origin, refused above); a body still needs a type. */
+    bool bare_cancel = p.route == SRV_ROUTE_CANCEL && !r->body_len &&
+                       !MHD_lookup_connection_value(r->conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_TYPE);
+    if (!strcmp(m, "POST") && !bare_cancel && !post_type_ok(r, p.route)) {
         const char *type = MHD_lookup_connection_value(r->conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_TYPE);
         if (p.route == SRV_ROUTE_JOBS)
             return srv_http_error(r, 415,
@@ -829,7 +944,7 @@ static int handle(srv_request *r)
         return srv_http_reply(r, 200, "text/html; charset=utf-8", ui_html, sizeof ui_html - 1);
     case SRV_ROUTE_HEALTHZ:
         if (!get) return srv_http_method_not_allowed(r, "GET, HEAD");
-        return srv_http_reply_json(r, 200, "{\"status\":\"ok\"}");
+        return healthz(r);
     case SRV_ROUTE_METRICS:
         if (!get) return srv_http_method_not_allowed(r, "GET, HEAD");
         return metrics(r);

@@ -7,13 +7,29 @@
 #ifndef SRV_API_H
 #define SRV_API_H
 
+#include <stdatomic.h>
+
 #include "http.h"
 
 struct srv_store;
 struct srv_metrics;
 struct srv_events_limits;
 struct srv_persist_stats;
+struct srv_offload;
 struct ts_scheduler;
+
+/* The loads of posted scenes (JSON and bundles): counters for /metrics. */
+typedef struct srv_load_stats {
+    atomic_ullong started;   /* loads begun on a loader thread */
+    atomic_ullong timed_out; /* stopped at --max-load-seconds, or whose time ran out while queued */
+    atomic_ullong cancelled; /* stopped by the server's shutdown */
+} srv_load_stats;
+
+/* How long a pool's task may run before /healthz calls the pool stuck: an encoder's (an
+ * image of the largest film takes a few seconds), a loader's beyond --max-load-seconds
+ * (what a load may take between two polls of its ts_cancel). */
+#define SRV_ENCODE_BOUND_S 60.0
+#define SRV_LOAD_GRACE_S 5.0
 
 /* What the routes read: the server's parts and the settings that concern them. Owned by
  * the caller; must outlive the HTTP daemon that uses it. */
@@ -33,6 +49,13 @@ typedef struct srv_api {
      * temporary folder. NULL: bundles are refused (415). */
     const struct srv_bundle_limits *bundle;
     struct srv_bundle_root *files_root;
+    /* Loading posted scenes, off the HTTP threads: the loader pool, each load's bound
+     * (--max-load-seconds, from the request's arrival; queueing counts), the flag the
+     * shutdown sets to stop every load, and the counters. The encoder pool, for /healthz. */
+    struct srv_offload *loaders, *encoders;
+    double max_load_s;
+    const atomic_bool *loads_stop;
+    srv_load_stats *loads;
 } srv_api;
 
 /* The handler table of API v1 over api (srv_http_start takes it). */

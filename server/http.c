@@ -270,7 +270,9 @@ static void run_deferred(void *arg)
     free(d);
 }
 
-int srv_http_defer(srv_request *r, void (*fn)(void *r))
+int srv_http_defer(srv_request *r, void (*fn)(void *r)) { return srv_http_defer_to(r, r->http->cfg.offload, fn); }
+
+int srv_http_defer_to(srv_request *r, struct srv_offload *pool, void (*fn)(void *r))
 {
     deferred *d = malloc(sizeof *d);
     if (!d) return srv_http_error(r, 500, "out of memory");
@@ -279,7 +281,7 @@ int srv_http_defer(srv_request *r, void (*fn)(void *r))
     r->deferred = true;
     r->completed = false;
     MHD_suspend_connection(r->conn);
-    if (!srv_offload_submit(r->http->cfg.offload, run_deferred, d)) {
+    if (!srv_offload_submit(pool, run_deferred, d)) {
         free(d);
         srv_http_set_error(r, 503, "the server is shutting down");
         srv_http_complete(r);

@@ -114,6 +114,8 @@ int srv_http_queue(srv_request *r, unsigned status, struct MHD_Response *resp);
  * srv_http_complete(r). Returns the MHD result for the handler; answers 503 when the
  * pool refuses (shutting down). */
 int srv_http_defer(srv_request *r, void (*fn)(void *r));
+/* The same on another pool (the loaders, offload.h). */
+int srv_http_defer_to(srv_request *r, struct srv_offload *pool, void (*fn)(void *r));
 /* Marks the deferred reply ready and resumes the connection (from the task). */
 void srv_http_complete(srv_request *r);
 

@@ -429,8 +429,8 @@ static void release_slot(srv_store *st)
     pthread_mutex_unlock(&st->mu);
 }
 
-static srv_job *submit(srv_store *st, const char *text, size_t len, const srv_submit_files *files, int *http_status,
-                       ts_error *err);
+static srv_job *submit(srv_store *st, const char *text, size_t len, const srv_submit_files *files, ts_cancel *cancel,
+                       int *http_status, ts_error *err);
 
 bool srv_store_has_room(srv_store *st)
 {
@@ -442,11 +442,17 @@ bool srv_store_has_room(srv_store *st)
 
 srv_job *srv_store_submit(srv_store *st, const char *text, size_t len, int *http_status, ts_error *err)
 {
-    return srv_store_submit_files(st, text, len, NULL, http_status, err);
+    return srv_store_submit_cancellable(st, text, len, NULL, NULL, http_status, err);
 }
 
 srv_job *srv_store_submit_files(srv_store *st, const char *text, size_t len, const srv_submit_files *files,
                                 int *http_status, ts_error *err)
+{
+    return srv_store_submit_cancellable(st, text, len, files, NULL, http_status, err);
+}
+
+srv_job *srv_store_submit_cancellable(srv_store *st, const char *text, size_t len, const srv_submit_files *files,
+                                      ts_cancel *cancel, int *http_status, ts_error *err)
 {
     /* Checked before the document is parsed: a full server allocates nothing for it. */
     int max_jobs = st->cfg.max_jobs;
@@ -456,7 +462,7 @@ srv_job *srv_store_submit_files(srv_store *st, const char *text, size_t len, con
                      "this server already holds %d jobs, its limit (--max-jobs); no new job can be queued", max_jobs);
         return NULL;
     }
-    srv_job *j = submit(st, text, len, files, http_status, err);
+    srv_job *j = submit(st, text, len, files, cancel, http_status, err);
     release_slot(st); /* after store_add: the job now counts in n_jobs */
     return j;
 }
@@ -502,8 +508,8 @@ static void log_warnings(srv_log *log, const srv_job *j)
     }
 }
 
-static srv_job *submit(srv_store *st, const char *text, size_t len, const srv_submit_files *files, int *http_status,
-                       ts_error *err)
+static srv_job *submit(srv_store *st, const char *text, size_t len, const srv_submit_files *files, ts_cancel *cancel,
+                       int *http_status, ts_error *err)
 {
     const srv_store_config *cfg = &st->cfg;
     /* Every string has a length limit (255 bytes, 1024 for file references: names end up
@@ -515,6 +521,7 @@ static srv_job *submit(srv_store *st, const char *text, size_t len, const srv_su
     ts_scene_limits_default(&def);
     lim.max_width = def.max_width, lim.max_height = def.max_height;
     lim.max_pixels = def.max_pixels, lim.max_spp = def.max_spp;
+    lim.cancel = cancel;
     ts_scene *s = NULL;
     srv_warnings warnings = {0}; /* the job's once it is made */
     ts_status stt = !files ? ts_scene_load_text(text, len, cfg->assets_dir, "scene", &lim, &s, err)
@@ -522,7 +529,10 @@ static srv_job *submit(srv_store *st, const char *text, size_t len, const srv_su
                                                             srv_warnings_collect, &warnings, &s, err)
                                   : ts_scene_load_text(text, len, files->staging_dir, "scene", &lim, &s, err);
     if (stt) {
-        *http_status = stt == TS_ERR_LIMIT ? 413 : stt == TS_ERR_NOMEM ? 500 : 400;
+        /* Stopped (core/cancel.h): past --max-load-seconds the scene is too costly for this
+         * server (422); at shutdown, try again later (503). */
+        *http_status = stt == TS_ERR_LIMIT ? 413 : stt == TS_ERR_NOMEM ? 500 : stt != TS_ERR_CANCELLED ? 400
+                       : atomic_load(&cancel->timed_out) ? 422 : 503;
         srv_warnings_fini(&warnings);
         return NULL;
     }

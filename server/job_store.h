@@ -124,6 +124,11 @@ typedef struct srv_submit_files {
 } srv_submit_files;
 srv_job *srv_store_submit_files(srv_store *st, const char *text, size_t len, const srv_submit_files *files,
                                 int *http_status, ts_error *err);
+/* Either of the above (files NULL: a posted JSON document), the load stopped by cancel
+ * (core/cancel.h; NULL: never): once it says stop, NULL with *http_status 422 when its
+ * deadline passed (err says how long it had), else 503. */
+srv_job *srv_store_submit_cancellable(srv_store *st, const char *text, size_t len, const srv_submit_files *files,
+                                      ts_cancel *cancel, int *http_status, ts_error *err);
 /* False when the store holds config.max_jobs jobs (a hint before unpacking a bundle; the
  * submission itself decides). */
 bool srv_store_has_room(srv_store *st);

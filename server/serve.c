@@ -24,6 +24,8 @@
 
 #define KEEPALIVE_S 15.0
 #define TICK_S 1.0 /* progress events and history points of running jobs */
+#define SRV_ENCODER_THREADS 2
+#define SRV_LOADER_THREADS 2
 
 static void usage(FILE *f)
 {
@@ -57,6 +59,8 @@ static void usage(FILE *f)
             "  --max-subscribers N         event streams open at once, all jobs, to 4000 (default 2048)\n"
             "  --max-job-subscribers N     event streams of one job at once, to 4000 (default 1024)\n"
             "  --max-work RAYS             most rays one job may ask for: rays a sample x spp x pixels (default 1e13)\n"
+            "  --max-load-seconds S        time a posted scene may take to load, from its arrival; beyond, 422\n"
+            "                              (or 503 if it waited that long for a loader), 0.1 to 3600 (default 30)\n"
             "A job may be posted as a tar (optionally gzip) of scene.json or scene.pbrt and its files:\n"
             "  --max-bundle-bytes BYTES    largest bundle as posted (default 268435456)\n"
             "  --max-bundle-entries N      most entries in a bundle, folders included (default 10000)\n"
@@ -207,12 +211,14 @@ bool srv_server_start(srv_server *srv, int *port_out, char *err, size_t err_len)
     pthread_cond_init(&srv->cv, NULL);
     srv_log_init(&srv->log, cfg->log_format, cfg->log_level, stderr);
     srv->metrics = srv_metrics_create();
-    srv->offload = srv_offload_create(2);
+    srv->offload = srv_offload_create(SRV_ENCODER_THREADS);
+    srv->loaders = srv_offload_create(SRV_LOADER_THREADS);
+    atomic_init(&srv->loads_stop, false);
     srv->sched = ts_scheduler_create(cfg->threads, cfg->max_running, &e);
     srv_store_config sc = {cfg->limits, cfg->assets_dir, cfg->max_jobs, cfg->max_work, srv->sched, on_job_finished, srv,
                            &srv->log, cfg->display_server, cfg->allow_job_display_server};
     srv->store = srv->sched ? srv_store_create(&sc) : NULL;
-    if (!srv->metrics || !srv->store || !srv->offload || !srv->sched) {
+    if (!srv->metrics || !srv->store || !srv->offload || !srv->loaders || !srv->sched) {
         snprintf(err, err_len, "%s", e.message[0] ? e.message : "out of memory");
         goto fail;
     }
@@ -256,7 +262,8 @@ bool srv_server_start(srv_server *srv, int *port_out, char *err, size_t err_len)
     atomic_init(&srv->sse_limits.total, 0);
     atomic_init(&srv->sse_limits.dropped, 0);
     srv->api = (srv_api){cfg->token, cfg->data_dir, cfg->cors_origin, cfg->bind, cfg->allowed_hosts, srv->store, srv->sched, srv->metrics,
-                         &srv->sse_limits, &srv->persist, &cfg->bundle, &srv->files_root};
+                         &srv->sse_limits, &srv->persist, &cfg->bundle, &srv->files_root, srv->loaders, srv->offload,
+                         cfg->max_load_s, &srv->loads_stop, &srv->loads};
     srv_http_config hc = {cfg->bind,       cfg->port,        cfg->http_threads, cfg->client_timeout_s,
                           cfg->request_timeout_s, cfg->max_client_conns, cfg->max_body, cfg->cors_origin, srv->metrics,
                           srv->offload, &srv->log, (size_t)cfg->bundle.max_bytes};
@@ -272,7 +279,11 @@ fail:
 void srv_server_stop(srv_server *srv, bool checkpoint)
 {
     const srv_config *cfg = &srv->cfg;
+    /* Loads stop first (at their next poll, within milliseconds) and answer 503, so none
+     * queues a job after the scheduler stopped, and none holds the shutdown up. */
+    atomic_store(&srv->loads_stop, true);
     if (srv->http) srv_http_quiesce(srv->http);
+    if (srv->loaders) srv_offload_drain(srv->loaders);
     if (srv->maint_started) {
         pthread_mutex_lock(&srv->mu);
         srv->stopping = true;
@@ -290,10 +301,11 @@ void srv_server_stop(srv_server *srv, bool checkpoint)
     if (srv->offload) srv_offload_drain(srv->offload);
     srv_http_stop(srv->http);
     srv_offload_destroy(srv->offload);
+    srv_offload_destroy(srv->loaders);
     srv_store_destroy(srv->store);
     ts_scheduler_destroy(srv->sched);
     srv_metrics_destroy(srv->metrics);
-    srv->http = NULL, srv->offload = NULL, srv->store = NULL, srv->sched = NULL, srv->metrics = NULL;
+    srv->http = NULL, srv->offload = NULL, srv->loaders = NULL, srv->store = NULL, srv->sched = NULL, srv->metrics = NULL;
     if (srv->files_root_made) {
         char made[sizeof srv->files_root.tmp];
         snprintf(made, sizeof made, "%s", srv->files_root.tmp);
@@ -316,7 +328,7 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
         OPT_MAX_PIXELS, OPT_MAX_RES, OPT_MAX_SPP, OPT_MAX_TRIS, OPT_MAX_SHAPES, OPT_CKPT, OPT_CORS, OPT_BUILTIN, OPT_HELP,
         OPT_TOKEN_FILE, OPT_ASSETS, OPT_MAX_ASSET_BYTES, OPT_MAX_JOBS, OPT_CLIENT_TIMEOUT, OPT_REQUEST_TIMEOUT, OPT_MAX_CLIENT_CONNS,
         OPT_LOG_FORMAT, OPT_LOG_LEVEL, OPT_MAX_WORK, OPT_MAX_SUBS, OPT_MAX_JOB_SUBS, OPT_ALLOWED_HOSTS, OPT_DISPLAY, OPT_ALLOW_JOB_DISPLAY,
-        OPT_BUNDLE_BYTES, OPT_BUNDLE_ENTRIES, OPT_BUNDLE_EXPANDED, OPT_BUNDLE_ENTRY_BYTES, OPT_BUNDLE_PATH
+        OPT_BUNDLE_BYTES, OPT_BUNDLE_ENTRIES, OPT_BUNDLE_EXPANDED, OPT_BUNDLE_ENTRY_BYTES, OPT_BUNDLE_PATH, OPT_MAX_LOAD
     };
     static const struct option opts[] = {
         {"bind", required_argument, NULL, OPT_BIND},
@@ -329,6 +341,7 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
         {"max-asset-bytes", required_argument, NULL, OPT_MAX_ASSET_BYTES},
         {"max-jobs", required_argument, NULL, OPT_MAX_JOBS},
         {"max-work", required_argument, NULL, OPT_MAX_WORK},
+        {"max-load-seconds", required_argument, NULL, OPT_MAX_LOAD},
         {"allowed-hosts", required_argument, NULL, OPT_ALLOWED_HOSTS},
         {"max-subscribers", required_argument, NULL, OPT_MAX_SUBS},
         {"max-job-subscribers", required_argument, NULL, OPT_MAX_JOB_SUBS},
@@ -380,6 +393,7 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
     cfg->limits.max_file_bytes = 256ull << 20; /* each asset file (only read with --assets) */
     cfg->max_jobs = 1000;
     cfg->max_work = 1e13;
+    cfg->max_load_s = 30;
     cfg->max_subscribers = 2048;
     cfg->max_job_subscribers = 1024;
     const char *token_file = NULL, *assets = NULL;
@@ -475,6 +489,14 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
             if (end == optarg || *end || !(w >= 1) || !isfinite(w))
                 return usage_error("--max-work: expected a number of rays (at least 1, e.g. 1e12), got '%s'", optarg);
             cfg->max_work = w;
+            break;
+        }
+        case OPT_MAX_LOAD: {
+            char *end;
+            double sec = strtod(optarg, &end);
+            if (end == optarg || *end || !(sec >= 0.1 && sec <= 3600))
+                return usage_error("--max-load-seconds: expected 0.1 to 3600 seconds, got '%s'", optarg);
+            cfg->max_load_s = sec;
             break;
         }
         case OPT_CKPT: {

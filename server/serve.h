@@ -51,6 +51,7 @@ typedef struct srv_config {
     srv_log_format log_format;   /* --log-format text|json */
     srv_log_level log_level;     /* --log-level: info (job events) by default, debug adds requests */
     srv_bundle_limits bundle;    /* --max-bundle-*: posted tar bundles (bundle.h) */
+    double max_load_s;           /* --max-load-seconds: a posted scene's load, from its arrival */
 } srv_config;
 
 typedef struct srv_server {
@@ -58,7 +59,10 @@ typedef struct srv_server {
     ts_scheduler *sched;
     srv_store *store;
     srv_metrics *metrics;
-    srv_offload *offload;
+    srv_offload *offload;           /* the encoders (images, tiles) */
+    srv_offload *loaders;           /* posted scenes and bundles (offload.h) */
+    atomic_bool loads_stop;         /* set first at shutdown: every load stops (core/cancel.h) */
+    srv_load_stats loads;           /* their counters (atomics) */
     srv_http *http;
     srv_api api;                    /* what the routes read; immutable after start */
     srv_log log;                    /* job events and (at debug) requests, to stderr */

@@ -34,7 +34,7 @@ static ts_mesh_data subdivide(const float *p, uint32_t nv, const uint32_t *ix, u
 {
     ts_mesh_data m;
     ts_error err = {0};
-    if (ts_mesh_loop_subdivide(p, nv, ix, nt, levels, 0, &m, &err)) fail_msg("%s", err.message);
+    if (ts_mesh_loop_subdivide(p, nv, ix, nt, levels, 0, NULL, &m, &err)) fail_msg("%s", err.message);
     return m;
 }
 
@@ -296,7 +296,7 @@ static void refused(const float *p, uint32_t nv, const uint32_t *ix, uint32_t nt
 {
     ts_mesh_data m;
     ts_error err = {0};
-    assert_int_not_equal(ts_mesh_loop_subdivide(p, nv, ix, nt, levels, max_t, &m, &err), TS_OK);
+    assert_int_not_equal(ts_mesh_loop_subdivide(p, nv, ix, nt, levels, max_t, NULL, &m, &err), TS_OK);
     if (!strstr(err.message, msg)) fail_msg("got '%s', expected '%s'", err.message, msg);
     assert_null(m.p);
 }

@@ -85,6 +85,7 @@ void ts_scene_limits_default(ts_scene_limits *l)
     l->max_materials = 1u << 16;
     l->max_file_bytes = 4ull << 30;
     l->max_memory = 16ull << 30;
+    l->cancel = NULL;
 }
 
 #define TRY(expr)                                                                                            \
@@ -119,7 +120,7 @@ static ts_status usable(const ts_scene_builder *b, ts_error *err)
 {
     if (b->finished)
         return ts_error_set(err, TS_ERR_INVALID, "the scene builder has finished; it takes no more calls");
-    return TS_OK;
+    return ts_cancel_check(b->lim.cancel, err);
 }
 
 static bool rgb_nonneg(ts_rgb c) { return c.r >= 0 && c.g >= 0 && c.b >= 0; } /* false for NaN */
@@ -430,7 +431,7 @@ ts_status ts_scene_builder_load_mesh(ts_scene_builder *b, const char *rel_path, 
             err, TS_ERR_INVALID,
             "mesh file '%s': this scene may not refer to files (no asset folder is configured)", rel_path);
     /* What is left of the scene's triangle budget (never 0, which would mean unlimited). */
-    ts_mesh_limits ml = {lim->max_triangles * 3, lim->max_triangles - b->n_triangles, lim->max_file_bytes};
+    ts_mesh_limits ml = {lim->max_triangles * 3, lim->max_triangles - b->n_triangles, lim->max_file_bytes, lim->cancel};
     return ts_mesh_file_load(b->s->base_dir, rel_path, &ml, out, err);
 }
 
@@ -897,7 +898,7 @@ ts_status ts_scene_builder_loop_subdivide(ts_scene_builder *b, const ts_mesh *co
     TRY(usable(b, err));
     uint64_t left = b->lim.max_triangles > b->n_triangles ? b->lim.max_triangles - b->n_triangles : 0;
     ts_status st = ts_mesh_loop_subdivide(control->p, control->n_vertices, control->index, control->n_triangles,
-                                          levels, left ? left : 1, out, err);
+                                          levels, left ? left : 1, b->lim.cancel, out, err);
     if (st == TS_ERR_LIMIT)
         return ts_error_set(err, TS_ERR_LIMIT, "%u levels of subdivision exceed the scene's limit of %llu triangles",
                             levels, (unsigned long long)b->lim.max_triangles);
@@ -1124,8 +1125,9 @@ static ts_status lay_out(ts_scene_builder *b, ts_error *err)
 static ts_status build(ts_scene_builder *b, ts_error *err)
 {
     ts_scene *s = b->s;
+    TRY(ts_cancel_check(b->lim.cancel, err));
     s->accel = ts_accel_create_instanced(s->shapes, s->n_shapes, s->objects, s->n_objects, s->instances,
-                                         s->n_instances, err);
+                                         s->n_instances, b->lim.cancel, err);
     if (!s->accel) return err->status ? err->status : TS_ERR_INTERNAL;
     s->bounds = ts_accel_bounds(s->accel);
     /* Rays carry float coordinates and Embree refuses components beyond ~1.8e18; far before

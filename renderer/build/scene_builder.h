@@ -42,6 +42,7 @@
 #include <stdint.h>
 
 #include "camera/camera.h"
+#include "core/cancel.h"
 #include "core/error.h"
 #include "core/transform.h"
 #include "core/vecmath.h"
@@ -64,6 +65,9 @@ typedef struct ts_scene_limits {
     uint32_t max_shapes, max_lights, max_materials; /* max_lights counts area lights too */
     uint64_t max_file_bytes;                        /* each referenced file */
     uint64_t max_memory;                            /* the scene arena */
+    /* Stops the load (core/cancel.h): every builder call, the mesh and pbrt-v3 readers'
+     * loops and the BVH build poll it; NULL (the default): never. Not owned. */
+    ts_cancel *cancel;
 } ts_scene_limits;
 
 /* Generous defaults for the CLI (a server sets its own). */

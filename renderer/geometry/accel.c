@@ -74,6 +74,7 @@ typedef struct mesh_geom {
 
 struct ts_accel {
     RTCDevice device;       /* immutable after create */
+    ts_cancel *cancel;      /* polled while building (NULL: never stops); not after */
     RTCScene scene;         /* immutable after rtcCommitScene */
     const ts_shape *shapes; /* caller-owned, outlives the accel */
     uint32_t n_shapes;
@@ -148,6 +149,14 @@ static void on_embree_error(void *user, enum RTCError code, const char *str)
     if (!a || a->build_error[0]) return; /* keep the first */
     a->build_code = code;
     snprintf(a->build_error, sizeof a->build_error, "%s%s%s", rtc_error_name(code), str ? ": " : "", str ? str : "");
+}
+
+/* Embree's progress monitor (on its build threads): false stops the build
+ * (RTC_ERROR_CANCELLED) once the accel's ts_cancel says so. */
+static bool on_embree_progress(void *user, double done)
+{
+    (void)done;
+    return !ts_cancel_requested(((ts_accel *)user)->cancel);
 }
 
 /* Embree's memory monitor: bytes > 0 allocated, < 0 freed; never refuses. */
@@ -429,6 +438,7 @@ static bool build_objects(ts_accel *a)
         a->obj_scene[o] = sc;
         rtcSetSceneFlags(sc, RTC_SCENE_FLAG_ROBUST);
         rtcSetSceneBuildQuality(sc, RTC_BUILD_QUALITY_HIGH);
+        if (a->cancel) rtcSetSceneProgressMonitorFunction(sc, on_embree_progress, a);
         ob[o] = ts_bounds3_empty();
         const ts_object *obj = &a->objects[o];
         for (uint32_t j = 0; j < obj->n_shapes; j++) {
@@ -470,12 +480,12 @@ fail:
 
 ts_accel *ts_accel_create(const ts_shape *shapes, uint32_t n_shapes, ts_error *err)
 {
-    return ts_accel_create_instanced(shapes, n_shapes, NULL, 0, NULL, 0, err);
+    return ts_accel_create_instanced(shapes, n_shapes, NULL, 0, NULL, 0, NULL, err);
 }
 
 ts_accel *ts_accel_create_instanced(const ts_shape *shapes, uint32_t n_shapes, const ts_object *objects,
                                     uint32_t n_objects, const ts_instance *instances, uint32_t n_instances,
-                                    ts_error *err)
+                                    ts_cancel *cancel, ts_error *err)
 {
     ts_accel *a = calloc(1, sizeof *a);
     if (!a) {
@@ -484,6 +494,7 @@ ts_accel *ts_accel_create_instanced(const ts_shape *shapes, uint32_t n_shapes, c
     }
     a->shapes = shapes;
     a->n_shapes = n_shapes;
+    a->cancel = cancel;
     a->bounds = ts_bounds3_empty();
     a->meshes = calloc(n_shapes ? n_shapes : 1, sizeof *a->meshes);
     if (!a->meshes) {
@@ -506,6 +517,7 @@ ts_accel *ts_accel_create_instanced(const ts_shape *shapes, uint32_t n_shapes, c
     if (!a->scene) goto fail_embree;
     rtcSetSceneFlags(a->scene, RTC_SCENE_FLAG_ROBUST);
     rtcSetSceneBuildQuality(a->scene, RTC_BUILD_QUALITY_HIGH);
+    if (cancel) rtcSetSceneProgressMonitorFunction(a->scene, on_embree_progress, a);
 
     a->objects = objects;
     a->instances = instances;
@@ -526,7 +538,12 @@ ts_accel *ts_accel_create_instanced(const ts_shape *shapes, uint32_t n_shapes, c
     }
     if (n_objects && !build_objects(a)) goto fail_embree;
     rtcCommitScene(a->scene);
+    if (ts_cancel_requested(cancel)) {
+        ts_cancel_check(cancel, err);
+        goto fail_cancelled;
+    }
     if (a->build_error[0] || rtcGetDeviceError(a->device) != RTC_ERROR_NONE) goto fail_embree;
+    a->cancel = NULL;
     /* Nothing writes to a after this but the memory monitor, which counts the teardown's frees. */
     rtcSetDeviceErrorFunction(a->device, NULL, NULL);
     return a;
@@ -536,8 +553,12 @@ fail_embree:
         a->build_code = rtcGetDeviceError(a->device);
         snprintf(a->build_error, sizeof a->build_error, "%s", rtc_error_name(a->build_code));
     }
-    ts_error_set(err, a->build_code == RTC_ERROR_OUT_OF_MEMORY ? TS_ERR_NOMEM : TS_ERR_INTERNAL,
-                 "Embree failed to build the scene's ray-intersection structure: %s", a->build_error);
+    if (a->build_code == RTC_ERROR_CANCELLED && ts_cancel_requested(cancel))
+        ts_cancel_check(cancel, err);
+    else
+        ts_error_set(err, a->build_code == RTC_ERROR_OUT_OF_MEMORY ? TS_ERR_NOMEM : TS_ERR_INTERNAL,
+                     "Embree failed to build the scene's ray-intersection structure: %s", a->build_error);
+fail_cancelled:
     if (a->scene) rtcReleaseScene(a->scene);
     for (uint32_t o = 0; a->obj_scene && o < a->n_objects; o++)
         if (a->obj_scene[o]) rtcReleaseScene(a->obj_scene[o]);

@@ -13,6 +13,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "core/cancel.h"
 #include "core/error.h"
 #include "geometry/interaction.h"
 #include "geometry/shape.h"
@@ -44,10 +45,11 @@ typedef struct ts_instance {
  * failure (Embree error text included). */
 ts_accel *ts_accel_create(const ts_shape *shapes, uint32_t n_shapes, ts_error *err);
 /* The same with object instances (the arrays, like shapes, must outlive the accel; shapes
- * in objects are attached only through instances). */
+ * in objects are attached only through instances). The build polls cancel (NULL: never
+ * stops; Embree's progress monitor): once it says stop, NULL with TS_ERR_CANCELLED. */
 ts_accel *ts_accel_create_instanced(const ts_shape *shapes, uint32_t n_shapes, const ts_object *objects,
                                     uint32_t n_objects, const ts_instance *instances, uint32_t n_instances,
-                                    ts_error *err);
+                                    ts_cancel *cancel, ts_error *err);
 void ts_accel_destroy(ts_accel *a);
 
 /* Nearest hit in (0, ray.tmax): fills si fully and returns true; false on a miss. */

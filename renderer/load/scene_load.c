@@ -37,6 +37,7 @@ static void pbrt_limits(const ts_scene_limits *l, ts_pbrt_limits *out)
     ts_pbrt_limits_default(out);
     out->max_file_bytes = l->max_file_bytes;
     out->max_memory = (size_t)l->max_memory;
+    out->cancel = l->cancel;
 }
 
 /* Parses (path or text), imports into a new builder (and doc), finishes. */

@@ -339,6 +339,7 @@ static ts_status obj_parse(const ts_mesh_reader *c, const char *buf, size_t size
     it = (obj_lines){buf, end, 1};
     while (obj_next_line(&it, &ls, &le, &line)) {
         const char *s = ls;
+        if ((st = ts_mesh_poll(c, line))) goto fail_faces;
         if (!obj_token(&s, le, &ts, &te)) continue;
         if (ts_mesh_token_is(ts, te, "v")) {
             st = obj_numbers(&o, line, "vertex", s, le, 3, 0, o.pos + 3 * o.iv, 3);

@@ -93,6 +93,8 @@ static ts_status ply_truncated(const ply_in *in) { return ply_fail(in, TS_ERR_IN
 /* Starts element item in->item: ASCII moves to the next non-blank line. */
 static ts_status ply_begin_item(ply_in *in)
 {
+    ts_status polled = ts_mesh_poll(in->c, in->item);
+    if (polled) return polled;
     if (!in->ascii) return TS_OK;
     for (;;) {
         if (in->p >= in->end)

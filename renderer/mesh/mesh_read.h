@@ -19,12 +19,14 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "core/cancel.h"
 #include "core/error.h"
 
 /* Upper bounds on what a file may make the loader allocate; 0 = no limit. max_vertices
  * bounds the output vertices and, for OBJ, also the number of `v` statements. */
 typedef struct ts_mesh_limits {
     uint64_t max_vertices, max_triangles, max_file_bytes;
+    ts_cancel *cancel; /* polled every TS_MESH_POLL items (core/cancel.h); NULL: never stops */
 } ts_mesh_limits;
 
 typedef struct ts_mesh_data {
@@ -56,6 +58,14 @@ ts_status ts_mesh_fail(const ts_mesh_reader *r, ts_status st, const char *fmt, .
 ts_status ts_mesh_fail_line(const ts_mesh_reader *r, unsigned long line, ts_status st, const char *fmt, ...)
     __attribute__((format(printf, 4, 5)));
 ts_status ts_mesh_nomem(const ts_mesh_reader *r);
+
+/* Every TS_MESH_POLL-th item (line, element) of a read polls r->lim.cancel: TS_OK, or
+ * TS_ERR_CANCELLED with the sentence in r->err. */
+#define TS_MESH_POLL 16384u
+static inline ts_status ts_mesh_poll(const ts_mesh_reader *r, uint64_t item)
+{
+    return item % TS_MESH_POLL ? TS_OK : ts_cancel_check(r->lim.cancel, r->err);
+}
 
 /* Grows the malloc'd array *ptr (of *cap elements of size elem) to hold at least need
  * elements, doubling from 256; false (nothing changed) when out of memory or too large. */

@@ -255,7 +255,8 @@ static ts_status refine(const level *L, level *N, ts_error *err)
 }
 
 ts_status ts_mesh_loop_subdivide(const float *p, uint32_t n_vertices, const uint32_t *index, uint32_t n_triangles,
-                                 uint32_t levels, uint64_t max_triangles, ts_mesh_data *out, ts_error *err)
+                                 uint32_t levels, uint64_t max_triangles, ts_cancel *cancel, ts_mesh_data *out,
+                                 ts_error *err)
 {
     memset(out, 0, sizeof *out);
     if (levels > TS_SUBDIV_MAX_LEVELS)
@@ -291,12 +292,14 @@ ts_status ts_mesh_loop_subdivide(const float *p, uint32_t n_vertices, const uint
     memcpy(L.v, index, 3 * (size_t)n_triangles * sizeof *L.v);
     if ((st = adjacency(&L, err))) goto done;
     for (uint32_t l = 0; l < levels; l++) {
+        if ((st = ts_cancel_check(cancel, err))) goto done;
         if ((st = refine(&L, &N, err))) goto done;
         level_free(&L);
         L = N;
         memset(&N, 0, sizeof N);
-        if ((st = adjacency(&L, err))) goto done;
+        if ((st = ts_cancel_check(cancel, err)) || (st = adjacency(&L, err))) goto done;
     }
+    if ((st = ts_cancel_check(cancel, err))) goto done;
 
     /* The limit surface: positions and normals from the last level. */
     out->p = malloc(3 * (size_t)L.nv * sizeof *out->p);

@@ -49,8 +49,10 @@
  * ts_mesh_data_free) with pbrt-v3's unnormalised normals (all scaled by one power of two
  * only if the longest is outside [2^-8, 2^64]; none shorter than 2^-60 of the longest). max_triangles bounds the result (0: none).
  * TS_ERR_INVALID / TS_ERR_LIMIT / TS_ERR_NOMEM with a sentence that names no place (the
- * caller prefixes it); *out is zeroed on failure. */
+ * caller prefixes it); *out is zeroed on failure. cancel (core/cancel.h; NULL: never) is
+ * polled at every level: TS_ERR_CANCELLED once it says stop. */
 ts_status ts_mesh_loop_subdivide(const float *p, uint32_t n_vertices, const uint32_t *index, uint32_t n_triangles,
-                                 uint32_t levels, uint64_t max_triangles, ts_mesh_data *out, ts_error *err);
+                                 uint32_t levels, uint64_t max_triangles, ts_cancel *cancel, ts_mesh_data *out,
+                                 ts_error *err);
 
 #endif

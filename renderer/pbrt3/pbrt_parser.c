@@ -94,6 +94,7 @@ struct parser {
     file_frame files[64];
     int nfiles;
     ts_pbrt_token tok;
+    uint64_t n_tokens; /* read so far: every TS_PBRT_POLL-th polls lim.cancel */
 
     /* state */
     enum { PHASE_OPTIONS, PHASE_WORLD, PHASE_ENDED } phase;
@@ -323,8 +324,14 @@ static void pop_file(parser *p)
 }
 
 /* Moves to the next token; the end of an included file continues in the includer. */
+#define TS_PBRT_POLL 16384u
+
 static ts_status advance(parser *p)
 {
+    if (++p->n_tokens % TS_PBRT_POLL == 0) {
+        ts_status polled = ts_cancel_check(p->lim.cancel, p->err);
+        if (polled) return polled;
+    }
     for (;;) {
         ts_status st = ts_pbrt_lexer_next(p->files[p->nfiles - 1].lx, &p->tok, p->err);
         if (st) return st;
@@ -1357,6 +1364,7 @@ void ts_pbrt_limits_default(ts_pbrt_limits *lim)
     lim->max_memory = 0;
     lim->max_include_depth = 32;
     lim->max_warnings = 1000;
+    lim->cancel = NULL;
 }
 
 static void option_default(ts_pbrt_option *o, const char *type)

@@ -56,6 +56,7 @@
 #include <stdint.h>
 
 #include "core/arena.h"
+#include "core/cancel.h"
 #include "core/error.h"
 #include "pbrt3/pbrt_lexer.h"
 #include "pbrt3/pbrt_params.h"
@@ -66,6 +67,7 @@ typedef struct ts_pbrt_limits {
     size_t max_memory;       /* the scene's arena, and separately the parser's own buffers; 0 = none */
     int max_include_depth;   /* files open at once, the top-level one included */
     size_t max_warnings;     /* warnings kept; later ones are only counted */
+    ts_cancel *cancel;       /* polled every few thousand tokens (core/cancel.h); NULL: never */
 } ts_pbrt_limits;
 
 /* No size limits, includes 32 deep, 1000 warnings kept. */
