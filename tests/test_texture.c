@@ -1532,6 +1532,83 @@ static void test_cache_budget(void **state)
     ts_texture_cache_destroy(c);
 }
 
+static uint32_t crc32_png(const unsigned char *p, size_t n)
+{
+    uint32_t c = 0xFFFFFFFFu;
+    for (size_t i = 0; i < n; i++) {
+        c ^= p[i];
+        for (int k = 0; k < 8; k++) c = c & 1 ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+    }
+    return c ^ 0xFFFFFFFFu;
+}
+
+static void put_be32(unsigned char *p, uint32_t v)
+{
+    p[0] = (unsigned char)(v >> 24), p[1] = (unsigned char)(v >> 16), p[2] = (unsigned char)(v >> 8), p[3] = (unsigned char)v;
+}
+
+/* Issue 27: a small file whose header claims a huge image is refused from the header,
+ * before its decoder allocates the pixels. A 1-bit grey PNG header of 16384² with 40 KB of
+ * IDAT passes the decoder's own bomb check (its scanlines, 33.5 MB, are within 1032 × the
+ * file), and the decoder would allocate 805 MB of bytes and 3.2 GB of floats before it
+ * found the data corrupt; an RLE TGA header of 8192² with 1.1 MB of 128-pixel packets
+ * likewise (800 MB). Both are refused with the MIP map's need against a 256 MiB budget —
+ * before the fix the decoders ran and the answers were their corruption errors. An EXR's
+ * header is read the same way (a 512² one-channel file against a 1 MiB budget). */
+static void test_cache_budget_from_header(void **state)
+{
+    (void)state;
+    size_t idat = 40000, n = 8 + 25 + 12 + idat;
+    unsigned char *png = calloc(1, n);
+    memcpy(png, "\x89PNG\r\n\x1a\n", 8);
+    put_be32(png + 8, 13);
+    memcpy(png + 12, "IHDR", 4);
+    put_be32(png + 16, 16384), put_be32(png + 20, 16384);
+    png[24] = 1, png[25] = 0; /* bit depth 1, grey */
+    put_be32(png + 29, crc32_png(png + 12, 17));
+    put_be32(png + 33, (uint32_t)idat);
+    memcpy(png + 37, "IDAT", 4);
+    ts_tmp_write("huge.png", png, n, NULL, 0);
+    free(png);
+    size_t tn = 18 + (1100u << 10);
+    unsigned char *tga = malloc(tn);
+    memset(tga, 0xFF, tn); /* run-length packets of 128 pixels */
+    memset(tga, 0, 18);
+    tga[2] = 10; /* RLE true colour */
+    tga[12] = 0x00, tga[13] = 0x20, tga[14] = 0x00, tga[15] = 0x20; /* 8192 × 8192 */
+    tga[16] = 24;
+    ts_tmp_write("huge.tga", tga, tn, NULL, 0);
+    free(tga);
+    ts_image img = {0};
+    const char *names[1] = {"Y"};
+    assert_int_equal(ts_image_init(&img, 512, 512, 1, names, NULL), TS_OK);
+    unsigned char *exr = NULL;
+    size_t exr_len = 0;
+    assert_int_equal(ts_exr_write_memory(&img, &exr, &exr_len, NULL), TS_OK);
+    ts_image_fini(&img);
+    ts_tmp_write("wide.exr", exr, exr_len, NULL, 0);
+    free(exr);
+
+    ts_texture_image_options opt = {.n_channels = 3, .gamma = true, .scale = 1, .wrap = TS_TEXTURE_WRAP_REPEAT};
+    const ts_mipmap *m = NULL;
+    ts_error err = {0};
+    ts_texture_cache *c = ts_texture_cache_create(256u << 20);
+    assert_int_equal(ts_texture_cache_get(c, ts_tmp_dir, "huge.png", 0, &opt, &m, &err), TS_ERR_LIMIT);
+    assert_message(&err, "texture image 'huge.png': its MIP map (16384 × 16384, 3 channels) needs 4294967292 bytes, "
+                         "more than the 268435456 left of the textures' 268435456");
+    assert_int_equal(ts_texture_cache_get(c, ts_tmp_dir, "huge.tga", 0, &opt, &m, &err), TS_ERR_LIMIT);
+    assert_message(&err, "texture image 'huge.tga': its MIP map (8192 × 8192, 3 channels) needs 1073741820 bytes, "
+                         "more than the 268435456 left of the textures' 268435456");
+    assert_int_equal(ts_texture_cache_count(c), 0);
+    ts_texture_cache_destroy(c);
+    c = ts_texture_cache_create(1u << 20);
+    opt.n_channels = 1;
+    assert_int_equal(ts_texture_cache_get(c, ts_tmp_dir, "wide.exr", 0, &opt, &m, &err), TS_ERR_LIMIT);
+    assert_message(&err, "texture image 'wide.exr': its MIP map (512 × 512, 1 channel) needs 1398100 bytes, more "
+                         "than the 1048576 left of the textures' 1048576");
+    ts_texture_cache_destroy(c);
+}
+
 static void test_make_refusals(void **state)
 {
     (void)state;
@@ -1564,6 +1641,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_noise_permutation),
+        cmocka_unit_test(test_cache_budget_from_header),
         cmocka_unit_test(test_noise_values),
         cmocka_unit_test(test_fbm_turbulence),
         cmocka_unit_test(test_mappings),

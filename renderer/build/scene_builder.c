@@ -401,6 +401,17 @@ ts_status ts_scene_builder_load_envmap(ts_scene_builder *b, const char *rel_path
     struct ts_envmap *em = NULL;
     ts_status st = ts_scene_path_read(b->s->base_dir, rel_path, "environment map", b->lim.max_file_bytes,
                                       &bytes, &n_bytes, err);
+    /* The header's size against the scene's memory before any pixel is decoded: the decoded
+     * floats, then 16 bytes a texel (radiance and weight) and 8 of the distributions. */
+    int64_t w = 0, h = 0;
+    int ch = 0;
+    if (!st && ts_exr_size_memory((const unsigned char *)bytes, n_bytes, &w, &h, &ch) && b->lim.max_memory &&
+        (double)w * (double)h * (4.0 * ch + 24) > (double)b->lim.max_memory)
+        st = ts_error_set(err, TS_ERR_LIMIT,
+                          "environment map '%s': its %lld × %lld pixels of %d channels need about %.0f bytes, more "
+                          "than the scene's memory limit of %llu",
+                          rel_path, (long long)w, (long long)h, ch, (double)w * (double)h * (4.0 * ch + 24),
+                          (unsigned long long)b->lim.max_memory);
     if (!st) {
         ts_image img = {0};
         st = ts_exr_read_memory((const unsigned char *)bytes, n_bytes, &img, err);

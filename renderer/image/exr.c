@@ -559,6 +559,35 @@ fail_ctxt:
     return st;
 }
 
+bool ts_exr_size_memory(const unsigned char *buf, size_t len, int64_t *width, int64_t *height, int *channels)
+{
+    *width = *height = 0;
+    *channels = 0;
+    if (!buf || len < 4 || memcmp(buf, "\x76\x2f\x31\x01", 4) != 0) return false;
+    exr_io io = {.src = buf, .src_len = len, .fd = -1};
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = on_exr_error;
+    init.user_data = &io;
+    init.read_fn = io_read;
+    init.size_fn = io_size;
+    init.flags = EXR_CONTEXT_FLAG_DISABLE_CHUNK_RECONSTRUCTION;
+    exr_context_t ctxt = NULL;
+    exr_attr_box2i_t dw;
+    const exr_attr_chlist_t *chlist = NULL;
+    int parts = 0;
+    bool ok = exr_start_read(&ctxt, "<exr>", &init) == EXR_ERR_SUCCESS && exr_get_count(ctxt, &parts) == EXR_ERR_SUCCESS &&
+              parts >= 1 && exr_get_data_window(ctxt, 0, &dw) == EXR_ERR_SUCCESS &&
+              exr_get_channels(ctxt, 0, &chlist) == EXR_ERR_SUCCESS && chlist;
+    if (ok) {
+        *width = (int64_t)dw.max.x - dw.min.x + 1;
+        *height = (int64_t)dw.max.y - dw.min.y + 1;
+        *channels = chlist->num_channels;
+        ok = *width > 0 && *height > 0;
+    }
+    if (ctxt) exr_finish(&ctxt);
+    return ok;
+}
+
 ts_status ts_exr_read_memory(const unsigned char *buf, size_t len, ts_image *out, ts_error *err)
 {
     memset(out, 0, sizeof *out);

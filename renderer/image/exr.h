@@ -14,7 +14,9 @@
 #ifndef TS_EXR_H
 #define TS_EXR_H
 
+#include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 
 #include "core/error.h"
 #include "image/image.h"
@@ -45,5 +47,10 @@ ts_status ts_exr_read(const char *path, ts_image *out, ts_error *err);
 
 /* ts_exr_read of an in-memory file (for fuzzing/HTTP); buf is only read. */
 ts_status ts_exr_read_memory(const unsigned char *buf, size_t len, ts_image *out, ts_error *err);
+
+/* The size of an in-memory file's first part as its header says, read without any pixel:
+ * false when the header cannot be read (ts_exr_read_memory then says why). So a caller
+ * can hold an image to its memory budget before it is decoded. */
+bool ts_exr_size_memory(const unsigned char *buf, size_t len, int64_t *width, int64_t *height, int *channels);
 
 #endif

@@ -48,6 +48,15 @@ static float read_f32(const unsigned char *p, int little_endian)
     return f;
 }
 
+bool ts_pfm_size(const unsigned char *buf, size_t len, int64_t *width, int64_t *height)
+{
+    *width = *height = 0;
+    size_t pos = 2, start = 0;
+    return len >= 3 && buf[0] == 'P' && (buf[1] == 'F' || buf[1] == 'f') && is_space(buf[2]) &&
+           next_token(buf, len, &pos, &start) && parse_size(buf + start, pos - start, width) &&
+           next_token(buf, len, &pos, &start) && parse_size(buf + start, pos - start, height);
+}
+
 ts_status ts_pfm_decode(const unsigned char *buf, size_t len, const char *name, ts_image *out, ts_error *err)
 {
     memset(out, 0, sizeof *out);

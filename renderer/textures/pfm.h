@@ -15,7 +15,9 @@
 #ifndef TS_PFM_H
 #define TS_PFM_H
 
+#include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 
 #include "core/error.h"
 #include "image/image.h"
@@ -24,5 +26,7 @@
  * ("texture image 'a.pfm'"). Errors: TS_ERR_INVALID (malformed, truncated, zero size),
  * TS_ERR_LIMIT (too many pixels), TS_ERR_NOMEM. On failure *out is empty. */
 ts_status ts_pfm_decode(const unsigned char *buf, size_t len, const char *name, ts_image *out, ts_error *err);
+/* The width and height the header gives, without decoding: false when it cannot be read. */
+bool ts_pfm_size(const unsigned char *buf, size_t len, int64_t *width, int64_t *height);
 
 #endif

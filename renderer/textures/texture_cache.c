@@ -57,6 +57,33 @@ static uint32_t float_bits(float f)
     return u;
 }
 
+/* Whether an image of w × h pixels and `decoded` channels fits what is left of the budget:
+ * its decoded floats, and its MIP map of n_channels (checked first: the message tests
+ * and users know). */
+static ts_status check_budget(const ts_texture_cache *c, const char *filename, int64_t w, int64_t h, int decoded,
+                              int n_channels, ts_error *err)
+{
+    if (!c->max_bytes) return TS_OK;
+    size_t left = c->max_bytes - c->bytes;
+    size_t need = w <= INT32_MAX && h <= INT32_MAX ? ts_mipmap_bytes_for((int32_t)w, (int32_t)h, n_channels) : 0;
+    if (need == 0)
+        return ts_error_set(err, TS_ERR_LIMIT, "texture image '%s': %lld × %lld pixels, more than a MIP map's %d a side",
+                            filename, (long long)w, (long long)h, TS_MIPMAP_MAX_SIZE);
+    if (need > left)
+        return ts_error_set(err, TS_ERR_LIMIT,
+                            "texture image '%s': its MIP map (%lld × %lld, %d channel%s) needs %zu bytes, more than the "
+                            "%zu left of the textures' %zu",
+                            filename, (long long)w, (long long)h, n_channels, n_channels == 1 ? "" : "s", need, left,
+                            c->max_bytes);
+    double image = (double)w * (double)h * (double)decoded * sizeof(float);
+    if (image > (double)left)
+        return ts_error_set(err, TS_ERR_LIMIT,
+                            "texture image '%s': decoding its %lld × %lld pixels of %d channels needs %.0f bytes, more "
+                            "than the %zu left of the textures' %zu",
+                            filename, (long long)w, (long long)h, decoded, image, left, c->max_bytes);
+    return TS_OK;
+}
+
 ts_status ts_texture_cache_get(ts_texture_cache *c, const char *base_dir, const char *filename,
                                uint64_t max_file_bytes, const ts_texture_image_options *opt,
                                const ts_mipmap **out, ts_error *err)
@@ -95,19 +122,19 @@ ts_status ts_texture_cache_get(ts_texture_cache *c, const char *base_dir, const 
     size_t len = 0;
     if ((st = ts_scene_path_read(base_dir, filename, "texture image", max_file_bytes, &bytes, &len, err)))
         return st;
+    /* The budget, from the header's size before anything is decoded (a small file may
+     * claim a huge image), and again from the decoded size. */
+    int64_t hw, hh;
+    int hc;
+    if (ts_texture_image_size(filename, (const unsigned char *)bytes, len, &hw, &hh, &hc) &&
+        (st = check_budget(c, filename, hw, hh, hc, opt->n_channels, err))) {
+        free(bytes);
+        return st;
+    }
     st = ts_texture_image_decode(filename, (const unsigned char *)bytes, len, &img, err);
     free(bytes);
     if (st) return st;
-
-    /* The budget, checked before the texels and the map are allocated. */
-    size_t need = ts_mipmap_bytes_for(img.width, img.height, opt->n_channels);
-    if (c->max_bytes && (need == 0 || need > c->max_bytes - c->bytes)) {
-        st = ts_error_set(
-            err, TS_ERR_LIMIT,
-            "texture image '%s': its MIP map (%d × %d, %d channel%s) needs %zu bytes, more than the %zu "
-            "left of the textures' %zu",
-            filename, img.width, img.height, opt->n_channels, opt->n_channels == 1 ? "" : "s", need,
-            c->max_bytes - c->bytes, c->max_bytes);
+    if ((st = check_budget(c, filename, img.width, img.height, img.n_channels, opt->n_channels, err))) {
         ts_image_fini(&img);
         return st;
     }

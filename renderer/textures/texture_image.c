@@ -44,6 +44,34 @@ float ts_texture_srgb_to_linear(float v)
     return powf((v + 0.055f) / 1.055f, 2.4f);
 }
 
+static uint32_t be32(const unsigned char *p) { return (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | p[3]; }
+
+bool ts_texture_image_size(const char *filename, const unsigned char *buf, size_t len, int64_t *width,
+                           int64_t *height, int *channels)
+{
+    *width = *height = 0;
+    *channels = 3;
+    if (!buf) return false;
+    switch (ts_texture_image_format_of(filename)) {
+    case TS_TEXTURE_IMAGE_PNG: /* the signature, then IHDR (libpng requires it first) */
+        if (len < 24 || memcmp(buf, "\x89PNG\r\n\x1a\n", 8) != 0 || memcmp(buf + 12, "IHDR", 4) != 0) return false;
+        *width = be32(buf + 16), *height = be32(buf + 20);
+        break;
+    case TS_TEXTURE_IMAGE_TGA:
+        if (len < 18) return false;
+        *width = buf[12] | buf[13] << 8, *height = buf[14] | buf[15] << 8;
+        break;
+    case TS_TEXTURE_IMAGE_PFM:
+        if (!ts_pfm_size(buf, len, width, height)) return false;
+        break;
+    case TS_TEXTURE_IMAGE_EXR:
+        if (!ts_exr_size_memory(buf, len, width, height, channels)) return false;
+        break;
+    case TS_TEXTURE_IMAGE_UNKNOWN: return false;
+    }
+    return *width > 0 && *height > 0;
+}
+
 ts_status ts_texture_image_decode(const char *filename, const unsigned char *buf, size_t len, ts_image *out,
                                   ts_error *err)
 {

@@ -43,6 +43,13 @@ ts_texture_image_format ts_texture_image_format_of(const char *filename);
 /* pbrt-v3's default of `gamma` for the file: true for .png and .tga. */
 bool ts_texture_image_default_gamma(const char *filename);
 
+/* The image's size and its decoded channels as the file's header says (PNG's IHDR, TGA's
+ * header, PFM's, EXR's data window and channel list), read without decoding anything:
+ * false when there is no such header (the decoder then says why). For a memory budget
+ * checked before any pixel is allocated (texture_cache.h). */
+bool ts_texture_image_size(const char *filename, const unsigned char *buf, size_t len, int64_t *width,
+                           int64_t *height, int *channels);
+
 /* Decodes buf[0, len) in the format of filename's extension into *out (caller calls
  * ts_image_fini). Messages start "texture image '<filename>': ". An unknown extension
  * is TS_ERR_UNSUPPORTED ("… unsupported image format \".jpg\" (.exr, .png, .tga and
