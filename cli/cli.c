@@ -366,7 +366,7 @@ static ts_status write_outputs(const render_run *r, const ts_film *film, const c
     ts_status st = ts_film_to_image(film, TS_FILM_IMAGE_STATS, &img, err);
     if (st) return st;
     ts_render_info info = {r->scene->name,   r->integrator, r->final.spp_done, true, r->scene->sampler.seed,
-                           r->final.elapsed_s, error,        (double)r->final.nonfinite, NULL};
+                           r->final.elapsed_s, error,        (double)r->final.nonfinite, NULL, film->scale};
     st = ts_image_set_render_info(&img, &info, err);
     for (int i = 0; !st && i < outputs->n; i++) {
         if (cli_output_is_exr(outputs->path[i])) st = ts_exr_write(outputs->path[i], &img, err);
@@ -452,6 +452,7 @@ static ts_film *film_copy(const ts_film *f, ts_error *err)
 {
     ts_film *c = ts_film_create(f->full_width, f->full_height, f->x0, f->y0, f->width, f->height, err);
     if (c) memcpy(c->pixels, f->pixels, (size_t)f->width * (size_t)f->height * sizeof *f->pixels);
+    if (c) c->scale = f->scale;
     return c;
 }
 
@@ -509,6 +510,7 @@ static int cmd_render(int argc, char **argv)
     ts_sched_job *job = NULL;
     ts_film *film = ts_film_create(scene->width, scene->height, scene->crop_x0, scene->crop_y0,
                                    scene->crop_x1 - scene->crop_x0, scene->crop_y1 - scene->crop_y0, &err);
+    if (film) film->scale = scene->film_scale; /* the output factor (film.h) */
     r.tile_spp = calloc((size_t)r.nx * (size_t)r.ny, sizeof *r.tile_spp);
     if (!film || !r.tile_spp) {
         if (film) ts_error_set(&err, TS_ERR_NOMEM, "out of memory for the tile grid");

@@ -300,6 +300,8 @@ static void encode_task(void *arg)
             film = ts_tile_snapshot_film(snap, j->full_w, j->full_h, &err);
         }
         ts_tile_snapshot_release(snap);
+        const ts_scene *sc = ts_sched_job_scene(j->sj);
+        if (film && sc) film->scale = sc->film_scale; /* the output factor (film.h) */
     } else {
         film = ts_sched_job_film(j->sj, NULL, &err);
     }
@@ -314,7 +316,7 @@ static void encode_task(void *arg)
         const ts_scene *sc = ts_sched_job_scene(j->sj);
         ts_render_info info = {sc ? sc->name : NULL, j->integrator, p.spp_done, sc != NULL, sc ? sc->sampler.seed : 0,
                                p.elapsed_s, t->tile ? -1 : ts_film_relative_error(film), (double)p.nonfinite,
-                               t->tile ? NULL : j->id};
+                               t->tile ? NULL : j->id, film->scale};
         st = ts_image_set_render_info(&img, &info, &err);
         if (!st) st = t->png ? ts_png_encode(&img, 0.0f, &buf, &len, &err) : ts_exr_write_memory(&img, &buf, &len, &err);
     }

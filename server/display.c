@@ -232,11 +232,12 @@ float srv_display_relative_error(const float rgb[3], const float var[3])
 }
 
 /* UpdateImageV3 of one snapshot, at window coordinates (x, y), planar channels. */
-static bool encode_tile(buf *b, const char *name, const ts_tile_snapshot *t, int full_w, int full_h, int x, int y)
+static bool encode_tile(buf *b, const char *name, const ts_tile_snapshot *t, int full_w, int full_h, int x, int y,
+                        float scale)
 {
     /* The snapshot read in place as a film of its tile (it is immutable and only read), so
      * the floats are those of the EXR encoder's ts_film_to_image, with no copy. */
-    ts_film view = {full_w, full_h, t->x, t->y, t->w, t->h, (ts_film_pixel *)t->pixels};
+    ts_film view = {full_w, full_h, t->x, t->y, t->w, t->h, (ts_film_pixel *)t->pixels, scale};
     ts_error err = {0};
     ts_image img;
     if (ts_film_to_image(&view, TS_FILM_IMAGE_STATS, &img, &err)) return false;
@@ -443,6 +444,8 @@ static void *display_thread(void *arg)
         qsort_r(d->order, (size_t)n, sizeof *d->order, by_stamp, d);
         bool ok = true;
         uint64_t sent = 0, bytes = 0;
+        const ts_scene *scene = ts_sched_job_scene(d->job);
+        float scale = scene ? scene->film_scale : 1; /* the output factor (film.h) */
         for (int k = 0; k < n && ok; k++) {
             int i = d->order[k];
             if (!atomic_exchange(&d->pending[i], 0)) continue;
@@ -450,7 +453,7 @@ static void *display_thread(void *arg)
             ts_tile_snapshot *t = ts_sched_job_tile(d->job, i % d->nx, i / d->nx);
             if (!t) continue; /* not rendered yet */
             /* An encoding failure (out of memory) skips this state of the tile only. */
-            bool encoded = encode_tile(&b, d->name, t, d->full_w, d->full_h, t->x - d->x0, t->y - d->y0);
+            bool encoded = encode_tile(&b, d->name, t, d->full_w, d->full_h, t->x - d->x0, t->y - d->y0, scale);
             ts_tile_snapshot_release(t);
             if (encoded && (ok = send_all(fd, b.p, b.n))) sent++, bytes += b.n;
         }

@@ -447,6 +447,72 @@ static void test_bad_merges_refused(void **state)
     log_has("8 spp of 8 (samples [0,8))");
 }
 
+/* Film "scale" (film.scale) is an output factor, never in the sums: shards of a scaled
+ * scene hold the same sums as the unscaled scene's, their merge records the scale
+ * (tessera_film_scale) and a plain render's pixels are the unscaled ones times it. */
+static void test_film_scale_shards(void **state)
+{
+    (void)state;
+    const char *plain = tmp("scale1.json"), *scaled = tmp("scale2.json");
+    write_cornell(plain, 16, 16, 6, "gaussian", NULL, 0);
+    write_cornell(scaled, 16, 16, 6, "gaussian", NULL, 0);
+    {
+        FILE *f = fopen(scaled, "r");
+        static char text[1 << 16];
+        size_t n = fread(text, 1, sizeof text - 1, f);
+        fclose(f);
+        text[n] = '\0';
+        cJSON *doc = cJSON_Parse(text);
+        cJSON_AddNumberToObject(cJSON_GetObjectItem(doc, "film"), "scale", 2);
+        char *out = cJSON_Print(doc);
+        write_file(scaled, out);
+        cJSON_free(out);
+        cJSON_Delete(doc);
+    }
+    render_shard(plain, "0/1", tmp("p-full.exr"));
+    render_shard(scaled, "0/2", tmp("s0.exr"));
+    render_shard(scaled, "1/2", tmp("s1.exr"));
+    const char *files[] = {tmp("s0.exr"), tmp("s1.exr")};
+    merge_files(files, 2, tmp("s-merged.exr"));
+    double px, mean;
+    compare_shards(tmp("s-merged.exr"), tmp("p-full.exr"), &px, &mean);
+    printf("scaled shards merged vs the unscaled render: sums differ by %.3g relative at most\n", px);
+    assert_true(px <= PIXEL_BOUND);
+    ts_shard_info info;
+    ts_film *film;
+    ts_error err = {0};
+    if (ts_shard_read(tmp("s-merged.exr"), &info, &film, &err)) fail_msg("%s", err.message);
+    assert_true(info.film_scale == 2 && film->scale == 2);
+    ts_film_destroy(film);
+    /* Plain EXRs: every value twice the unscaled one (×2 is exact), and the attribute. */
+    const char *r1[] = {"render", plain, "-o", tmp("p.exr"), "--quiet", NULL},
+               *r2[] = {"render", scaled, "-o", tmp("s.exr"), "--quiet", NULL};
+    assert_int_equal(run(r1), 0);
+    assert_int_equal(run(r2), 0);
+    ts_image a = {0}, b = {0};
+    if (ts_exr_read(tmp("p.exr"), &a, &err) || ts_exr_read(tmp("s.exr"), &b, &err)) fail_msg("%s", err.message);
+    const ts_image_attr *at = ts_image_attr_find(&b, "tessera_film_scale");
+    assert_true(at && at->type == TS_ATTR_DOUBLE && at->d == 2);
+    int red = -1;
+    for (int c = 0; c < a.n_channels; c++)
+        if (!strcmp(a.channel_names[c], "R")) red = c;
+    assert_true(red >= 0 && a.n_channels == b.n_channels);
+    size_t differ = 0, lit = 0;
+    for (size_t i = 0; i < (size_t)a.width * a.height; i++) {
+        float pa = a.data[i * a.n_channels + red], pb = b.data[i * b.n_channels + red];
+        differ += pb != 2 * pa;
+        lit += pa > 0;
+    }
+    assert_true(lit > 0);
+    assert_int_equal(differ, 0);
+    ts_image_fini(&a);
+    ts_image_fini(&b);
+    /* A shard of the scaled scene does not merge with one of the unscaled scene. */
+    render_shard(plain, "1/2", tmp("p1.exr"));
+    const char *mixed[] = {"merge", tmp("s0.exr"), tmp("p1.exr"), "-o", tmp("mixed.exr"), NULL};
+    assert_int_equal(run(mixed), 1);
+}
+
 static void test_shard_auto(void **state)
 {
     (void)state;
@@ -551,6 +617,7 @@ int main(void)
         cmocka_unit_test(test_merge_equals_single_render),
         cmocka_unit_test(test_region_shards),
         cmocka_unit_test(test_bad_merges_refused),
+        cmocka_unit_test(test_film_scale_shards),
         cmocka_unit_test(test_shard_auto),
         cmocka_unit_test(test_sigterm_sigkill_resume),
     };

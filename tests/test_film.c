@@ -440,6 +440,53 @@ static void test_film_merge(void **state)
     ts_film_destroy(b);
 }
 
+/* Film "scale" is an output factor: the sums are those of scale 1, the values scale times
+ * theirs and the variances scale² times; merges keep the destination's scale. pbrt-v3's
+ * maxsampleluminance: a sample above the luminance is scaled to it (pbrt-v3's Y weights),
+ * one at or below it passes bit for bit. */
+static void test_film_scale_and_clamp(void **state)
+{
+    (void)state;
+    ts_film *a = ts_film_create(8, 8, 0, 0, 8, 8, NULL), *b = ts_film_create(8, 8, 0, 0, 8, 8, NULL);
+    assert_true(a && b);
+    assert_true(a->scale == 1);
+    ts_pcg32 rng;
+    ts_pcg32_seed(&rng, 3, 3);
+    for (int i = 0; i < 40; i++) {
+        ts_rgb L = {ts_pcg32_float(&rng), 2 * ts_pcg32_float(&rng), 0.5f + ts_pcg32_float(&rng)};
+        float w = 0.25f + ts_pcg32_float(&rng);
+        ts_film_add_sample(a, 3, 4, L, w);
+        ts_film_add_sample(b, 3, 4, L, w);
+    }
+    b->scale = 1.5f;
+    assert_memory_equal(ts_film_pixel_at(a, 3, 4), ts_film_pixel_at(b, 3, 4), sizeof(ts_film_pixel));
+    ts_rgb m = ts_film_pixel_rgb(a, 3, 4), ms = ts_film_pixel_rgb(b, 3, 4);
+    ts_rgb v = ts_film_pixel_variance(a, 3, 4), vs = ts_film_pixel_variance(b, 3, 4);
+    assert_close(ms.r, 1.5 * m.r, 1e-6 * m.r);
+    assert_close(ms.g, 1.5 * m.g, 1e-6 * m.g);
+    assert_close(ms.b, 1.5 * m.b, 1e-6 * m.b);
+    assert_true(v.g > 0);
+    assert_close(vs.g, 2.25 * v.g, 1e-6 * v.g);
+    float rgb[8 * 8 * 3];
+    ts_film_resolve(b, rgb);
+    assert_true(rgb[(4 * 8 + 3) * 3 + 1] == ms.g);
+    ts_film_merge(b, a); /* adds a's sums; b keeps its scale */
+    assert_true(b->scale == 1.5f);
+    assert_close(ts_film_pixel_rgb(b, 3, 4).g, ms.g, 1e-6 * ms.g);
+    ts_film_destroy(a);
+    ts_film_destroy(b);
+
+    ts_rgb bright = {100, 40, 2}, dim = {1, 2, 3};
+    ts_rgb c = ts_film_clamp_luminance(bright, 10);
+    double y = 0.212671 * c.r + 0.715160 * c.g + 0.072169 * c.b;
+    assert_close(y, 10, 1e-5);
+    assert_close(c.g / c.r, 0.4, 1e-6); /* the colour's ratios stay */
+    ts_rgb d = ts_film_clamp_luminance(dim, 10);
+    assert_memory_equal(&d, &dim, sizeof d);
+    d = ts_film_clamp_luminance(bright, INFINITY);
+    assert_memory_equal(&d, &bright, sizeof d);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -447,7 +494,7 @@ int main(void)
         cmocka_unit_test(test_filter_sample_bounds), cmocka_unit_test(test_filter_importance_sampling),
         cmocka_unit_test(test_film_create_errors),   cmocka_unit_test(test_film_constant_exact),
         cmocka_unit_test(test_film_variance),        cmocka_unit_test(test_film_crop),
-        cmocka_unit_test(test_film_merge),
+        cmocka_unit_test(test_film_merge),           cmocka_unit_test(test_film_scale_and_clamp),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -150,6 +150,39 @@ static void camera_orthographic(void **state)
     ts_scene_destroy(s);
 }
 
+/* Film "scale" and "maxsampleluminance" (pbrt-v3's ImageFilm): on the scene, into the
+ * converted document, refused where pbrt-v3's image would be meaningless; defaults 1 and
+ * no clamp. */
+static void film_scale_and_clamp(void **state)
+{
+    (void)state;
+    warnings w = {0};
+    ts_scene *s = load("Film \"image\" \"integer xresolution\" 8 \"integer yresolution\" 8\n" WORLD, &w);
+    assert_true(s->film_scale == 1 && s->max_sample_luminance == INFINITY);
+    ts_scene_destroy(s);
+    static const char text[] = "Film \"image\" \"integer xresolution\" 8 \"integer yresolution\" 8 "
+                               "\"float scale\" [1.5] \"float maxsampleluminance\" [10]\n" WORLD;
+    w.n = 0;
+    s = load(text, &w);
+    assert_true(s->film_scale == 1.5f && s->max_sample_luminance == 10);
+    assert_int_equal(w.n, 0); /* both are used: no "is not used" warning */
+    ts_scene_destroy(s);
+    char *json = NULL, path[4096];
+    size_t len = 0;
+    ts_error err = {0};
+    write_file("film.pbrt", text, path, sizeof path);
+    assert_int_equal(ts_scene_convert_pbrt_path(path, NULL, NULL, NULL, &json, &len, &err), TS_OK);
+    cJSON *doc = cJSON_Parse(json), *film = cJSON_GetObjectItem(doc, "film");
+    assert_true(cJSON_GetObjectItem(film, "scale")->valuedouble == 1.5);
+    assert_true(cJSON_GetObjectItem(film, "max_sample_luminance")->valuedouble == 10);
+    cJSON_Delete(doc);
+    free(json);
+    expect_error("Film \"image\" \"float scale\" [0]\n" WORLD,
+                 "t.pbrt:1:14: Film \"image\": \"float scale\" must be a finite number > 0, got 0");
+    expect_error("Film \"image\" \"float maxsampleluminance\" [-1]\n" WORLD,
+                 "t.pbrt:1:14: Film \"image\": \"float maxsampleluminance\" must be a number > 0, got -1");
+}
+
 /* pbrt-v3's gaussian: f(x) = exp(−α x²) − exp(−α r²), α = 2, r = 2 by default. */
 static void filter_gaussian(void **state)
 {
@@ -990,6 +1023,7 @@ int main(void)
         cmocka_unit_test(camera_screen_window),
         cmocka_unit_test(camera_orthographic),
         cmocka_unit_test(filter_gaussian),
+        cmocka_unit_test(film_scale_and_clamp),
         cmocka_unit_test(spectrum_equal_energy),
         cmocka_unit_test(error_sentences),
         cmocka_unit_test(lights_mapped),

@@ -8,6 +8,7 @@
  * preparation and distribution — once, after everything has been accepted. */
 #include "build/scene_builder.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -226,9 +227,16 @@ ts_status ts_scene_builder_set_film(ts_scene_builder *b, const ts_film_desc *f, 
     int y0 = (int)ceilf(height * c[2]), y1 = (int)ceilf(height * c[3]);
     if (x1 <= x0 || y1 <= y0)
         return ts_error_set(err, TS_ERR_INVALID, "film.crop: the window holds no pixel");
+    if (!(f->scale >= 0 && f->scale <= FLT_MAX))
+        return ts_error_set(err, TS_ERR_INVALID, "film.scale: expected a finite number > 0, got %g", f->scale);
+    if (!(f->max_sample_luminance >= 0))
+        return ts_error_set(err, TS_ERR_INVALID, "film.max_sample_luminance: expected a number > 0, got %g",
+                            f->max_sample_luminance);
     ts_filter filter; /* its own checks: a radius > 0, a known type */
     TRY(ts_filter_init_params(&filter, f->filter, f->filter_radius, &f->filter_params, err));
     ts_scene *s = b->s;
+    s->film_scale = f->scale > 0 ? f->scale : 1;
+    s->max_sample_luminance = f->max_sample_luminance > 0 ? f->max_sample_luminance : INFINITY;
     s->width = width;
     s->height = height;
     s->crop_x0 = x0, s->crop_x1 = x1, s->crop_y0 = y0, s->crop_y1 = y1;

@@ -101,6 +101,8 @@ typedef struct ts_film_desc {
     ts_filter_type filter;
     float filter_radius; /* pixels, in (0, 16] */
     ts_filter_params filter_params; /* gaussian α, Mitchell B and C (filter.h); all zero: the defaults */
+    float scale;                /* output factor of the pixel values, finite > 0 (0: 1) */
+    float max_sample_luminance; /* a sample's luminance at most, > 0 (0 or INFINITY: no clamp) */
 } ts_film_desc;
 ts_status ts_scene_builder_set_film(ts_scene_builder *b, const ts_film_desc *film, ts_error *err);
 

@@ -34,6 +34,7 @@ ts_film *ts_film_create(int full_width, int full_height, int x0, int y0, int wid
     f->y0 = y0;
     f->width = width;
     f->height = height;
+    f->scale = 1;
     return f;
 
 fail_pixels:
@@ -50,17 +51,17 @@ void ts_film_destroy(ts_film *f)
     free(f);
 }
 
-static ts_rgb pixel_mean(const ts_film_pixel *p)
+static ts_rgb pixel_mean(const ts_film_pixel *p, float scale)
 {
     if (p->weight == 0) return (ts_rgb){0, 0, 0};
-    double inv = 1 / p->weight;
+    double inv = scale / p->weight;
     return (ts_rgb){(float)(p->sum[0] * inv), (float)(p->sum[1] * inv), (float)(p->sum[2] * inv)};
 }
 
 ts_rgb ts_film_pixel_rgb(const ts_film *f, int x, int y)
 {
     const ts_film_pixel *p = ts_film_pixel_at(f, x, y);
-    return p ? pixel_mean(p) : (ts_rgb){0, 0, 0};
+    return p ? pixel_mean(p, f->scale) : (ts_rgb){0, 0, 0};
 }
 
 ts_rgb ts_film_pixel_variance(const ts_film *f, int x, int y)
@@ -75,9 +76,10 @@ ts_rgb ts_film_pixel_variance(const ts_film *f, int x, int y)
         /* (Σ w·L² − mean·Σ w·L)/Σ w: the weighted sample variance, clamped against
          * cancellation (it is exactly 0 for a constant only up to rounding). */
         double s2 = (p->sum_sq[c] - mean * p->sum[c]) / p->weight;
-        v[c] = s2 > 0 ? s2 / (n_eff - 1) : 0;
+        v[c] = s2 > 0 ? (double)f->scale * f->scale * s2 / (n_eff - 1) : 0;
         /* Samples are at most TS_FILM_SAMPLE_MAX, so s2 fits a float; n_eff − 1 below 1
-         * (negative filter weights) could still lift it beyond: the largest float then. */
+         * (negative filter weights) or a scale above 1 could still lift it beyond: the
+         * largest float then. */
         if (!(v[c] <= FLT_MAX)) v[c] = FLT_MAX;
     }
     return (ts_rgb){(float)v[0], (float)v[1], (float)v[2]};
@@ -87,7 +89,7 @@ void ts_film_resolve(const ts_film *f, float *rgb)
 {
     size_t n = (size_t)f->width * (size_t)f->height;
     for (size_t i = 0; i < n; i++) {
-        ts_rgb m = pixel_mean(&f->pixels[i]);
+        ts_rgb m = pixel_mean(&f->pixels[i], f->scale);
         rgb[3 * i + 0] = m.r;
         rgb[3 * i + 1] = m.g;
         rgb[3 * i + 2] = m.b;

@@ -34,6 +34,10 @@ typedef struct ts_film {
     int full_width, full_height; /* the whole image the camera sees */
     int x0, y0, width, height;   /* the pixels this film holds (crop window) */
     ts_film_pixel *pixels;       /* (x-x0) + (y-y0)*width; owned */
+    /* The output factor of every pixel value (pbrt-v3's Film "scale", the scene's
+     * film_scale): ts_film_pixel_rgb and _resolve multiply by it, _variance by its square.
+     * It is never in the sums, so merges and shards stay exact; 1 at create. */
+    float scale;
 } ts_film;
 
 /* A zeroed film for the window [x0, x0+width) × [y0, y0+height), which must lie inside the
@@ -61,6 +65,17 @@ static inline ts_film_pixel *ts_film_pixel_at(const ts_film *f, int x, int y)
  * Larger samples are dropped and counted with the non-finite ones (docs/design.md §6). */
 #define TS_FILM_SAMPLE_MAX 1.8e19f
 
+/* pbrt-v3's ImageFilm clamp ("maxsampleluminance"): L scaled so that its luminance (pbrt-v3's
+ * weights 0.212671, 0.715160, 0.072169) is at most max_luminance; a sample is clamped before
+ * its filter weight is applied. INFINITY: L as it is. */
+static inline ts_rgb ts_film_clamp_luminance(ts_rgb L, float max_luminance)
+{
+    float y = 0.212671f * L.r + 0.715160f * L.g + 0.072169f * L.b;
+    if (!(y > max_luminance)) return L;
+    float k = max_luminance / y;
+    return (ts_rgb){L.r * k, L.g * k, L.b * k};
+}
+
 /* Adds radiance L with filter weight `weight` to full-image pixel (x, y). Samples outside
  * the window are ignored. L and weight must be finite: the integrator rejects (and
  * counts) NaN/Inf before they reach the film (docs/design.md §6). Hot path: no allocation,
@@ -80,10 +95,10 @@ static inline void ts_film_add_sample(ts_film *f, int x, int y, ts_rgb L, float 
     p->count++;
 }
 
-/* Σ w·L / Σ w of full-image pixel (x, y); 0 with no weight or outside the window. */
+/* scale · Σ w·L / Σ w of full-image pixel (x, y); 0 with no weight or outside the window. */
 ts_rgb ts_film_pixel_rgb(const ts_film *f, int x, int y);
 
-/* Estimated variance of that pixel's mean, per channel: s² / (n_eff − 1), where
+/* Estimated variance of that pixel's mean, per channel: scale² · s² / (n_eff − 1), where
  * s² = Σ w·L²/Σ w − mean² is the weighted sample variance and n_eff = (Σw)²/Σw². For
  * equal weights this is the usual unbiased s²/n of a mean of n samples; with unequal
  * weights it is unbiased when L is independent of w (exact for the box and triangle
@@ -91,10 +106,11 @@ ts_rgb ts_film_pixel_rgb(const ts_film *f, int x, int y);
  * n_eff <= 1 (fewer than two effective samples: unknown) or outside the window. */
 ts_rgb ts_film_pixel_variance(const ts_film *f, int x, int y);
 
-/* Writes the window's pixel values, 3·width·height floats, row-major RGB. */
+/* Writes the window's pixel values (scaled), 3·width·height floats, row-major RGB. */
 void ts_film_resolve(const ts_film *f, float *rgb);
 
-/* Adds src's sums to dst for every pixel in both windows (normally the same window).
+/* Adds src's sums to dst for every pixel in both windows (normally the same window); dst's
+ * scale stays.
  * Sums in double are associative only up to rounding, so merging two halves equals one
  * film with all samples to about 2^-53 relative, not bit for bit. */
 void ts_film_merge(ts_film *dst, const ts_film *src);

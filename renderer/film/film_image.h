@@ -69,11 +69,12 @@ typedef struct ts_render_info {
     double error_estimate;      /* < 0: not written (a tile) */
     double nonfinite_samples;   /* samples dropped for NaN/∞/negative radiance */
     const char *job;            /* job id, or NULL */
+    double film_scale;          /* the output factor the pixels carry (film.h); 0: not written */
 } ts_render_info;
 
 /* Sets software ("tessera VERSION"), tessera_scene, tessera_integrator, tessera_spp,
- * tessera_seed, tessera_render_time_s, tessera_error_estimate, tessera_nonfinite_samples and
- * tessera_job on img. */
+ * tessera_seed, tessera_render_time_s, tessera_error_estimate, tessera_nonfinite_samples,
+ * tessera_job and tessera_film_scale on img. */
 ts_status ts_image_set_render_info(ts_image *img, const ts_render_info *info, ts_error *err);
 
 #endif

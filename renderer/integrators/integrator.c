@@ -345,6 +345,13 @@ static ts_rgb li_path(const ts_scene *s, uint32_t fx, ts_ray ray, const ts_ray_d
     if (!(fx & TS_EFFECTS_SCATTERING)) max_depth = 0;
     else if (!(fx & TS_EFFECT_INDIRECT) && max_depth > 1) max_depth = 1;
     const bool emitters = (fx & (TS_EFFECT_AREA_LIGHTS | TS_EFFECT_ENVIRONMENT)) != 0;
+    /* Under a film that clamps samples (max_sample_luminance) the image's expectation
+     * depends on how each sample's value is distributed, not only on its mean: direct
+     * light is then estimated as pbrt-v3's PathIntegrator does (UniformSampleOneLight: its
+     * own BSDF ray towards the chosen light, all divided by the light's pmf; the
+     * continuation's emission counts only at the camera and after specular bounces), so
+     * the clamp cuts what pbrt-v3's cuts. Unclamped, both estimators have the same mean. */
+    const bool v3_direct = s->max_sample_luminance < INFINITY;
     ts_interaction prev = {0};
     float prev_pdf = 0;
     for (int bounces = 0;; bounces++) {
@@ -353,7 +360,7 @@ static ts_rgb li_path(const ts_scene *s, uint32_t fx, ts_ray ray, const ts_ray_d
          * is asked for. A ray whose hit can add nothing — the last one, when nothing
          * emits or its emission does not count — is not traced; it draws no sample
          * dimensions, so nothing else changes. */
-        bool counts = emitters && (bounces == 0 || specular_bounce || sampling != TS_SAMPLING_LIGHT);
+        bool counts = emitters && (bounces == 0 || specular_bounce || (!v3_direct && sampling != TS_SAMPLING_LIGHT));
         if ((bounces > 0 && bounces >= max_depth && !counts) || stopped(c)) break;
         ts_interaction si;
         bool found = ts_accel_intersect(s->accel, &ray, &si);
@@ -367,7 +374,9 @@ static ts_rgb li_path(const ts_scene *s, uint32_t fx, ts_ray ray, const ts_ray_d
         /* The camera ray's differentials only, as pbrt-v3's PathIntegrator (differential.h). */
         material_bsdf(s, &si, bounces == 0 ? rd : NULL, &bsdf);
         uint32_t flags = ts_bsdf_flags(&bsdf);
-        if (flags & ~TS_BXDF_SPECULAR & (TS_BXDF_DIFFUSE | TS_BXDF_GLOSSY)) {
+        if ((flags & ~TS_BXDF_SPECULAR & (TS_BXDF_DIFFUSE | TS_BXDF_GLOSSY)) && v3_direct) {
+            L = ts_rgb_add(L, ts_rgb_mul(beta, sample_one_light(s, fx, &si, &bsdf, st, c)));
+        } else if (flags & ~TS_BXDF_SPECULAR & (TS_BXDF_DIFFUSE | TS_BXDF_GLOSSY)) {
             ts_vec2 u_select = ts_sample_2d(st); /* x: the alias bin, y: its coin */
             ts_vec2 u_light = ts_sample_2d(st);
             L = ts_rgb_add(L, ts_rgb_mul(beta, path_nee(s, &si, &bsdf, u_select, u_light, c)));

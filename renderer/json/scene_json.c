@@ -7,6 +7,7 @@
  * has been accepted. */
 #include "json/scene_json.h"
 
+#include <float.h>
 #include <limits.h>
 #include <math.h>
 #include <stdio.h>
@@ -148,8 +149,16 @@ static ts_status parse_film(loader *ld, const cJSON *doc)
     const cJSON *film;
     TRY(ts_json_object(doc, "", "film", false, &film, ld->err));
     if (film) {
-        static const char *const keys[] = {"width", "height", "filter", "crop", NULL};
+        static const char *const keys[] = {"width", "height", "filter", "crop", "scale", "max_sample_luminance", NULL};
         TRY(ts_json_check_object(film, "film", keys, ld->err));
+        double scale = 1, max_lum = 0; /* 0: no clamp */
+        TRY(ts_json_number(film, "film", "scale", false, TS_J_POSITIVE, &scale, ld->err));
+        TRY(ts_json_number(film, "film", "max_sample_luminance", false, TS_J_POSITIVE, &max_lum, ld->err));
+        if (!((float)scale > 0 && (float)scale <= FLT_MAX))
+            return ts_error_set(ld->err, TS_ERR_INVALID, "film.scale: expected a finite number > 0 within float range, got %g",
+                                scale);
+        f.scale = (float)scale;
+        f.max_sample_luminance = max_lum > 0 && (float)max_lum == 0 ? FLT_MIN : (float)max_lum;
         int64_t w = f.width, h = f.height;
         TRY(ts_json_int(film, "film", "width", false, 1, ld->lim->max_width, &w, ld->err));
         TRY(ts_json_int(film, "film", "height", false, 1, ld->lim->max_height, &h, ld->err));

@@ -342,6 +342,16 @@ static ts_status map_film(imp *im, uint32_t *width, uint32_t *height)
             f.crop[2 * k + 1] = ts_clampf(fmaxf(a, b), 0, 1);
         }
     }
+    /* pbrt-v3's ImageFilm: "scale" multiplies every written pixel, "maxsampleluminance"
+     * clamps each sample's luminance before its filter weight (film.h). */
+    TRY(ts_pbrt_find_float(ps, "scale", 1, &f.scale, im->err));
+    if (!(f.scale > 0) || !isfinite(f.scale))
+        return ts_pbrt_param_error(ps, ts_pbrt_params_get(ps, "scale"), im->err, TS_ERR_INVALID,
+                                   "must be a finite number > 0, got %g", f.scale);
+    TRY(ts_pbrt_find_float(ps, "maxsampleluminance", INFINITY, &f.max_sample_luminance, im->err));
+    if (!(f.max_sample_luminance > 0))
+        return ts_pbrt_param_error(ps, ts_pbrt_params_get(ps, "maxsampleluminance"), im->err, TS_ERR_INVALID,
+                                   "must be a number > 0, got %g", f.max_sample_luminance);
     const char *filename;
     TRY(ts_pbrt_find_string(ps, "filename", NULL, &filename, im->err));
     if (filename)
@@ -427,6 +437,9 @@ static ts_status map_film(imp *im, uint32_t *width, uint32_t *height)
             double c[4] = {f.crop[0], f.crop[1], f.crop[2], f.crop[3]};
             ok = ts_jw_add(film, "crop", ts_jw_doubles(c, 4));
         }
+        if (ok && f.scale != 1) ok = ts_jw_number(film, "scale", f.scale);
+        if (ok && isfinite(f.max_sample_luminance))
+            ok = ts_jw_number(film, "max_sample_luminance", f.max_sample_luminance);
         if (!ok || !ts_jw_add(im->doc, "film", film)) {
             if (!ok) cJSON_Delete(film);
             return nomem(im);

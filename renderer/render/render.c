@@ -106,6 +106,7 @@ bool ts_render_tile(const ts_render_request *req, int x0, int y0, int w, int h, 
                     c->nonfinite++;
                     continue;
                 }
+                L = ts_film_clamp_luminance(L, s->max_sample_luminance);
                 ts_film_add_sample(req->film, x, y, L, weight);
             }
         }

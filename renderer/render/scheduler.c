@@ -583,6 +583,7 @@ ts_sched_job *ts_scheduler_submit(ts_scheduler *s, const ts_sched_job_desc *d, t
     j->tiles = calloc((size_t)j->n_tiles, sizeof *j->tiles);
     j->order = malloc(sizeof *j->order * (size_t)j->n_tiles);
     ts_film *film = d->film ? d->film : ts_film_create(j->full_w, j->full_h, j->x0, j->y0, j->w, j->h, err);
+    if (film && d->scene) film->scale = d->scene->film_scale; /* the output factor; a film of its own else */
     if (!j->tiles || !j->order || !film) {
         if (film && film != d->film) ts_film_destroy(film);
         free(j->tiles);
@@ -711,6 +712,7 @@ ts_film *ts_sched_job_film(ts_sched_job *j, uint32_t *tile_spp, ts_error *err)
 {
     ts_tile_snapshot **snaps = calloc((size_t)j->n_tiles, sizeof *snaps);
     ts_film *f = ts_film_create(j->full_w, j->full_h, j->x0, j->y0, j->w, j->h, err);
+    if (f) f->scale = j->film->scale;
     if (!snaps || !f) {
         free(snaps);
         ts_film_destroy(f);

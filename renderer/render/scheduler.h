@@ -179,12 +179,13 @@ void ts_sched_job_grid(const ts_sched_job *j, int *nx, int *ny);
 ts_tile_snapshot *ts_sched_job_tile(ts_sched_job *j, int tx, int ty);
 void ts_tile_snapshot_release(ts_tile_snapshot *t); /* NULL is fine */
 
-/* A new film (caller destroys) of the job's window holding every tile's latest snapshot,
- * and optionally (tile_spp: nx·ny entries, caller-allocated) each tile's spp. Tiles not
+/* A new film (caller destroys) of the job's window holding every tile's latest snapshot
+ * (with the scene's output scale, film.h), and optionally (tile_spp: nx·ny entries, caller-allocated) each tile's spp. Tiles not
  * rendered yet are empty. Consistent per tile; reads no working state. */
 ts_film *ts_sched_job_film(ts_sched_job *j, uint32_t *tile_spp, ts_error *err);
 
-/* A new film (caller destroys) covering just one snapshot's tile. */
+/* A new film (caller destroys) covering just one snapshot's tile (scale 1: the caller sets
+ * the scene's). */
 ts_film *ts_tile_snapshot_film(const ts_tile_snapshot *t, int full_w, int full_h, ts_error *err);
 
 #endif

@@ -3,6 +3,7 @@
 #include "render/shard.h"
 
 #include <errno.h>
+#include <float.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -142,6 +143,7 @@ void ts_shard_info_init(ts_shard_info *info, const ts_scene *scene, const ts_fil
     info->n_ranges = n_ranges < TS_SHARD_MAX_RANGES ? n_ranges : TS_SHARD_MAX_RANGES;
     if (info->n_ranges) memcpy(info->ranges, ranges, (size_t)info->n_ranges * sizeof *ranges);
     info->render_time_s = render_time_s;
+    info->film_scale = scene->film_scale;
 }
 
 /* ---------------------------------------------------------------- metadata */
@@ -169,6 +171,7 @@ static ts_status set_metadata(ts_image *img, const ts_shard_info *info, const ts
     if (!st) st = ts_image_set_int(img, "tessera_y0", info->y0, err);
     if (!st) st = ts_image_set_double(img, "tessera_render_time_s", info->render_time_s, err);
     if (!st) st = ts_image_set_double(img, "tessera_error_estimate", ts_film_relative_error(film), err);
+    if (!st) st = ts_image_set_double(img, "tessera_film_scale", info->film_scale, err);
     return st;
 }
 
@@ -242,6 +245,11 @@ static ts_status read_metadata(const ts_image *img, const char *path, ts_shard_i
     get_int(img, "tessera_uneven", &uneven);
     const ts_image_attr *t = ts_image_attr_find(img, "tessera_render_time_s");
     if (t && t->type == TS_ATTR_DOUBLE) info->render_time_s = t->d;
+    const ts_image_attr *fs = ts_image_attr_find(img, "tessera_film_scale");
+    info->film_scale = fs && fs->type == TS_ATTR_DOUBLE ? fs->d : 1; /* older shards: none */
+    if (!(info->film_scale > 0 && info->film_scale <= FLT_MAX))
+        return ts_error_set(err, TS_ERR_INVALID, "%s: tessera_film_scale %g is not a finite number > 0", path,
+                            info->film_scale);
     if (!ok)
         return ts_error_set(err, TS_ERR_INVALID, "%s: the shard metadata is incomplete (a tessera_* attribute is missing)",
                             path);
@@ -267,6 +275,7 @@ ts_status ts_shard_read(const char *path, ts_shard_info *info, ts_film **film, t
     st = read_metadata(&img, path, info, err);
     if (!st) {
         *film = ts_film_from_image(&img, info->full_width, info->full_height, info->x0, info->y0, err);
+        if (*film) (*film)->scale = (float)info->film_scale;
         if (!*film) {
             st = err->status ? err->status : TS_ERR_INVALID;
             ts_error_prefix(err, "%s", path);
@@ -297,6 +306,9 @@ static ts_status same_render(const ts_shard_info *a, const char *fa, const ts_sh
     if (strcmp(a->integrator, b->integrator) != 0)
         return ts_error_set(err, TS_ERR_INVALID, "%s and %s were rendered with different integrators ('%s' and '%s')", fa,
                             fb, a->integrator, b->integrator);
+    if (a->film_scale != b->film_scale)
+        return ts_error_set(err, TS_ERR_INVALID, "%s and %s have different film scales (%g and %g)", fa, fb,
+                            a->film_scale, b->film_scale);
     if (same_window && (a->x0 != b->x0 || a->y0 != b->y0 || a->width != b->width || a->height != b->height))
         return ts_error_set(err, TS_ERR_INVALID, "%s covers a different film window than %s", fb, fa);
     return TS_OK;
@@ -588,6 +600,7 @@ const ts_film *ts_merge_result(ts_merge *m, ts_shard_info *info, int *n_files)
         ts_error e = {0};
         m->result = ts_film_create(t.full_width, t.full_height, t.x0, t.y0, t.width, t.height, &e);
         if (!m->result) return NULL;
+        m->result->scale = (float)t.film_scale;
         ts_film_merge(m->result, m->full);
     }
     if (info) *info = t;

@@ -41,6 +41,8 @@ typedef struct ts_shard_info {
     ts_sample_range ranges[TS_SHARD_MAX_RANGES];
     bool uneven;        /* a merge whose pixels do not all hold `ranges` (partial region merge) */
     double render_time_s; /* summed over merged shards */
+    double film_scale;    /* the scene's output factor (film.h): in no sum, applied to what is viewed
+                           * (tessera_film_scale; 1 when a file lacks it); must agree to merge */
 } ts_shard_info;
 
 /* Shard `index` of `count` of spp samples: [⌊index·spp/count⌋, ⌊(index+1)·spp/count⌋). */

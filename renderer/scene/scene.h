@@ -75,6 +75,10 @@ typedef struct ts_scene {
     int width, height;                         /* full film */
     int crop_x0, crop_y0, crop_x1, crop_y1;    /* pixel window [x0,x1) × [y0,y1) */
     ts_filter filter;
+    /* pbrt-v3's ImageFilm: every pixel value is multiplied by film_scale at output (the
+     * film's scale, film.h; never in the sums), and a sample's RGB is scaled to luminance
+     * max_sample_luminance at most before the film weighs it in (INFINITY: never). */
+    float film_scale, max_sample_luminance;
     ts_sampler sampler;
     uint32_t spp;
     ts_integrator_desc integrator;

@@ -31,6 +31,7 @@ static ts_film *render(const ts_scene *s, int threads, ts_error *err)
     ts_film *f = ts_film_create(s->width, s->height, s->crop_x0, s->crop_y0, s->crop_x1 - s->crop_x0,
                                 s->crop_y1 - s->crop_y0, err);
     if (!f) return NULL;
+    f->scale = s->film_scale;
     ts_render_stats stats = {0};
     ts_render_request req = {s, s->integrator.type, f, 0, 2, threads, NULL, NULL, NULL};
     if (ts_render(&req, &stats, err)) {
