@@ -3,8 +3,9 @@
  * `tessera render` loads a scene (or the built-in Cornell box), renders it in progressive
  * passes of 1, 1, 2, 4, … samples per pixel until the sample count, the time limit or the
  * target error is reached, and writes every -o file (the extension picks the encoder).
- * Exit status: 0 success, 1 bad input or failed output, 2 usage error. Nothing is written
- * unless the render succeeded. */
+ * Exit status: 0 success, 1 bad input or failed output, 2 usage error. Every output is
+ * checked before rendering (outputs.h), and nothing is written unless the render succeeded
+ * and every output could be. */
 #include "cli.h"
 
 #include <getopt.h>
@@ -51,8 +52,9 @@ static void render_usage(FILE *f)
             "passes of 1, 1, 2, 4, ... samples per pixel until the first of --spp, --time-limit and\n"
             "--target-error is reached.\n"
             "  -o, --output FILE         write FILE; .exr (colour, per-pixel variance, sample count) or .png;\n"
-            "                            may repeat (at most 8). Default: NAME.exr in this folder, NAME from\n"
-            "                            the scene (its \"name\", else its file name)\n"
+            "                            may repeat (at most 8); each is checked before rendering, and all are\n"
+            "                            written or none. Default: NAME.exr in this folder, NAME the job's\n"
+            "                            (the scene's job.name, else its \"name\", else its file name)\n"
             "  --spp N                   samples per pixel, 1 to 16777216 (default: the scene's job.spp, else\n"
             "                            its sampler.spp)\n"
             "  --time-limit SECONDS      stop after this much rendering time (default: the scene's\n"
@@ -365,13 +367,10 @@ static ts_status write_outputs(const render_run *r, const ts_film *film, const c
     ts_image img;
     ts_status st = ts_film_to_image(film, TS_FILM_IMAGE_STATS, &img, err);
     if (st) return st;
-    ts_render_info info = {r->scene->name,   r->integrator, r->final.spp_done, true, r->scene->sampler.seed,
+    ts_render_info info = {ts_job_name(r->scene), r->integrator, r->final.spp_done, true, r->scene->sampler.seed,
                            r->final.elapsed_s, error,        (double)r->final.nonfinite, NULL, film->scale};
     st = ts_image_set_render_info(&img, &info, err);
-    for (int i = 0; !st && i < outputs->n; i++) {
-        if (cli_output_is_exr(outputs->path[i])) st = ts_exr_write(outputs->path[i], &img, err);
-        else st = ts_png_write(outputs->path[i], &img, 0.0f, err);
-    }
+    if (!st) st = cli_outputs_write_image(outputs, &img, err);
     ts_image_fini(&img);
     return st;
 }
@@ -480,9 +479,16 @@ static int cmd_render(int argc, char **argv)
     rc = prepare_render(&o, &scene, &js, &range, shard_how, sizeof shard_how, &shard_i, &shard_n);
     if (rc >= 0) return rc;
     if (o.outputs.n == 0) {
-        default_output(scene->name, o.shard_text != NULL, shard_i, shard_n, default_out, sizeof default_out);
+        default_output(ts_job_name(scene), o.shard_text != NULL, shard_i, shard_n, default_out, sizeof default_out);
         cli_outputs_add(&o.outputs, default_out);
         if (!o.quiet) fprintf(stderr, "tessera: no -o given: the image goes to %s\n", default_out);
+    }
+    /* Every output's folder, before any rendering: a file that cannot be made fails now. */
+    ts_error oerr = {0};
+    if (cli_outputs_open(&o.outputs, &oerr)) {
+        fprintf(stderr, "tessera: %s\n", oerr.message);
+        ts_scene_destroy(scene);
+        return 1;
     }
     int n_threads = o.threads ? (int)o.threads : (int)sysconf(_SC_NPROCESSORS_ONLN);
     if (n_threads < 1) n_threads = 1;
@@ -551,7 +557,7 @@ static int cmd_render(int argc, char **argv)
     sigaddset(&sigs, SIGTERM);
     if (o.checkpoint) pthread_sigmask(SIG_BLOCK, &sigs, NULL);
     if (!(sched = ts_scheduler_create(n_threads, 1, &err))) goto fail;
-    if (o.display_server && !(r.display = srv_display_create(o.display_server, scene->name, &err))) goto fail;
+    if (o.display_server && !(r.display = srv_display_create(o.display_server, ts_job_name(scene), &err))) goto fail;
     if (scene->job.display_server && !o.display_server && !o.quiet)
         fprintf(stderr, "tessera: the scene's job.display_server is for tessera serve; tessera render streams to a "
                         "display server only with --display-server\n");
@@ -603,6 +609,7 @@ static int cmd_render(int argc, char **argv)
     } else {
         st = write_outputs(&r, film, &o.outputs, error, &err);
     }
+    if (!st) st = cli_outputs_commit(&o.outputs, &err);
     if (st) goto fail;
     if (o.checkpoint && done == r.span) unlink(o.checkpoint); /* finished: the outputs hold everything it did */
     if (!o.quiet) {
@@ -611,10 +618,10 @@ static int cmd_render(int argc, char **argv)
         double seconds = r.final.elapsed_s;
         double msps = seconds > 0 ? r.final.samples / seconds / 1e6 : 0;
         fprintf(stderr,
-                "tessera: %s: %d×%d, %u spp (%s), %s integrator, %d threads, %.2f s, %.2f Msamples/s, "
+                "tessera: %s: %d×%d, %u spp (%s), %s integrator, %d thread%s, %.2f s, %.2f Msamples/s, "
                 "error estimate %s, %llu non-finite samples dropped\n",
-                r.scene->name, film->width, film->height, done, ts_halt_reason_phrase(r.final.halt), r.integrator,
-                n_threads, seconds, msps, error_text, (unsigned long long)r.final.nonfinite);
+                ts_job_name(r.scene), film->width, film->height, done, ts_halt_reason_phrase(r.final.halt), r.integrator,
+                n_threads, n_threads == 1 ? "" : "s", seconds, msps, error_text, (unsigned long long)r.final.nonfinite);
         for (int i = 0; i < o.outputs.n; i++) fprintf(stderr, "tessera: wrote %s\n", o.outputs.path[i]);
     }
     rc = 0;
@@ -623,6 +630,7 @@ fail:
     fprintf(stderr, "tessera: %s\n", err.message);
     rc = 1;
 out:
+    cli_outputs_discard(&o.outputs); /* what was not committed: all the outputs or none */
     srv_display_destroy(r.display);
     ts_sched_job_release(job); /* the scene goes with the job, once the scheduler lets it go */
     ts_scheduler_destroy(sched);

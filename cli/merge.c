@@ -58,9 +58,14 @@ int cli_merge(int argc, char **argv)
     if (unsupported) return usage_error("-o %s: the extension must be .exr or .png", unsupported);
 
     ts_error err = {0};
+    if (cli_outputs_open(&outputs, &err)) { /* before reading any shard: all the outputs or none */
+        fprintf(stderr, "tessera merge: %s\n", err.message);
+        return 1;
+    }
     ts_merge *m = ts_merge_create(&err);
     if (!m) {
         fprintf(stderr, "tessera merge: %s\n", err.message);
+        cli_outputs_discard(&outputs);
         return 1;
     }
     int rc = 0;
@@ -90,7 +95,7 @@ int cli_merge(int argc, char **argv)
         rc = 1;
     }
     ts_error_clear(&err);
-    if (!rc && cli_outputs_write_shard(&outputs, film, &info, &err)) {
+    if (!rc && (cli_outputs_write_shard(&outputs, film, &info, &err) || cli_outputs_commit(&outputs, &err))) {
         fprintf(stderr, "tessera merge: %s\n", err.message);
         rc = 1;
     }
@@ -104,6 +109,7 @@ int cli_merge(int argc, char **argv)
                 100 * ts_film_relative_error(film));
         for (int i = 0; i < outputs.n; i++) fprintf(stderr, "tessera merge: wrote %s\n", outputs.path[i]);
     }
+    cli_outputs_discard(&outputs);
     ts_merge_destroy(m);
     return rc;
 }

@@ -64,6 +64,7 @@ static void parse_url(const char *url, parsed *p)
     if (!strcmp(url, "/") || !strcmp(url, "/index.html") || srv_asset_find(url)) p->route = SRV_ROUTE_UI;
     else if (!strcmp(url, "/healthz")) p->route = SRV_ROUTE_HEALTHZ;
     else if (!strcmp(url, "/metrics")) p->route = SRV_ROUTE_METRICS;
+    else if (!strcmp(url, "/api/v1/limits")) p->route = SRV_ROUTE_LIMITS;
     else if (!strcmp(url, API_PREFIX) || !strcmp(url, API_PREFIX "/")) p->route = SRV_ROUTE_JOBS;
     else if (!strncmp(url, API_PREFIX "/", sizeof API_PREFIX)) {
         const char *id = url + sizeof API_PREFIX;
@@ -271,12 +272,14 @@ static bool origin_allowed(srv_request *r)
 /* ---------------------------------------------------------------- images (deferred) */
 
 /* A deferred request's state (r->task, freed by request_done): an image's, or a load's
- * (job NULL; a bundle's spp its ?spp=; load its bound, from the request's arrival). */
+ * (job NULL; a bundle's spp its ?spp=, name its ?name= or ""; load its bound, from the
+ * request's arrival). */
 typedef struct image_task {
     srv_job *job;
     bool tile, png;
     int tx, ty;
     uint32_t spp;
+    char name[256];
     ts_cancel load;
 } image_task;
 
@@ -314,7 +317,8 @@ static void encode_task(void *arg)
         ts_job_progress p;
         ts_sched_job_progress(j->sj, &p);
         const ts_scene *sc = ts_sched_job_scene(j->sj);
-        ts_render_info info = {sc ? sc->name : NULL, j->integrator, p.spp_done, sc != NULL, sc ? sc->sampler.seed : 0,
+        /* Named as the job is (a restored job's scene was loaded again without its name). */
+        ts_render_info info = {j->name ? j->name : sc ? sc->name : NULL, j->integrator, p.spp_done, sc != NULL, sc ? sc->sampler.seed : 0,
                                p.elapsed_s, t->tile ? -1 : ts_film_relative_error(film), (double)p.nonfinite,
                                t->tile ? NULL : j->id, film->scale};
         st = ts_image_set_render_info(&img, &info, &err);
@@ -454,6 +458,8 @@ static int post_job(srv_request *r)
 {
     if (MHD_lookup_connection_value(r->conn, MHD_GET_ARGUMENT_KIND, "spp"))
         return srv_http_error(r, 400, "spp: the query parameter is for bundles; a JSON scene sets job.spp");
+    if (MHD_lookup_connection_value(r->conn, MHD_GET_ARGUMENT_KIND, "name"))
+        return srv_http_error(r, 400, "name: the query parameter is for bundles; a JSON scene sets name or job.name");
     if (!r->body_len) return srv_http_error(r, 400, "the request body is empty: send a scene document (JSON)");
     if (!load_state(r)) return srv_http_error(r, 500, "out of memory");
     return srv_http_defer_to(r, ((srv_api *)r->app)->loaders, json_task);
@@ -620,7 +626,7 @@ static void bundle_task(void *arg)
         srv_http_set_error(r, 500, "the bundle's %s cannot be read back: %s", info.scene_file, strerror(errno));
         goto done;
     }
-    srv_submit_files files = {!strcmp(info.scene_file, "scene.pbrt"), staging, root, t->spp};
+    srv_submit_files files = {!strcmp(info.scene_file, "scene.pbrt"), staging, root, t->spp, t->name[0] ? t->name : NULL};
     srv_job *j = srv_store_submit_cancellable(a->store, text, len, &files, &t->load, &status, &err);
     free(text);
     if (!j) {
@@ -641,6 +647,20 @@ done:
     srv_http_complete(r);
 }
 
+/* Whether s is UTF-8 (complete sequences, no overlong two-byte forms) without control characters. */
+static bool name_text_ok(const char *s)
+{
+    for (const unsigned char *u = (const unsigned char *)s; *u;) {
+        unsigned c = *u;
+        size_t n = c < 0x80 ? 1 : c >= 0xc2 && c <= 0xdf ? 2 : c >= 0xe0 && c <= 0xef ? 3 : c >= 0xf0 && c <= 0xf4 ? 4 : 0;
+        if (!n || c < 0x20 || c == 0x7f) return false;
+        for (size_t i = 1; i < n; i++)
+            if ((u[i] & 0xc0) != 0x80) return false;
+        u += n;
+    }
+    return true;
+}
+
 static int post_bundle(srv_request *r)
 {
     const srv_api *a = r->app;
@@ -656,9 +676,22 @@ static int post_bundle(srv_request *r)
     uint64_t v = 0;
     if (spp && (!parse_decimal(spp, strlen(spp), &v) || v < 1 || v > UINT32_MAX))
         return srv_http_error(r, 400, "spp: expected a whole number of samples per pixel from 1 (canonical decimal)");
+    /* ?name=NAME (v1.4): the job's name when its scene has none (a scene.pbrt never has):
+     * the page sends the bundle's file or folder name. */
+    const char *raw = MHD_lookup_connection_value(r->conn, MHD_GET_ARGUMENT_KIND, "name");
+    char name[256] = "";
+    if (raw) {
+        char dec[3 * sizeof name]; /* decoding never lengthens */
+        size_t n = strlen(raw) < sizeof dec ? percent_decode(raw, strlen(raw), dec) : 0;
+        if (n == (size_t)-1 || n >= sizeof name) n = 0;
+        if (n) dec[n] = '\0', snprintf(name, sizeof name, "%s", dec);
+        if (!n || strlen(name) != n || !name_text_ok(name))
+            return srv_http_error(r, 400, "name: expected 1 to 255 bytes of UTF-8 text without control characters");
+    }
     image_task *t = load_state(r);
     if (!t) return srv_http_error(r, 500, "out of memory");
     t->spp = (uint32_t)v;
+    snprintf(t->name, sizeof t->name, "%s", name);
     return srv_http_defer_to(r, a->loaders, bundle_task);
 }
 
@@ -950,6 +983,18 @@ static int handle(srv_request *r)
     case SRV_ROUTE_METRICS:
         if (!get) return srv_http_method_not_allowed(r, "GET, HEAD");
         return metrics(r);
+    case SRV_ROUTE_LIMITS: {
+        if (!get) return srv_http_method_not_allowed(r, "GET, HEAD");
+        const struct srv_api_limits *l = &cfg->limits;
+        char body[400];
+        snprintf(body, sizeof body,
+                 "{\"max_spp\":%u,\"max_resolution\":%u,\"max_pixels\":%llu,\"max_work\":%.17g,\"max_body\":%llu,"
+                 "\"max_bundle_bytes\":%llu,\"bundles\":%s}",
+                 l->max_spp, l->max_resolution, (unsigned long long)l->max_pixels, l->max_work,
+                 (unsigned long long)l->max_body, (unsigned long long)l->max_bundle_bytes,
+                 cfg->bundle && cfg->files_root ? "true" : "false");
+        return srv_http_reply_json(r, 200, body);
+    }
     case SRV_ROUTE_JOBS:
         if (!strcmp(m, "POST") &&
             srv_bundle_media_type(MHD_lookup_connection_value(r->conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_TYPE)))

@@ -8,6 +8,7 @@
 #define SRV_API_H
 
 #include <stdatomic.h>
+#include <stdint.h>
 
 #include "http.h"
 
@@ -56,6 +57,13 @@ typedef struct srv_api {
     double max_load_s;
     const atomic_bool *loads_stop;
     srv_load_stats *loads;
+    /* What GET /api/v1/limits answers (v1.4): the limits a posted job is checked against,
+     * so a client (the web UI's form) can say them before posting. */
+    struct srv_api_limits {
+        uint32_t max_spp, max_resolution;
+        uint64_t max_pixels, max_body, max_bundle_bytes;
+        double max_work; /* 0: none */
+    } limits;
 } srv_api;
 
 /* The handler table of API v1 over api (srv_http_start takes it). */

@@ -400,7 +400,7 @@ static srv_job *job_new(srv_store *st, const char *id, const char *text, size_t 
 /* False when out of memory for the name. */
 static bool describe_scene(srv_job *j, const ts_scene *s)
 {
-    const char *name = s->job.name ? s->job.name : s->name;
+    const char *name = ts_job_name(s);
     if (!j->name && name && !(j->name = strdup(name))) return false;
     snprintf(j->integrator, sizeof j->integrator, "%s", ts_integrator_name(s->integrator.type));
     ts_effects_format(s->effects, j->effects, sizeof j->effects);
@@ -429,8 +429,10 @@ static void release_slot(srv_store *st)
     pthread_mutex_unlock(&st->mu);
 }
 
-static srv_job *submit(srv_store *st, const char *text, size_t len, const srv_submit_files *files, ts_cancel *cancel,
-                       int *http_status, ts_error *err);
+static srv_job *submit(srv_store *st, const char *text, size_t len, const char *name, const srv_submit_files *files,
+                       ts_cancel *cancel, int *http_status, ts_error *err);
+static srv_job *submit_reserved(srv_store *st, const char *text, size_t len, const char *name,
+                                const srv_submit_files *files, ts_cancel *cancel, int *http_status, ts_error *err);
 
 bool srv_store_has_room(srv_store *st)
 {
@@ -442,17 +444,29 @@ bool srv_store_has_room(srv_store *st)
 
 srv_job *srv_store_submit(srv_store *st, const char *text, size_t len, int *http_status, ts_error *err)
 {
-    return srv_store_submit_cancellable(st, text, len, NULL, NULL, http_status, err);
+    return submit_reserved(st, text, len, NULL, NULL, NULL, http_status, err);
+}
+
+srv_job *srv_store_submit_named(srv_store *st, const char *text, size_t len, const char *name, int *http_status,
+                                ts_error *err)
+{
+    return submit_reserved(st, text, len, name, NULL, NULL, http_status, err);
 }
 
 srv_job *srv_store_submit_files(srv_store *st, const char *text, size_t len, const srv_submit_files *files,
                                 int *http_status, ts_error *err)
 {
-    return srv_store_submit_cancellable(st, text, len, files, NULL, http_status, err);
+    return submit_reserved(st, text, len, files->name, files, NULL, http_status, err);
 }
 
 srv_job *srv_store_submit_cancellable(srv_store *st, const char *text, size_t len, const srv_submit_files *files,
                                       ts_cancel *cancel, int *http_status, ts_error *err)
+{
+    return submit_reserved(st, text, len, files ? files->name : NULL, files, cancel, http_status, err);
+}
+
+static srv_job *submit_reserved(srv_store *st, const char *text, size_t len, const char *name,
+                                const srv_submit_files *files, ts_cancel *cancel, int *http_status, ts_error *err)
 {
     /* Checked before the document is parsed: a full server allocates nothing for it. */
     int max_jobs = st->cfg.max_jobs;
@@ -462,7 +476,7 @@ srv_job *srv_store_submit_cancellable(srv_store *st, const char *text, size_t le
                      "this server already holds %d jobs, its limit (--max-jobs); no new job can be queued", max_jobs);
         return NULL;
     }
-    srv_job *j = submit(st, text, len, files, cancel, http_status, err);
+    srv_job *j = submit(st, text, len, name, files, cancel, http_status, err);
     release_slot(st); /* after store_add: the job now counts in n_jobs */
     return j;
 }
@@ -508,8 +522,8 @@ static void log_warnings(srv_log *log, const srv_job *j)
     }
 }
 
-static srv_job *submit(srv_store *st, const char *text, size_t len, const srv_submit_files *files, ts_cancel *cancel,
-                       int *http_status, ts_error *err)
+static srv_job *submit(srv_store *st, const char *text, size_t len, const char *name, const srv_submit_files *files,
+                       ts_cancel *cancel, int *http_status, ts_error *err)
 {
     const srv_store_config *cfg = &st->cfg;
     /* Every string has a length limit (255 bytes, 1024 for file references: names end up
@@ -524,10 +538,13 @@ static srv_job *submit(srv_store *st, const char *text, size_t len, const srv_su
     lim.cancel = cancel;
     ts_scene *s = NULL;
     srv_warnings warnings = {0}; /* the job's once it is made */
-    ts_status stt = !files ? ts_scene_load_text(text, len, cfg->assets_dir, "scene", &lim, &s, err)
+    /* A scene without a name takes the one given (a pbrt-v3 scene never has one: its
+     * positions still say scene.pbrt). */
+    if (!name) name = "scene";
+    ts_status stt = !files ? ts_scene_load_text(text, len, cfg->assets_dir, name, &lim, &s, err)
                     : files->pbrt ? ts_scene_load_pbrt_text(text, len, files->staging_dir, "scene.pbrt", &lim,
                                                             srv_warnings_collect, &warnings, &s, err)
-                                  : ts_scene_load_text(text, len, files->staging_dir, "scene", &lim, &s, err);
+                                  : ts_scene_load_text(text, len, files->staging_dir, name, &lim, &s, err);
     if (stt) {
         /* Stopped (core/cancel.h): past --max-load-seconds the scene is too costly for this
          * server (422); at shutdown, try again later (503). */
@@ -583,6 +600,10 @@ static srv_job *submit(srv_store *st, const char *text, size_t len, const srv_su
     }
     *http_status = 500;
     srv_job *j = job_new(st, NULL, text, len);
+    if (j && files && files->pbrt && !s->job.name && !(j->name = strdup(name))) {
+        job_free(j);
+        j = NULL;
+    }
     if (!j || !describe_scene(j, s) || !start_display(j, display_for(cfg, s), err)) {
         ts_error_set(err, TS_ERR_NOMEM, "out of memory for a job");
         if (j) job_free(j);

@@ -110,6 +110,11 @@ void srv_store_destroy(srv_store *st);
  * store already holds config.max_jobs jobs — checked before the document is parsed) and
  * err's sentence say why. The returned job carries a reference for the caller. */
 srv_job *srv_store_submit(srv_store *st, const char *text, size_t len, int *http_status, ts_error *err);
+/* The same, with the name of a scene that has none (its file's: "cornell-box" for the
+ * built-in one; srv_store_submit's is "scene"). The job's name: job.name, else the scene's
+ * "name", else this one (ts_job_name, as `tessera render` names it). */
+srv_job *srv_store_submit_named(srv_store *st, const char *text, size_t len, const char *name, int *http_status,
+                                ts_error *err);
 
 /* A posted bundle's scene (api.c, bundle.h): its scene file's text is loaded with the
  * folder the bundle was unpacked in as the base of every file it names; once the scene
@@ -121,6 +126,8 @@ typedef struct srv_submit_files {
     const char *files_root;   /* --data DIR, or the server's temporary folder */
     uint32_t spp;             /* the job's spp target (POST …?spp=N, the job.spp a scene.pbrt
                                * cannot hold; the sampler's spp stays the scene's), 0: the scene's */
+    const char *name;         /* the bundle's name (POST …?name=, the page sends its file or folder
+                               * name): the job's when its scene has none; NULL: "scene" */
 } srv_submit_files;
 srv_job *srv_store_submit_files(srv_store *st, const char *text, size_t len, const srv_submit_files *files,
                                 int *http_status, ts_error *err);

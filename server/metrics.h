@@ -20,6 +20,7 @@
     X(SRV_ROUTE_EVENTS, "/api/v1/jobs/{id}/events") \
     X(SRV_ROUTE_HISTORY, "/api/v1/jobs/{id}/history") \
     X(SRV_ROUTE_CANCEL, "/api/v1/jobs/{id}/cancel") \
+    X(SRV_ROUTE_LIMITS, "/api/v1/limits")          \
     X(SRV_ROUTE_OTHER, "other")
 
 typedef enum srv_route {

@@ -247,7 +247,7 @@ bool srv_server_start(srv_server *srv, int *port_out, char *err, size_t err_len)
         size_t len;
         const char *text = ts_scene_builtin_text(&len);
         int status;
-        srv_job *j = srv_store_submit(srv->store, text, len, &status, &e);
+        srv_job *j = srv_store_submit_named(srv->store, text, len, "cornell-box", &status, &e); /* as render names it */
         if (!j) fprintf(stderr, "tessera serve: the built-in scene was not queued: %s\n", e.message);
         else snprintf(srv->builtin_job, sizeof srv->builtin_job, "%s", j->id);
         srv_job_release(j);
@@ -263,7 +263,9 @@ bool srv_server_start(srv_server *srv, int *port_out, char *err, size_t err_len)
     atomic_init(&srv->sse_limits.dropped, 0);
     srv->api = (srv_api){cfg->token, cfg->data_dir, cfg->cors_origin, cfg->bind, cfg->allowed_hosts, srv->store, srv->sched, srv->metrics,
                          &srv->sse_limits, &srv->persist, &cfg->bundle, &srv->files_root, srv->loaders, srv->offload,
-                         cfg->max_load_s, &srv->loads_stop, &srv->loads};
+                         cfg->max_load_s, &srv->loads_stop, &srv->loads,
+                         {cfg->limits.max_spp, cfg->limits.max_width, cfg->limits.max_pixels, cfg->max_body,
+                          cfg->bundle.max_bytes, cfg->max_work}};
     srv_http_config hc = {cfg->bind,       cfg->port,        cfg->http_threads, cfg->client_timeout_s,
                           cfg->request_timeout_s, cfg->max_client_conns, cfg->max_body, cfg->cors_origin, srv->metrics,
                           srv->offload, &srv->log, (size_t)cfg->bundle.max_bytes};

@@ -13,6 +13,7 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "cli_support.h"
@@ -244,6 +245,119 @@ static void test_builtin_default(void **state)
     assert_non_null(strstr(read_log(), "cornell-box"));
 }
 
+/* No ".tmp-tessera-" temporary of cli/outputs.c is left in the test's folder. */
+static void assert_no_temporaries(void)
+{
+    char cmd[700];
+    snprintf(cmd, sizeof cmd, "ls -a '%s' | grep -q 'tmp-tessera'", tmpdir);
+    if (system(cmd) == 0) fail_msg("a temporary output file was left in %s", tmpdir);
+}
+
+/* Issue #32.3: a -o that cannot be written is refused before rendering, and with two -o
+ * neither file is written. The render asks for 2^24 spp within a 60 s time limit: had it
+ * rendered, it would have run for the whole minute; refused first, it returns at once (the
+ * 20 s bound only tells "rendered" from "did not", by a factor of 3 on a loaded machine). */
+static void test_outputs_checked_before_rendering(void **state)
+{
+    (void)state;
+    char scene[512], good[512], bad[512], want[700];
+    path_in_tmp(scene, sizeof scene, "out-check.json");
+    write_file(scene, small_scene);
+    path_in_tmp(good, sizeof good, "first.exr");
+    path_in_tmp(bad, sizeof bad, "no-such-folder/second.png");
+    const char *args[] = {"render", scene, "--spp", "16777216", "--time-limit", "60", "-o", good, "-o", bad, NULL};
+    time_t t0 = time(NULL);
+    assert_int_equal(run(args), 1);
+    if (time(NULL) - t0 > 20) fail_msg("a bad -o was refused only after %lds of rendering", (long)(time(NULL) - t0));
+    snprintf(want, sizeof want, "-o %s: the folder %s/no-such-folder does not exist", bad, tmpdir);
+    if (!strstr(read_log(), want)) fail_msg("expected \"%s\" in: %s", want, read_log());
+    assert_false(exists(good)); /* all the outputs or none */
+    assert_no_temporaries();
+    /* An output that is a folder. */
+    const char *dir_out[] = {"render", scene, "--spp", "16777216", "--time-limit", "60", "-o", tmpdir, NULL};
+    char folder_exr[512];
+    path_in_tmp(folder_exr, sizeof folder_exr, "folder.exr");
+    assert_int_equal(mkdir(folder_exr, 0755), 0);
+    dir_out[7] = folder_exr;
+    t0 = time(NULL);
+    assert_int_equal(run(dir_out), 1);
+    assert_true(time(NULL) - t0 <= 20);
+    assert_non_null(strstr(read_log(), "is a folder"));
+    assert_no_temporaries();
+    /* merge: the outputs are checked before any shard is read (this one does not exist). */
+    char shard[512];
+    path_in_tmp(shard, sizeof shard, "missing-shard.exr");
+    const char *merge[] = {"merge", shard, "-o", good, "-o", bad, NULL};
+    assert_int_equal(run(merge), 1);
+    if (!strstr(read_log(), want)) fail_msg("merge: expected \"%s\" in: %s", want, read_log());
+    assert_false(exists(good));
+    assert_no_temporaries();
+    /* Both good: both written, nothing else left. */
+    char png[512];
+    path_in_tmp(png, sizeof png, "second.png");
+    const char *ok[] = {"render", scene, "--spp", "2", "-o", good, "-o", png, NULL};
+    assert_int_equal(run(ok), 0);
+    assert_true(exists(good) && exists(png));
+    assert_no_temporaries();
+    unlink(good), unlink(png);
+}
+
+/* The string attribute name of the EXR at path ("" when absent). */
+static void exr_string_attr(const char *path, const char *name, char *out, size_t n)
+{
+    ts_image img;
+    ts_error err = {0};
+    if (ts_exr_read(path, &img, &err)) fail_msg("cannot read %s: %s", path, err.message);
+    const ts_image_attr *a = ts_image_attr_find(&img, name);
+    snprintf(out, n, "%s", a && a->type == TS_ATTR_STRING ? a->s : "");
+    ts_image_fini(&img);
+}
+
+/* Issue #32.4 and .7: a render is named as the server names its job — job.name, else the
+ * scene's "name", else its file name — in the summary, the default output and the EXR;
+ * "1 thread", not "1 threads". */
+static void test_render_names_and_summary(void **state)
+{
+    (void)state;
+    char scene[512], cwd[512], out[512], attr[256];
+    path_in_tmp(scene, sizeof scene, "file-name.json");
+    char text[2048];
+    snprintf(text, sizeof text, "{\"name\":\"scene-name\",\"job\":{\"name\":\"job-name\"},%s", small_scene + 1);
+    write_file(scene, text);
+    assert_non_null(getcwd(cwd, sizeof cwd));
+    assert_int_equal(chdir(tmpdir), 0);
+    const char *noout[] = {"render", scene, "--spp", "2", "--threads", "1", NULL};
+    int rc = run(noout);
+    assert_int_equal(chdir(cwd), 0);
+    assert_int_equal(rc, 0);
+    if (!strstr(read_log(), "tessera: job-name: 48×32, 2 spp") || !strstr(read_log(), ", 1 thread, "))
+        fail_msg("the summary names the job and says \"1 thread\": %s", read_log());
+    path_in_tmp(out, sizeof out, "job-name.exr");
+    assert_true(exists(out));
+    exr_string_attr(out, "tessera_scene", attr, sizeof attr);
+    assert_string_equal(attr, "job-name");
+    /* Without job.name: the scene's name; two threads are "threads". */
+    snprintf(text, sizeof text, "{\"name\":\"scene-name\",%s", small_scene + 1);
+    write_file(scene, text);
+    const char *named[] = {"render", scene, "--spp", "2", "--threads", "2", "-o", out, NULL};
+    assert_int_equal(run(named), 0);
+    if (!strstr(read_log(), "tessera: scene-name: ") || !strstr(read_log(), ", 2 threads, "))
+        fail_msg("the summary names the scene: %s", read_log());
+    exr_string_attr(out, "tessera_scene", attr, sizeof attr);
+    assert_string_equal(attr, "scene-name");
+    /* Neither: the file's name; the built-in scene is "cornell-box". */
+    write_file(scene, small_scene);
+    const char *unnamed[] = {"render", scene, "--spp", "2", "-o", out, NULL};
+    assert_int_equal(run(unnamed), 0);
+    exr_string_attr(out, "tessera_scene", attr, sizeof attr);
+    assert_string_equal(attr, "file-name");
+    const char *builtin[] = {"render", "--spp", "1", "-o", out, NULL};
+    assert_int_equal(run(builtin), 0);
+    exr_string_attr(out, "tessera_scene", attr, sizeof attr);
+    assert_string_equal(attr, "cornell-box");
+    unlink(out);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -254,6 +368,8 @@ int main(void)
         cmocka_unit_test(test_usage_error_lines),
         cmocka_unit_test(test_honest_command_line),
         cmocka_unit_test(test_builtin_default),
+        cmocka_unit_test(test_outputs_checked_before_rendering),
+        cmocka_unit_test(test_render_names_and_summary),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -585,6 +585,131 @@ static void test_limits(void **state)
     rm_rf(tmp);
 }
 
+/* ---------------------------------------------------------------- names and limits */
+
+/* The job's name in its status and in its image.exr's tessera_scene. */
+static void assert_named(const test_server *s, const char *id, const char *want, const char *what)
+{
+    char p[96];
+    snprintf(p, sizeof p, "/api/v1/jobs/%s", id);
+    cJSON *o = ts_http_json(s, p, 200);
+    const char *name = ts_json_str(o, "name");
+    if (!name || strcmp(name, want)) fail_msg("%s: the job is named '%s', expected '%s'", what, name ? name : "(none)", want);
+    cJSON_Delete(o);
+    snprintf(p, sizeof p, "/api/v1/jobs/%s/image.exr", id);
+    http_resp r;
+    ts_http(s, "GET", p, NULL, 0, NULL, &r);
+    assert_int_equal(r.status, 200);
+    ts_image img;
+    ts_error err = {0};
+    if (ts_exr_read_memory((const unsigned char *)r.body, r.len, &img, &err)) fail_msg("%s: %s", what, err.message);
+    const ts_image_attr *a = ts_image_attr_find(&img, "tessera_scene");
+    if (!a || a->type != TS_ATTR_STRING || strcmp(a->s, want))
+        fail_msg("%s: image.exr's tessera_scene is '%s', expected '%s'", what, a ? a->s : "(none)", want);
+    ts_image_fini(&img);
+    ts_http_free(&r);
+}
+
+/* Issue #32.4 and .7: a job is named as `tessera render` names it — job.name, else the
+ * scene's "name", else its file's (the built-in scene: "cornell-box"; a bundle: ?name=,
+ * which the page fills with the bundle's file or folder name) — in its status and its EXR,
+ * also after a restart; GET /api/v1/limits says the limits a POST is checked against. */
+static void test_names_and_limits(void **state)
+{
+    (void)state;
+    char data[256], tmp[256];
+    make_tmp(data, sizeof data, "names");
+    make_tmp(tmp, sizeof tmp, "names_tmp");
+    const char *args[] = {"--threads", "1", "--data", data, "--max-spp", "64", "--max-resolution", "1024",
+                          "--queue-builtin", NULL};
+    test_server s;
+    start_with_tmpdir(&s, tmp, args);
+    cJSON *lim = ts_http_json(&s, "/api/v1/limits", 200);
+    assert_int_equal((int)ts_json_num(lim, "max_spp"), 64);
+    assert_int_equal((int)ts_json_num(lim, "max_resolution"), 1024);
+    assert_true(ts_json_num(lim, "max_pixels") == 16777216.0 && ts_json_num(lim, "max_body") == 16777216.0);
+    assert_true(ts_json_num(lim, "max_bundle_bytes") == 268435456.0 && ts_json_num(lim, "max_work") == 1e13);
+    assert_true(cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(lim, "bundles")));
+    cJSON_Delete(lim);
+    /* The built-in job, cancelled at once (it is the 512 × 512 Cornell box). */
+    cJSON *list = ts_http_json(&s, "/api/v1/jobs", 200);
+    const cJSON *jobs = cJSON_GetObjectItemCaseSensitive(list, "jobs");
+    assert_int_equal(cJSON_GetArraySize(jobs), 1);
+    char builtin[32];
+    snprintf(builtin, sizeof builtin, "%s", ts_json_str(cJSON_GetArrayItem(jobs, 0), "id"));
+    cJSON_Delete(list);
+    char p[96];
+    snprintf(p, sizeof p, "/api/v1/jobs/%s/cancel", builtin);
+    http_resp r;
+    ts_http(&s, "POST", p, "", 0, NULL, &r);
+    assert_int_equal(r.status, 200);
+    ts_http_free(&r);
+    cJSON_Delete(ts_wait_done(&s, builtin, 60));
+    assert_named(&s, builtin, "cornell-box", "the built-in job");
+
+    tar_entry pe[] = {{"scene.pbrt", 'f', scene_pbrt, strlen(scene_pbrt)}, {"meshes/quad.ply", 'f', quad_ply, strlen(quad_ply)}};
+    size_t len;
+    unsigned char *tar = make_tar(pe, 2, false, &len);
+    static const struct { const char *query; const char *name; } cases[] = {
+        {"?name=box&spp=2", "box"}, {"?spp=2", "scene"}, {"?name=caf%C3%A9%20bundle&spp=2", "café bundle"}};
+    char ids[3][32];
+    for (int c = 0; c < 3; c++) {
+        char path[96], *body;
+        snprintf(path, sizeof path, "/api/v1/jobs%s", cases[c].query);
+        long st = ts_http_post_body(&s, path, tar, len, "application/x-tar", NULL, &body);
+        if (st != 201) fail_msg("%s: %ld %s", cases[c].query, st, body);
+        snprintf(ids[c], sizeof ids[c], "%s", job_id_of(body));
+        free(body);
+        cJSON_Delete(ts_wait_done(&s, ids[c], 60));
+        assert_named(&s, ids[c], cases[c].name, cases[c].query);
+    }
+    free(tar);
+    /* A scene.json's own name comes first; without one, ?name=. */
+    char named[sizeof scene_json + 32];
+    snprintf(named, sizeof named, "{\"name\":\"its-own\",%s", scene_json + 1);
+    tar_entry je[6];
+    int n = good_entries(je, false);
+    char jids[2][32];
+    for (int c = 0; c < 2; c++) {
+        je[0].data = c ? scene_json : named;
+        je[0].len = strlen(je[0].data);
+        tar = make_tar(je, n, false, &len);
+        char *body;
+        long st = ts_http_post_body(&s, "/api/v1/jobs?name=box", tar, len, "application/x-tar", NULL, &body);
+        if (st != 201) fail_msg("scene.json bundle: %ld %s", st, body);
+        snprintf(jids[c], sizeof jids[c], "%s", job_id_of(body));
+        free(body);
+        free(tar);
+        cJSON_Delete(ts_wait_done(&s, jids[c], 60));
+        assert_named(&s, jids[c], c ? "box" : "its-own", "a scene.json bundle");
+    }
+    /* Refused: an empty name, a control character; ?name= on a JSON POST. */
+    tar = make_tar(pe, 2, false, &len);
+    static const char *const bad[] = {"?name=", "?name=a%01b"};
+    for (int b = 0; b < 2; b++) {
+        char path[64], *body;
+        snprintf(path, sizeof path, "/api/v1/jobs%s", bad[b]);
+        long st = ts_http_post_body(&s, path, tar, len, "application/x-tar", NULL, &body);
+        if (st != 400 || !strstr(body, "name: expected 1 to 255 bytes")) fail_msg("%s: %ld %s", bad[b], st, body);
+        free(body);
+    }
+    free(tar);
+    char *body;
+    long st = ts_http_post_body(&s, "/api/v1/jobs?name=x", scene_json, strlen(scene_json), "application/json", NULL, &body);
+    if (st != 400 || !strstr(body, "a JSON scene sets name or job.name")) fail_msg("JSON with ?name=: %ld %s", st, body);
+    free(body);
+    /* Restored from --data: the same names, in the status and the EXR. */
+    assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
+    const char *again[] = {"--threads", "1", "--data", data, NULL};
+    start_with_tmpdir(&s, tmp, again);
+    assert_named(&s, builtin, "cornell-box", "the built-in job, restored");
+    assert_named(&s, ids[0], "box", "a named bundle, restored");
+    assert_named(&s, jids[1], "box", "a scene.json bundle named by ?name=, restored");
+    assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
+    rm_rf(data);
+    rm_rf(tmp);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -592,6 +717,7 @@ int main(void)
         cmocka_unit_test(test_pbrt_warnings_and_spp),
         cmocka_unit_test(test_bad_entries),
         cmocka_unit_test(test_limits),
+        cmocka_unit_test(test_names_and_limits),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -12,6 +12,8 @@ void ts_job_settings_from_scene(const ts_scene *s, ts_job_settings *out)
     out->target_error = s->job.target_error;
 }
 
+const char *ts_job_name(const ts_scene *s) { return s->job.name ? s->job.name : s->name; }
+
 const char *ts_halt_reason_name(ts_halt_reason r)
 {
     switch (r) {

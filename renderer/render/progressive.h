@@ -35,6 +35,11 @@ typedef struct ts_job_settings {
  * sampler's), priority, time limit and target error. */
 void ts_job_settings_from_scene(const ts_scene *s, ts_job_settings *out);
 
+/* A render's name, the same in `tessera render`, the server's job list and every EXR
+ * (docs/design.md §5b): the scene's job.name, else its "name", else the name its loader gave
+ * it (the file's stem; "cornell-box" for the built-in scene). */
+const char *ts_job_name(const ts_scene *s);
+
 /* Why a render stopped. */
 typedef enum ts_halt_reason {
     TS_HALT_NONE,      /* not finished */
