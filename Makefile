@@ -49,8 +49,19 @@ define install_missing
 	fi
 endef
 
+# node and npm build the web UI (web/, Vite) and run its browser tests: Debian's nodejs and
+# npm, installed when either command is missing (a node from elsewhere that brings its own
+# npm, as NodeSource's does, is used as it is: its package conflicts with Debian's npm).
+WEB_PACKAGES := nodejs npm
+
 deps:
 	$(call install_missing,deps,$(DEB_PACKAGES))
+	@if ! command -v node >/dev/null || ! command -v npm >/dev/null; then \
+	  echo "deps: installing from Debian: $(WEB_PACKAGES) (the web UI's build)"; \
+	  $(SUDO) apt-get update -qq && \
+	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $(WEB_PACKAGES) >/dev/null && \
+	  echo "deps: done"; \
+	fi
 	@for p in $(OPTIONAL_PACKAGES); do \
 	  dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q '^install ok installed' && continue; \
 	  echo "deps: installing optional $$p"; \
