@@ -259,8 +259,11 @@ static void history_add(srv_job *j, const srv_history_point *pt)
 
 static void history_add_progress(srv_job *j, const ts_job_progress *p, char kind)
 {
-    srv_history_point pt = {p->elapsed_s, kind == 't' ? p->spp_fraction : p->spp_done, p->error_estimate,
-                            p->samples_per_s, kind};
+    /* One quantity at every kind of point, as the status's and events' spp_mean: samples held
+     * ÷ pixels, which only grows (a pass end's is its spp; issue #32.2: ticks carried it and
+     * pass ends spp_done, so a plot of both with live spp_done went backwards mid-pass). */
+    (void)kind;
+    srv_history_point pt = {p->elapsed_s, p->spp_fraction, p->error_estimate, p->samples_per_s, kind};
     history_add(j, &pt);
 }
 
@@ -769,6 +772,7 @@ cJSON *srv_job_progress_json(srv_job *j, const ts_job_progress *p)
     cJSON_AddStringToObject(o, "id", j->id);
     cJSON_AddStringToObject(o, "state", srv_job_state_name(j, p));
     cJSON_AddNumberToObject(o, "spp", p->spp_done);
+    cJSON_AddNumberToObject(o, "spp_mean", p->spp_fraction);
     cJSON_AddNumberToObject(o, "spp_target", p->spp_target);
     cJSON_AddNumberToObject(o, "pass_spp", p->pass_end);
     cJSON_AddNumberToObject(o, "elapsed_s", p->elapsed_s);
@@ -799,6 +803,7 @@ cJSON *srv_job_status_json(srv_job *j)
     cJSON_AddNumberToObject(o, "priority", j->settings.priority);
     cJSON_AddNumberToObject(o, "created_at", j->created_unix);
     cJSON_AddNumberToObject(o, "spp_done", p.spp_done);
+    cJSON_AddNumberToObject(o, "spp_mean", p.spp_fraction);
     cJSON_AddNumberToObject(o, "spp_target", p.spp_target);
     cJSON_AddNumberToObject(o, "pass_spp", p.pass_end);
     cJSON_AddNumberToObject(o, "elapsed_s", p.elapsed_s);

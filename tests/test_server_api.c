@@ -248,6 +248,32 @@ static void test_two_jobs_at_once_and_cancel(void **state)
 }
 
 /* Halting on the time limit and on the target error. */
+/* Issue #32.2: the history's spp is one quantity at every kind of point, the status's
+ * spp_mean (samples held ÷ pixels), so it never decreases, and its last point is the
+ * finished job's spp_mean. A time limit stops tiles one pass apart, where spp_done (what
+ * the done point carried) is below the ticks' fractional spp. */
+static void assert_spp_series(const char *id, const cJSON *status)
+{
+    double mean = ts_json_num(status, "spp_mean");
+    assert_true(cJSON_IsNumber(cJSON_GetObjectItem(status, "spp_mean")) && mean >= ts_json_num(status, "spp_done"));
+    char path[160];
+    get_path(path, sizeof path, id, "/history");
+    cJSON *o = ts_http_json(&srv, path, 200);
+    const cJSON *pt;
+    double last = 0;
+    int n = 0;
+    cJSON_ArrayForEach(pt, cJSON_GetObjectItem(o, "points"))
+    {
+        double spp = ts_json_num(pt, "spp");
+        if (spp < last) fail_msg("job %s: history spp went back from %g to %g (%s point %d)", id, last, spp,
+                                 ts_json_str(pt, "kind"), n);
+        last = spp, n++;
+    }
+    assert_true(n >= 2);
+    if (last != mean) fail_msg("job %s: the history ends at %g spp, the status's spp_mean is %g", id, last, mean);
+    cJSON_Delete(o);
+}
+
 static void test_time_limit_and_target_error(void **state)
 {
     (void)state;
@@ -256,6 +282,7 @@ static void test_time_limit_and_target_error(void **state)
     ts_submit(&srv, doc, id, sizeof id);
     cJSON *o = ts_wait_done(&srv, id, 20);
     assert_string_equal(ts_json_str(o, "halt_reason"), "time_limit");
+    assert_spp_series(id, o);
     double el = ts_json_num(o, "elapsed_s");
     /* The last pass is shrunk to fit the measured speed: a small overshoot at most. */
     assert_true(el >= 0.6 && el < 1.6);
@@ -321,6 +348,10 @@ static void test_progress_eta_and_history(void **state)
     }
     assert_int_equal(passes, 10); /* pass ends 1 … 512; 1024 is the end */
     assert_int_equal(done, 1);
+    cJSON_Delete(o);
+    get_path(path, sizeof path, id, "");
+    o = ts_http_json(&srv, path, 200);
+    assert_spp_series(id, o);
     cJSON_Delete(o);
     free(doc);
 }
