@@ -576,14 +576,18 @@ static srv_job *submit(srv_store *st, const char *text, size_t len, const char *
                      cfg->limits.max_spp);
         goto fail_scene;
     }
-    /* The work a job may ask for: an upper bound on the rays it traces. */
-    double rays = ts_integrator_rays_per_sample(s, js.integrator, s->effects);
-    double work = rays * (double)spp * (double)pixels;
+    /* The work a job may ask for: an upper bound on the rays it traces, each weighted by
+     * the texture lookups its hit may cost (ts_scene_ray_weight). */
+    double rays = ts_integrator_rays_per_sample(s, js.integrator, s->effects), weight = ts_scene_ray_weight(s);
+    double work = rays * weight * (double)spp * (double)pixels;
     if (cfg->max_work > 0 && work > cfg->max_work) {
+        char textures[96] = "";
+        if (weight > 1)
+            snprintf(textures, sizeof textures, " × %.3g for its textures' %u lookups a hit", weight, s->shading_cost);
         ts_error_set(err, TS_ERR_LIMIT,
-                     "this job may trace up to %.3g rays (%.0f a sample × %u spp × %llu pixels), more than this "
+                     "this job may trace up to %.3g rays (%.0f a sample%s × %u spp × %llu pixels), more than this "
                      "server accepts (--max-work %.3g): lower the depth, the samples or the resolution",
-                     work, rays, spp, (unsigned long long)pixels, cfg->max_work);
+                     work, rays, textures, spp, (unsigned long long)pixels, cfg->max_work);
         goto fail_scene;
     }
     if (s->job.display_server) {

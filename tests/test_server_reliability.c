@@ -363,6 +363,74 @@ static void test_cancel_without_body(void **state)
     assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
 }
 
+/* A scene whose material reads a texture chain of cost 638 lookups (t7: 1 + twice t6's +
+ * its constant amount, from a checkerboard of two constants), w × h pixels. */
+static char *costly_texture_scene(int w, int h, int spp)
+{
+    char *s = malloc(4096);
+    int n = snprintf(s, 4096,
+                     "{\"tessera\":1,\"camera\":{\"from\":[0,0,5],\"to\":[0,0,0],\"fov\":40},"
+                     "\"film\":{\"width\":%d,\"height\":%d},\"sampler\":{\"spp\":%d},"
+                     "\"integrator\":{\"type\":\"path\",\"max_depth\":2},"
+                     "\"textures\":{\"t0\":{\"type\":\"checkerboard\",\"tex1\":0.2,\"tex2\":0.8}",
+                     w, h, spp);
+    for (int k = 1; k <= 7; k++)
+        n += snprintf(s + n, 4096 - (size_t)n, ",\"t%d\":{\"type\":\"mix\",\"tex1\":\"t%d\",\"tex2\":\"t%d\"}", k, k - 1, k - 1);
+    snprintf(s + n, 4096 - (size_t)n,
+             "},\"materials\":{\"m\":{\"type\":\"diffuse\",\"reflectance\":\"t7\"}},"
+             "\"shapes\":[{\"type\":\"sphere\",\"radius\":1.5,\"material\":\"m\"}],"
+             "\"lights\":[{\"type\":\"point\",\"position\":[0,3,3],\"intensity\":10}]}");
+    return s;
+}
+
+/* --max-work counts what a ray's hit costs in texture lookups (1 + 638/16 rays a ray for
+ * the chain above): at --max-work 20000 a 16² path job of depth 2 at 1 spp (5 rays a
+ * sample: 1280) is accepted without the texture and refused with it (52 k), naming the
+ * textures. Before, textures were not counted and both were accepted. A job of that
+ * texture cancels within 100 ms plus a loaded machine's scheduling (1 s here): a lookup
+ * costs at most TS_TEXTURE_MAX_COST evaluations, and stops are checked every bounce. */
+static void test_max_work_counts_textures(void **state)
+{
+    (void)state;
+    test_server s;
+    ts_server_start(&s, (const char *[]){"--threads", "1", "--max-work", "20000", NULL});
+    char *plain = costly_texture_scene(16, 16, 1);
+    char *at = strstr(plain, "\"reflectance\":\"t7\"");
+    memcpy(at, "\"reflectance\":0.50", 18);
+    http_resp r;
+    ts_http(&s, "POST", "/api/v1/jobs", plain, strlen(plain), NULL, &r);
+    assert_int_equal(r.status, 201);
+    ts_http_free(&r);
+    free(plain);
+    char *costly = costly_texture_scene(16, 16, 1);
+    ts_http(&s, "POST", "/api/v1/jobs", costly, strlen(costly), NULL, &r);
+    print_message("with the texture: %ld %s\n", r.status, r.body);
+    assert_int_equal(r.status, 422);
+    assert_non_null(strstr(r.body, "for its textures' 638 lookups a hit"));
+    ts_http_free(&r);
+    free(costly);
+    assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
+
+    ts_server_start(&s, (const char *[]){"--threads", "2", NULL});
+    char id[64], path[128];
+    costly = costly_texture_scene(256, 256, 4096);
+    ts_submit(&s, costly, id, sizeof id);
+    free(costly);
+    ts_wait_field(&s, id, "samples", 1, 30);
+    snprintf(path, sizeof path, "/api/v1/jobs/%s/cancel", id);
+    double t0 = now_s();
+    call c = {.srv = &s, .method = "POST", .path = path};
+    do_call(&c);
+    assert_int_equal(c.status, 200);
+    cJSON *st = ts_wait_done(&s, id, 30);
+    double took = now_s() - t0;
+    print_message("a job of that texture cancelled in %.3f s\n", took);
+    assert_string_equal(ts_json_str(st, "state"), "cancelled");
+    assert_true(took < 1.0);
+    cJSON_Delete(st);
+    assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
+}
+
 static int setup(void **state)
 {
     curl_global_init(CURL_GLOBAL_DEFAULT);
@@ -382,6 +450,7 @@ int main(void)
         cmocka_unit_test(test_bundles_leave_encoders_free),
         cmocka_unit_test(test_sigterm_during_load),
         cmocka_unit_test(test_cancel_without_body),
+        cmocka_unit_test(test_max_work_counts_textures),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

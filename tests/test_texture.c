@@ -1502,6 +1502,18 @@ static void test_pbrt_refusals(void **state)
     assert_int_equal(build(body, &b, &err), TS_ERR_LIMIT);
     assert_message(&err, "t.pbrt:34:1: Texture \"t32\": scale texture: textures nest more than 32 deep");
     unbuild(&b);
+    /* Issue 27: a mix of a texture with itself, within the nesting limit, is refused once one
+     * lookup would evaluate more than TS_TEXTURE_MAX_COST textures (each level 1 + twice the
+     * last + its constant amount: 1, 4, 10, … 1534 at t9), counted as it is built; before,
+     * 31 levels were 2^31 evaluations a lookup. */
+    snprintf(body, sizeof body, "Texture \"t0\" \"float\" \"constant\"\n");
+    for (int i = 1; i < 31; i++)
+        snprintf(body + strlen(body), sizeof body - strlen(body),
+                 "Texture \"t%d\" \"float\" \"mix\" \"texture tex1\" \"t%d\" \"texture tex2\" \"t%d\"\n", i, i - 1, i - 1);
+    assert_int_equal(build(body, &b, &err), TS_ERR_LIMIT);
+    assert_message(&err, "t.pbrt:11:1: Texture \"t9\": mix texture: one lookup of it would evaluate 1534 textures (each "
+                         "use of a child counted), more than the limit of 1024");
+    unbuild(&b);
 }
 
 static void test_cache_budget(void **state)

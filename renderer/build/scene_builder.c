@@ -515,6 +515,19 @@ static ts_status check_float_texture(const ts_material_float *p, const char *wha
     return TS_OK;
 }
 
+/* m's lobes and texture cost (material.h), a mix's from the two materials it names. */
+static void material_counts(const ts_scene_builder *b, const ts_material *m, uint64_t *lobes, uint64_t *cost)
+{
+    *cost = ts_material_texture_cost(m);
+    if (m->type != TS_MATERIAL_MIX) {
+        *lobes = (uint64_t)ts_material_max_lobes(m);
+        return;
+    }
+    const ts_material *a = &b->materials[m->mix_id[0]], *c = &b->materials[m->mix_id[1]];
+    *lobes = (uint64_t)a->lobes + c->lobes;
+    *cost += (uint64_t)a->cost + c->cost;
+}
+
 static ts_status check_material(const ts_scene_builder *b, const ts_material *m, ts_error *err)
 {
     static const char unit[] = "RGB in [0, 1]", finite[] = "finite RGB ≥ 0";
@@ -603,18 +616,22 @@ static ts_status check_material(const ts_scene_builder *b, const ts_material *m,
     if (m->has_vroughness && !m->vroughness.tex && !(m->vroughness.value >= 0 && isfinite(m->vroughness.value)))
         return ts_error_set(err, TS_ERR_INVALID, "vroughness: expected a finite number ≥ 0, got %g",
                             m->vroughness.value);
-    if (m->type == TS_MATERIAL_MIX) {
-        /* pbrt-v3's BSDF holds 8 lobes and aborts beyond; refuse such a mix up front. */
-        ts_material c = *m;
-        c.mix[0] = &b->materials[m->mix_id[0]];
-        c.mix[1] = &b->materials[m->mix_id[1]];
-        int lobes = ts_material_max_lobes(&c);
-        if (lobes > TS_BSDF_MAX_BXDFS)
-            return ts_error_set(err, TS_ERR_LIMIT,
-                                "materials: the two materials mixed have up to %d lobes together, more than a "
-                                "BSDF's %d",
-                                lobes, TS_BSDF_MAX_BXDFS);
-    }
+    /* The flattened BSDF's lobes and one shading's texture evaluations, from the counts of
+     * the materials a mix names (set when they were added): linear in the scene, however
+     * often a material is mixed in. pbrt-v3's BSDF holds 8 lobes and aborts beyond; refuse
+     * such a mix up front. */
+    uint64_t lobes = 0, cost = 0;
+    material_counts(b, m, &lobes, &cost);
+    if (lobes > TS_BSDF_MAX_BXDFS)
+        return ts_error_set(err, TS_ERR_LIMIT,
+                            "materials: the two materials mixed have up to %llu lobes together, more than a BSDF's %d",
+                            (unsigned long long)lobes, TS_BSDF_MAX_BXDFS);
+    if (cost > TS_MATERIAL_MAX_COST)
+        return ts_error_set(err, TS_ERR_LIMIT,
+                            "one shading of this material evaluates up to %llu textures (its parameters', its bump "
+                            "map's three%s), more than the limit of %d",
+                            (unsigned long long)cost, m->type == TS_MATERIAL_MIX ? " and the two materials mixed" : "",
+                            TS_MATERIAL_MAX_COST);
     return TS_OK;
 }
 
@@ -648,6 +665,10 @@ ts_status ts_scene_builder_add_material(ts_scene_builder *b, const char *name, c
         added->textured = added->textured || b->materials[m->mix_id[0]].textured || b->materials[m->mix_id[1]].textured;
         added->mix[0] = added->mix[1] = NULL;
     }
+    uint64_t lobes, cost;
+    material_counts(b, m, &lobes, &cost); /* within bounds: check_material */
+    added->lobes = (uint8_t)lobes;
+    added->cost = (uint32_t)cost;
     b->material_names[b->n_materials] = copy;
     if (id) *id = b->n_materials;
     b->n_materials++;
@@ -1184,8 +1205,17 @@ static ts_status build(ts_scene_builder *b, ts_error *err)
     if (!s->infinite_lights) return nomem(err, "the lights");
     for (uint32_t i = 0; i < s->n_lights; i++)
         if (s->lights[i].type == TS_LIGHT_INFINITE) s->infinite_lights[s->n_infinite_lights++] = i;
-    for (uint32_t i = 0; i < s->n_materials; i++)
+    for (uint32_t i = 0; i < s->n_materials; i++) {
         if (s->materials[i].textured) s->textured = true;
+        if (s->materials[i].cost > s->shading_cost) s->shading_cost = s->materials[i].cost;
+    }
+    uint32_t alpha_cost = 0; /* a hit's cut-out test, once for either kind of ray */
+    for (uint32_t i = 0; i < s->n_shapes; i++) {
+        const ts_shape *sh = &s->shapes[i];
+        uint32_t c = sh->alpha ? sh->alpha->cost : 0, d = sh->shadow_alpha ? sh->shadow_alpha->cost : 0;
+        if ((c > d ? c : d) > alpha_cost) alpha_cost = c > d ? c : d;
+    }
+    s->shading_cost += alpha_cost;
     for (uint32_t i = 0; i < s->n_shapes; i++) /* dn/du is for bump maps and differentials */
         s->shapes[i].no_normal_derivatives = !s->textured;
     s->effects = ts_effects_analyse(s) & ~s->job.effects_off;

@@ -88,6 +88,19 @@ bool ts_material_uses_textures(const ts_material *m)
            (m->has_vroughness && m->vroughness.tex) || m->opacity.tex || m->amount.tex || m->bump;
 }
 
+uint64_t ts_material_texture_cost(const ts_material *m)
+{
+    const struct ts_texture *t[] = {m->reflectance.tex, m->transmittance.tex, m->sigma_deg.tex, m->eta.tex,
+                                    m->conductor_eta.tex, m->conductor_k.tex, m->roughness.tex, m->diffuse.tex,
+                                    m->specular.tex, m->has_vroughness ? m->vroughness.tex : NULL, m->opacity.tex,
+                                    m->amount.tex};
+    uint64_t cost = 0;
+    for (size_t i = 0; i < sizeof t / sizeof *t; i++)
+        if (t[i]) cost += t[i]->cost;
+    if (m->bump) cost += 3ull * m->bump->cost;
+    return cost;
+}
+
 /* pbrt-v3's Material::Bump of displacement texture d on si's shading frame. */
 static void bump(const ts_texture *d, ts_interaction *si, const ts_texture_context *c)
 {

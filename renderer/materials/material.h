@@ -100,7 +100,23 @@ typedef struct ts_material {
      * normal (NULL: none; ts_material_bump). */
     const struct ts_texture *bump;
     bool textured; /* a parameter or the bump map has a texture: set by the builder (ts_material_uses_textures) */
+    /* Set by the builder, from the materials a mix names (so counting is linear in the
+     * scene): the lobes of its flattened BSDF at most (ts_material_max_lobes; a mix the sum
+     * of its two, at most TS_BSDF_MAX_BXDFS), and the textures one shading of it evaluates
+     * at most (ts_material_texture_cost; a mix adds its two, at most TS_MATERIAL_MAX_COST). */
+    uint8_t lobes;
+    uint32_t cost;
 } ts_material;
+
+/* The most texture evaluations one shading of a material may take (its parameters', its
+ * bump map's three, and a mix's two materials'): the builder refuses beyond. Each texture
+ * counts its own cost (textures/texture.h, TS_TEXTURE_MAX_COST a lookup). */
+#define TS_MATERIAL_MAX_COST 4096
+
+/* The textures one shading of m evaluates at most, its own parameters and bump map only
+ * (every parameter with a texture counted, read by m's type or not; the bump map three
+ * times: at the point and its two offsets). A mix's materials are the builder's to add. */
+uint64_t ts_material_texture_cost(const ts_material *m);
 
 /* Whether any parameter of m has a texture (whether or not m's type reads it), or m has a
  * bump map. */

@@ -20,3 +20,5 @@ void ts_scene_destroy(ts_scene *s)
     ts_arena_fini(&s->arena);
     free(s);
 }
+
+double ts_scene_ray_weight(const ts_scene *s) { return 1.0 + (double)s->shading_cost / TS_LOOKUPS_PER_RAY; }

@@ -107,6 +107,10 @@ typedef struct ts_scene {
     /* Some material has a texture (or bump map): camera rays carry ray differentials
      * (integrators/differential.h); else none are made. */
     bool textured;
+    /* The most texture evaluations one ray's hit may cost: the costliest material's
+     * (ts_material.cost) plus the costliest alpha cut-out's. ts_scene_ray_weight turns it
+     * into the work a ray stands for (the server's --max-work). */
+    uint32_t shading_cost;
     /* Light selection for next-event estimation: integrator.light_sampling for `path` and
      * `direct` (used by its strategy one), power for the others. */
     ts_light_distribution light_distribution;
@@ -125,5 +129,11 @@ typedef struct ts_scene {
 /* Frees the scene and everything it owns (its arena, accelerator, Fourier tables,
  * environment maps and texture images). NULL is fine. Not while any thread still reads the scene. */
 void ts_scene_destroy(ts_scene *s);
+
+/* Texture evaluations a ray's work is worth: a ray with a hit is counted as
+ * 1 + shading_cost / TS_LOOKUPS_PER_RAY rays, so a scene whose textures cost many lookups
+ * a hit asks more of --max-work (docs/design.md §5b). */
+#define TS_LOOKUPS_PER_RAY 16
+double ts_scene_ray_weight(const ts_scene *s);
 
 #endif

@@ -219,14 +219,17 @@ static ts_status check_map3d(const ts_texture_mapping3d *m, const char *what, ts
 }
 
 /* A child of the given kind; raises *depth to its depth. */
+/* A child's depth and cost go into *depth (the deepest) and *cost (the sum, each use
+ * counted: evaluation visits a child once for each field that names it). */
 static ts_status check_child(const ts_texture *child, bool want_rgb, const char *what, const char *field,
-                             int *depth, ts_error *err)
+                             int *depth, uint64_t *cost, ts_error *err)
 {
     if (!child) return ts_error_set(err, TS_ERR_INVALID, "%s texture: %s is missing", what, field);
     if (child->is_rgb != want_rgb)
         return ts_error_set(err, TS_ERR_INVALID, "%s texture: %s must be a%s texture, not a%s one", what,
                             field, want_rgb ? "n RGB" : " float", child->is_rgb ? "n RGB" : " float");
     if (child->depth > *depth) *depth = child->depth;
+    *cost += child->cost;
     return TS_OK;
 }
 
@@ -249,6 +252,7 @@ ts_status ts_texture_make(ts_arena *arena, const ts_texture *proto, const ts_tex
     const char *what = type_names[t.type];
     bool rgb = t.is_rgb;
     int depth = 0;
+    uint64_t cost = 0;
     ts_status st = TS_OK;
     switch (t.type) {
     case TS_TEXTURE_CONSTANT:
@@ -257,14 +261,14 @@ ts_status ts_texture_make(ts_arena *arena, const ts_texture *proto, const ts_tex
         if (!rgb) t.constant.value = ts_rgb_gray(t.constant.value.r);
         break;
     case TS_TEXTURE_SCALE:
-        if ((st = check_child(t.scale.tex1, rgb, what, "tex1", &depth, err)) ||
-            (st = check_child(t.scale.tex2, rgb, what, "tex2", &depth, err)))
+        if ((st = check_child(t.scale.tex1, rgb, what, "tex1", &depth, &cost, err)) ||
+            (st = check_child(t.scale.tex2, rgb, what, "tex2", &depth, &cost, err)))
             return st;
         break;
     case TS_TEXTURE_MIX:
-        if ((st = check_child(t.mix.tex1, rgb, what, "tex1", &depth, err)) ||
-            (st = check_child(t.mix.tex2, rgb, what, "tex2", &depth, err)) ||
-            (st = check_child(t.mix.amount, false, what, "amount", &depth, err)))
+        if ((st = check_child(t.mix.tex1, rgb, what, "tex1", &depth, &cost, err)) ||
+            (st = check_child(t.mix.tex2, rgb, what, "tex2", &depth, &cost, err)) ||
+            (st = check_child(t.mix.amount, false, what, "amount", &depth, &cost, err)))
             return st;
         break;
     case TS_TEXTURE_BILERP:
@@ -285,20 +289,20 @@ ts_status ts_texture_make(ts_arena *arena, const ts_texture *proto, const ts_tex
         break;
     case TS_TEXTURE_CHECKERBOARD2D:
         if ((st = check_map2d(&t.checkerboard2d.map, what, err)) ||
-            (st = check_child(t.checkerboard2d.tex1, rgb, what, "tex1", &depth, err)) ||
-            (st = check_child(t.checkerboard2d.tex2, rgb, what, "tex2", &depth, err)))
+            (st = check_child(t.checkerboard2d.tex1, rgb, what, "tex1", &depth, &cost, err)) ||
+            (st = check_child(t.checkerboard2d.tex2, rgb, what, "tex2", &depth, &cost, err)))
             return st;
         break;
     case TS_TEXTURE_CHECKERBOARD3D:
         if ((st = check_map3d(&t.checkerboard3d.map, what, err)) ||
-            (st = check_child(t.checkerboard3d.tex1, rgb, what, "tex1", &depth, err)) ||
-            (st = check_child(t.checkerboard3d.tex2, rgb, what, "tex2", &depth, err)))
+            (st = check_child(t.checkerboard3d.tex1, rgb, what, "tex1", &depth, &cost, err)) ||
+            (st = check_child(t.checkerboard3d.tex2, rgb, what, "tex2", &depth, &cost, err)))
             return st;
         break;
     case TS_TEXTURE_DOTS:
         if ((st = check_map2d(&t.dots.map, what, err)) ||
-            (st = check_child(t.dots.inside, rgb, what, "inside", &depth, err)) ||
-            (st = check_child(t.dots.outside, rgb, what, "outside", &depth, err)))
+            (st = check_child(t.dots.inside, rgb, what, "inside", &depth, &cost, err)) ||
+            (st = check_child(t.dots.outside, rgb, what, "outside", &depth, &cost, err)))
             return st;
         break;
     case TS_TEXTURE_FBM:
@@ -336,7 +340,13 @@ ts_status ts_texture_make(ts_arena *arena, const ts_texture *proto, const ts_tex
     if (depth + 1 > TS_TEXTURE_MAX_DEPTH)
         return ts_error_set(err, TS_ERR_LIMIT, "%s texture: textures nest more than %d deep", what,
                             TS_TEXTURE_MAX_DEPTH);
+    if (cost + 1 > TS_TEXTURE_MAX_COST)
+        return ts_error_set(err, TS_ERR_LIMIT,
+                            "%s texture: one lookup of it would evaluate %llu textures (each use of a child counted), "
+                            "more than the limit of %d",
+                            what, (unsigned long long)(cost + 1), TS_TEXTURE_MAX_COST);
     t.depth = (uint8_t)(depth + 1);
+    t.cost = (uint32_t)(cost + 1);
     ts_texture *copy = ts_arena_alloc(arena, sizeof *copy, _Alignof(ts_texture));
     if (!copy) return ts_error_set(err, TS_ERR_NOMEM, "%s texture: out of memory", what);
     memcpy(copy, &t, sizeof t);

@@ -54,6 +54,11 @@
 
 /* The deepest nesting of textures in textures (a texture with no children is depth 1). */
 #define TS_TEXTURE_MAX_DEPTH 32
+/* The most textures one evaluation may visit: 1 + its children's, a child used twice
+ * counted twice (evaluation recurses into each use). Depth alone does not bound it: a mix
+ * of a texture with itself, 32 deep, is 2^32 evaluations a lookup. ts_texture_make counts
+ * it from its children's (so counting is linear in the graph) and refuses beyond. */
+#define TS_TEXTURE_MAX_COST 1024
 
 typedef enum ts_texture_type {
     TS_TEXTURE_CONSTANT,
@@ -77,6 +82,7 @@ struct ts_texture {
     ts_texture_type type;
     bool is_rgb;   /* an RGB texture; else a float texture (its values grey) */
     uint8_t depth; /* set by ts_texture_make: 1 + the deepest child's */
+    uint32_t cost; /* set by ts_texture_make: textures one evaluation visits, at most TS_TEXTURE_MAX_COST */
     union {
         struct {
             ts_rgb value;
@@ -130,7 +136,7 @@ struct ts_texture {
     };
 };
 
-/* Checks proto (children of the right kind and present, depth, finite parameters, the
+/* Checks proto (children of the right kind and present, depth and cost, finite parameters, the
  * image's channel count matching the texture's kind, octaves in 0 … TS_NOISE_MAX_OCTAVES,
  * RGB-only types RGB) and copies it into the arena; *out points to the copy. Children
  * and the image map must outlive it. Errors (TS_ERR_INVALID with a sentence naming the
