@@ -4,6 +4,7 @@
 
 #include <archive.h>
 #include <archive_entry.h>
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <ftw.h>
@@ -11,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -187,6 +189,13 @@ void srv_bundle_root_init(srv_bundle_root *r, const char *fixed)
     pthread_mutex_init(&r->mu, NULL);
     r->fixed = fixed;
     r->tmp[0] = '\0';
+    r->lock_fd = -1;
+}
+
+static const char *tmp_base(void)
+{
+    const char *t = getenv("TMPDIR");
+    return t && t[0] && strlen(t) < 4000 ? t : "/tmp";
 }
 
 const char *srv_bundle_root_get(srv_bundle_root *r)
@@ -194,9 +203,19 @@ const char *srv_bundle_root_get(srv_bundle_root *r)
     if (r->fixed) return r->fixed;
     pthread_mutex_lock(&r->mu);
     if (!r->tmp[0]) {
-        const char *t = getenv("TMPDIR");
-        snprintf(r->tmp, sizeof r->tmp, "%s/tessera-serve-XXXXXX", t && t[0] && strlen(t) < 4000 ? t : "/tmp");
-        if (!mkdtemp(r->tmp)) r->tmp[0] = '\0';
+        snprintf(r->tmp, sizeof r->tmp, "%s/tessera-serve-XXXXXX", tmp_base());
+        if (!mkdtemp(r->tmp)) {
+            r->tmp[0] = '\0';
+        } else {
+            /* Held until the process ends (by fini, or by its death): the sweep's sign. */
+            char lock[4300];
+            snprintf(lock, sizeof lock, "%s/.lock", r->tmp);
+            r->lock_fd = open(lock, O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+            if (r->lock_fd >= 0 && flock(r->lock_fd, LOCK_EX | LOCK_NB) != 0) {
+                close(r->lock_fd);
+                r->lock_fd = -1;
+            }
+        }
     }
     const char *out = r->tmp[0] ? r->tmp : NULL;
     pthread_mutex_unlock(&r->mu);
@@ -206,9 +225,34 @@ const char *srv_bundle_root_get(srv_bundle_root *r)
 int srv_bundle_root_fini(srv_bundle_root *r)
 {
     int rc = r->tmp[0] ? srv_bundle_remove_tree(r->tmp) : 0;
+    if (r->lock_fd >= 0) close(r->lock_fd);
+    r->lock_fd = -1;
     r->tmp[0] = '\0';
     pthread_mutex_destroy(&r->mu);
     return rc;
+}
+
+int srv_bundle_root_sweep(void)
+{
+    const char *base = tmp_base();
+    DIR *d = opendir(base);
+    if (!d) return 0;
+    int removed = 0;
+    struct dirent *e;
+    while ((e = readdir(d))) {
+        if (strncmp(e->d_name, "tessera-serve-", 14) != 0 || strlen(e->d_name) != 20) continue;
+        char dir[4300], lock[4400];
+        snprintf(dir, sizeof dir, "%s/%s", base, e->d_name);
+        struct stat sb;
+        if (lstat(dir, &sb) != 0 || !S_ISDIR(sb.st_mode) || sb.st_uid != geteuid()) continue;
+        snprintf(lock, sizeof lock, "%s/.lock", dir);
+        int fd = open(lock, O_RDWR | O_NOFOLLOW | O_CLOEXEC);
+        if (fd < 0) continue; /* no lock: not ours to judge */
+        if (flock(fd, LOCK_EX | LOCK_NB) == 0 && srv_bundle_remove_tree(dir) == 0) removed++;
+        close(fd);
+    }
+    closedir(d);
+    return removed;
 }
 
 ts_status srv_bundle_unpack(const void *buf, size_t len, const char *dir, const srv_bundle_limits *lim,

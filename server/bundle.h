@@ -54,14 +54,22 @@ int srv_bundle_remove_tree(const char *dir);
 
 /* The folder bundles go under (incoming/ while unpacking, jobs/<id>/files after): --data,
  * or without it a temporary folder of the run, $TMPDIR/tessera-serve-XXXXXX, made at the
- * first bundle (so a server that takes none, or is killed, leaves none behind) and removed
- * by srv_bundle_root_fini. */
+ * first bundle (so a server that takes none leaves none behind) and removed by
+ * srv_bundle_root_fini. The run holds an flock on the folder's .lock for as long as it
+ * lives, so the folder of a run that was killed is found by the next server's
+ * srv_bundle_root_sweep (its lock is free) and removed at its start. */
 typedef struct srv_bundle_root {
     pthread_mutex_t mu;
     const char *fixed;  /* --data, or NULL */
     char tmp[4200];     /* the temporary folder once made, else "" (guarded by mu) */
+    int lock_fd;        /* the open, locked tmp/.lock, or -1 */
 } srv_bundle_root;
 void srv_bundle_root_init(srv_bundle_root *r, const char *fixed);
+/* Removes the temporary folders (tessera-serve-*, owned by this user, under $TMPDIR or
+ * /tmp) that no live server holds: their .lock can be locked. A folder without .lock is
+ * left alone (a server between making its folder and locking it). Returns how many were
+ * removed; the start of a server without --data calls it. */
+int srv_bundle_root_sweep(void);
 /* The folder, made if needed; NULL with errno when it cannot be. Thread-safe. */
 const char *srv_bundle_root_get(srv_bundle_root *r);
 /* Removes the temporary folder if one was made (after the server stopped); 0 or -1 with errno. */

@@ -234,6 +234,10 @@ bool srv_server_start(srv_server *srv, int *port_out, char *err, size_t err_len)
      * swept), else a temporary folder made at the first bundle, removed at shutdown. */
     srv_bundle_root_init(&srv->files_root, cfg->data_dir);
     srv->files_root_made = true;
+    if (!cfg->data_dir) { /* the temporary folders of runs that were killed */
+        int swept = srv_bundle_root_sweep();
+        if (swept) fprintf(stderr, "tessera serve: removed %d temporary folder(s) of servers that ended without removing them\n", swept);
+    }
     if (cfg->data_dir) {
         char incoming[4096];
         snprintf(incoming, sizeof incoming, "%s/incoming", cfg->data_dir);

@@ -20,6 +20,7 @@
 #include <cmocka.h>
 
 #include <curl/curl.h>
+#include <dirent.h>
 #include <limits.h>
 #include <pthread.h>
 #include <signal.h>
@@ -431,6 +432,54 @@ static void test_max_work_counts_textures(void **state)
     assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
 }
 
+/* Folders named tessera-serve-* in ts_tmp_dir. */
+static int serve_folders(char first[PATH_MAX])
+{
+    DIR *d = opendir(ts_tmp_dir);
+    int n = 0;
+    for (struct dirent *e; d && (e = readdir(d));)
+        if (!strncmp(e->d_name, "tessera-serve-", 14)) {
+            if (!n) snprintf(first, PATH_MAX, "%s/%s", ts_tmp_dir, e->d_name);
+            n++;
+        }
+    if (d) closedir(d);
+    return n;
+}
+
+/* Without --data, bundles go under a temporary folder that the server removes when it
+ * stops; a server that is killed cannot, and the next one's start removes it (its .lock
+ * is free), never a live server's. Before, every killed run left its folder behind. */
+static void test_killed_server_folder_swept(void **state)
+{
+    (void)state;
+    setenv("TMPDIR", ts_tmp_dir, 1);
+    test_server a, b;
+    ts_server_start(&a, (const char *[]){"--threads", "1", NULL});
+    char *scene = ts_ao_scene("bundled", 8, 8, 1);
+    size_t tar_len;
+    unsigned char *tar = one_file_tar("scene.json", scene, strlen(scene), &tar_len);
+    http_resp r;
+    ts_http_post(&a, "/api/v1/jobs", tar, tar_len, "application/x-tar", NULL, &r);
+    assert_int_equal(r.status, 201);
+    ts_http_free(&r);
+    char folder[PATH_MAX] = "";
+    assert_int_equal(serve_folders(folder), 1);
+    /* A second server beside a live one leaves the live one's folder alone. */
+    ts_server_start(&b, (const char *[]){"--threads", "1", NULL});
+    assert_int_equal(serve_folders(folder), 1);
+    assert_int_equal(ts_server_stop(&b, SIGTERM), 0);
+    ts_server_stop(&a, SIGKILL);
+    struct stat sb;
+    assert_int_equal(stat(folder, &sb), 0); /* left behind by the kill */
+    ts_server_start(&b, (const char *[]){"--threads", "1", NULL});
+    assert_int_equal(stat(folder, &sb), -1);
+    assert_int_equal(serve_folders(folder), 0);
+    assert_int_equal(ts_server_stop(&b, SIGTERM), 0);
+    free(tar);
+    free(scene);
+    unsetenv("TMPDIR");
+}
+
 static int setup(void **state)
 {
     curl_global_init(CURL_GLOBAL_DEFAULT);
@@ -451,6 +500,7 @@ int main(void)
         cmocka_unit_test(test_sigterm_during_load),
         cmocka_unit_test(test_cancel_without_body),
         cmocka_unit_test(test_max_work_counts_textures),
+        cmocka_unit_test(test_killed_server_folder_swept),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -350,7 +350,14 @@ static RTCGeometry make_mesh(ts_accel *a, uint32_t i)
         snprintf(a->build_error, sizeof a->build_error, "out of memory for %u triangles' data", m->n_triangles);
         return NULL;
     }
-    for (uint32_t k = 0; k < m->n_triangles; k++) ts_shape_triangle_cache_init(s, k, &mg->tri[k]);
+    for (uint32_t k = 0; k < m->n_triangles; k++) {
+        if (k % 65536 == 0 && ts_cancel_requested(a->cancel)) {
+            a->build_code = RTC_ERROR_CANCELLED;
+            snprintf(a->build_error, sizeof a->build_error, "cancelled");
+            return NULL;
+        }
+        ts_shape_triangle_cache_init(s, k, &mg->tri[k]);
+    }
     RTCGeometry g = rtcNewGeometry(a->device, RTC_GEOMETRY_TYPE_TRIANGLE);
     if (!g) return NULL;
     float *v = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
