@@ -69,9 +69,13 @@ static double analytic_f(const lobe *l, ts_vec3 wo, ts_vec3 wi, int c)
  * hugging 0 the reflection/transmission kink of f·|μi| at μi = 0 falls in an interval
  * 2e-5 wide, so the Catmull-Rom slope estimates beside it stay within 1% of the true
  * one-sided slopes instead of averaging across the kink. */
+/* The innermost nodes' |μ|: 1e-5, or 0 for a table with μ = 0 twice (−0 and +0) at the
+ * middle as the pbrt-v3-scenes collection's tables have (test_repeated_zero_node). */
+static double node_eps = 1e-5;
+
 static void make_nodes(float *mu)
 {
-    const double eps = 1e-5;
+    const double eps = node_eps;
     for (int j = 0; j < HALF; j++) {
         double x = eps + (1 - eps) * 0.5 * (1 - cos(TS_PI_D * j / (HALF - 1)));
         mu[HALF + j] = (float)x;
@@ -225,7 +229,14 @@ static ts_vec3 dir_cos(double cos_theta, double phi)
  * Deterministic, so the margin to 1% is not eaten by noise. Below that (the last 1.1° above the horizon) the
  * spline crosses the μ = 0 kink and the relative error grows while the value → 0, so those directions are
  * held to 1% of the lobe's peak value instead. Transmission must be ~0: bounded by 1% of the peak as well. */
+static void check_eval_edge(const lobe *l, const ts_fourier_table *t, const char *name, double edge_tol);
 static void check_eval(const lobe *l, const ts_fourier_table *t, const char *name)
+{
+    check_eval_edge(l, t, name, 0.01);
+}
+
+/* The same with directions below cosθ 0.02 held to edge_tol of the peak. */
+static void check_eval_edge(const lobe *l, const ts_fourier_table *t, const char *name, double edge_tol)
 {
     double worst = 0, worst_leak = 0;
     ts_vec3 wpeak = dir_cos(0.7, 0);
@@ -248,10 +259,11 @@ static void check_eval(const lobe *l, const ts_fourier_table *t, const char *nam
                         bool interior = cosines[a] >= 0.02 && cosines[b] >= 0.02;
                         double rel = interior ? e / want : e / peak;
                         if (rel > worst) worst = rel;
-                        if (rel > 0.01)
+                        double tol = interior ? 0.01 : edge_tol;
+                        if (rel > tol)
                             print_error("%s: μo=%g μi=%g φ=%d·30° channel %d: f=%g, analytic %g\n", name,
                                         sgn * cosines[a], sgn * cosines[b], k, c, fv[c], want);
-                        assert_true(rel <= 0.01);
+                        assert_true(rel <= tol);
                         double leak = ftv[c] / peak;
                         if (leak > worst_leak) worst_leak = leak;
                         assert_true(leak <= 0.01);
@@ -433,8 +445,12 @@ static void test_malformed(void **state)
     putf(b + 44, -1);
     expect_reject(b, n, "eta", "index of refraction");
     FRESH();
-    putf(b + 64 + 4 * 5, 0.9f); /* node 5 out of order */
-    expect_reject(b, n, "nodes", "not increasing");
+    putf(b + 64 + 4 * 5, 0.9f); /* node 5 out of order: node 6 is below it */
+    expect_reject(b, n, "nodes", "cosine node 6 at byte 88");
+    FRESH();
+    putf(b + 64 + 4 * (N_MU - 1), 1); /* the last interval empty */
+    putf(b + 64 + 4 * (N_MU - 2), 1);
+    expect_reject(b, n, "lastnodes", "the last interval is empty");
     /* Series past the end of the coefficients: a bad offset, and an offset whose series
      * (3 channels × 25 coefficients) runs over; series nn − N_MU is (μo = 1, μi = −1). */
     FRESH();
@@ -453,7 +469,7 @@ static void test_malformed(void **state)
     putf(b + coeff_at + 4 * 7, NAN);
     expect_reject(b, n, "nan", "not finite");
     /* Truncated at several lengths: empty, inside the magic, inside the header, inside
-     * each array, one byte short; and trailing bytes. */
+     * each array, one byte short. */
     size_t cuts[] = {0,     5,    40, 63, 64, 64 + 4 * N_MU - 2, table_at - 4, table_at + 12, coeff_at + 100,
                      n - 4, n - 1};
     for (size_t k = 0; k < sizeof cuts / sizeof cuts[0]; k++) {
@@ -462,10 +478,24 @@ static void test_malformed(void **state)
         FRESH();
         expect_reject(b, cuts[k], tag, "truncated");
     }
-    FRESH();
-    memset(b + n, 0, 16);
-    expect_reject(b, n + 16, "trailing", "trailing data");
 #undef FRESH
+    /* What follows the coefficients is not read, as in pbrt-v3: the nMetadataBytes (header
+     * byte 32) of description the collection's tables carry, or bytes the header does not
+     * count. The table is the same as without them. */
+    ts_fourier_table *plain = NULL, *meta = NULL;
+    ts_error merr = {0};
+    assert_int_equal(ts_fourier_table_load_memory(good, n, "plain.bsdf", &plain, &merr), TS_OK);
+    for (int counted = 0; counted < 2; counted++) {
+        memcpy(b, good, n);
+        memcpy(b + n, "{\"layers\": []}\n", 16);
+        put32(b + 32, counted ? 16 : 0);
+        if (ts_fourier_table_load_memory(b, n + 16, "meta.bsdf", &meta, &merr)) fail_msg("%s", merr.message);
+        assert_int_equal(meta->n_coeffs, plain->n_coeffs);
+        assert_memory_equal(meta->a, plain->a, sizeof(float) * (size_t)plain->n_coeffs);
+        assert_memory_equal(meta->cdf, plain->cdf, sizeof(float) * (size_t)nn);
+        ts_fourier_table_destroy(meta);
+    }
+    ts_fourier_table_destroy(plain);
     /* A missing file is an I/O error naming the file. */
     char path[512];
     snprintf(path, sizeof path, "%s/missing.bsdf", tmpdir);
@@ -475,6 +505,39 @@ static void test_malformed(void **state)
     assert_non_null(strstr(err.message, path));
     free(b);
     free(good);
+}
+
+/* μ = 0 twice at the middle node (−0 and +0), as every Fourier table of the pbrt-v3-scenes
+ * collection has it (leather, paint, roughgold_alpha_0.2, roughglass_alpha_0.2): pbrt-v3
+ * reads it, so must tessera; evaluation holds the same 1 % as the table without it, and
+ * sampling matches evaluation (χ²) with no NaN on either side of the repeated node. */
+static void test_repeated_zero_node(void **state)
+{
+    (void)state;
+    node_eps = 0;
+    ts_fourier_table *t = load_lobe(&glossy, "zero-twice.bsdf");
+    node_eps = 1e-5;
+    assert_true(t->mu[HALF - 1] == 0 && t->mu[HALF] == 0);
+    /* Interior directions (cosθ ≥ 0.02) within 1 % as the other tables. Nearer the horizon
+     * this writer's rows at μ = ±0 sample the lobe exactly at its kink and the spline over
+     * the next intervals is off by up to 11 % of the value (cosθ 0.005: 1.270 against the
+     * analytic 1.143, where the table with ±1e-5 gives 1.1433): a property of this table,
+     * whose values pbrt-v3's spline (the same weights, interval search and repeated node)
+     * reads alike; those directions are held to 25 % of the peak. */
+    check_eval_edge(&glossy, t, "zero-twice", 0.25);
+    run_chi2("zero-twice", t, dir_cos(0.6, 0.4));
+    ts_pcg32 rng;
+    ts_pcg32_seed(&rng, 77, 1);
+    for (int i = 0; i < 4096; i++) { /* at and around the repeated node */
+        float c = (i % 3 == 0) ? 0.0f : (ts_pcg32_float(&rng) - 0.5f) * 1e-3f;
+        ts_vec3 wo = dir_cos(i % 2 ? 0.5 : c, 0.1 * i), wi;
+        float pdf;
+        ts_rgb f = ts_fourier_sample(t, wo, (ts_vec2){ts_pcg32_float(&rng), ts_pcg32_float(&rng)}, &wi, &pdf);
+        assert_true(ts_rgb_is_finite(f) && isfinite(pdf) && pdf >= 0);
+        ts_rgb g = ts_fourier_f(t, wo, dir_cos(c, 0.2 * i));
+        assert_true(ts_rgb_is_finite(g));
+    }
+    ts_fourier_table_destroy(t);
 }
 
 /* Degenerate queries stay finite: wo at the pole, on the horizon, u → 1. */
@@ -521,6 +584,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_evaluation), cmocka_unit_test(test_malformed), cmocka_unit_test(test_limits),
+        cmocka_unit_test(test_repeated_zero_node),
         cmocka_unit_test(test_energy),     cmocka_unit_test(test_chi2),
     };
     return cmocka_run_group_tests(tests, setup, teardown);

@@ -183,6 +183,31 @@ static void film_scale_and_clamp(void **state)
                  "t.pbrt:1:14: Film \"image\": \"float maxsampleluminance\" must be a number > 0, got -1");
 }
 
+/* A dots texture is made as pbrt-v3 renders it (test_texture's test_pbrt_dots_swapped),
+ * and the load says so at the Texture directive. */
+static void dots_swap_warned(void **state)
+{
+    (void)state;
+    warnings w = {0};
+    ts_scene *s = load("WorldBegin\nTexture \"d\" \"color\" \"dots\" \"rgb inside\" [1 0 0]\n"
+                       "Material \"matte\" \"texture Kd\" \"d\"\nShape \"sphere\"\nWorldEnd\n",
+                       &w);
+    assert_int_equal(w.n, 1);
+    assert_string_equal(w.last, "t.pbrt:2:1: Texture \"d\": paints its dots with \"outside\" and the rest with "
+                                "\"inside\", as pbrt-v3 renders it (pbrt-v3's textures/dots.cpp passes the two "
+                                "swapped); its JSON conversion names them by what they paint");
+    ts_scene_destroy(s);
+    /* marble keeps the book's spline (docs/design.md's Decision) and says so. */
+    w.n = 0;
+    s = load("WorldBegin\nTexture \"mb\" \"color\" \"marble\"\n"
+             "Material \"matte\" \"texture Kd\" \"mb\"\nShape \"sphere\"\nWorldEnd\n",
+             &w);
+    assert_int_equal(w.n, 1);
+    assert_non_null(strstr(w.last, "t.pbrt:2:1: Texture \"mb\": renders as the book's marble, not pbrt-v3's"));
+    assert_non_null(strstr(w.last, "the image differs from pbrt-v3's"));
+    ts_scene_destroy(s);
+}
+
 /* pbrt-v3's gaussian: f(x) = exp(−α x²) − exp(−α r²), α = 2, r = 2 by default. */
 static void filter_gaussian(void **state)
 {
@@ -1024,6 +1049,7 @@ int main(void)
         cmocka_unit_test(camera_orthographic),
         cmocka_unit_test(filter_gaussian),
         cmocka_unit_test(film_scale_and_clamp),
+        cmocka_unit_test(dots_swap_warned),
         cmocka_unit_test(spectrum_equal_energy),
         cmocka_unit_test(error_sentences),
         cmocka_unit_test(lights_mapped),

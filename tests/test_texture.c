@@ -1407,6 +1407,30 @@ static void test_pbrt_textures(void **state)
     unbuild(&b);
 }
 
+/* pbrt-v3's dots paint the dots with "outside" (its CreateDots*Texture pass "inside" where
+ * DotsTexture takes its outside texture): a .pbrt file's dots texture is made that way,
+ * for colour and float textures alike. */
+static void test_pbrt_dots_swapped(void **state)
+{
+    (void)state;
+    built b;
+    ts_error err = {0};
+    ts_status st = build("Texture \"d\" \"color\" \"dots\" \"rgb inside\" [1 0 0] \"rgb outside\" [0 0 1]\n"
+                         "Texture \"df\" \"float\" \"dots\" \"float inside\" 0.25 \"float outside\" 0.75\n"
+                         "Texture \"dd\" \"float\" \"dots\"\n",
+                         &b, &err);
+    if (st) fail_msg("%s", err.message);
+    const ts_texture *d = named(&b, "d"), *df = named(&b, "df"), *dd = named(&b, "dd");
+    ts_texture_context c = ctx_uv(0.3f, 0.6f);
+    assert_rgb(ts_texture_eval_rgb(d->dots.inside, &c), 0, 0, 1, 0, "dots: the dots are \"outside\"");
+    assert_rgb(ts_texture_eval_rgb(d->dots.outside, &c), 1, 0, 0, 0, "dots: the rest is \"inside\"");
+    assert_true(ts_texture_eval_float(df->dots.inside, &c) == 0.75f);
+    assert_true(ts_texture_eval_float(df->dots.outside, &c) == 0.25f);
+    /* The defaults (inside 1, outside 0) swap with them: dots of 0 on 1. */
+    assert_true(ts_texture_eval_float(dd->dots.inside, &c) == 0 && ts_texture_eval_float(dd->dots.outside, &c) == 1);
+    unbuild(&b);
+}
+
 static void test_pbrt_refusals(void **state)
 {
     (void)state;
@@ -1663,6 +1687,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_checkerboard_closed_form, setup_arena, teardown_arena),
         cmocka_unit_test_setup_teardown(test_noise_textures, setup_arena, teardown_arena),
         cmocka_unit_test_setup_teardown(test_dots, setup_arena, teardown_arena),
+        cmocka_unit_test_setup_teardown(test_pbrt_dots_swapped, setup_arena, teardown_arena),
         cmocka_unit_test(test_mipmap_pyramid),
         cmocka_unit_test(test_mipmap_resample),
         cmocka_unit_test(test_mipmap_lookups),

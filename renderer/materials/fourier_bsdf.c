@@ -106,45 +106,52 @@ ts_status ts_fourier_table_load_memory(const unsigned char *buf, size_t size, co
                           path);
         return st;
     }
+    /* The header (pbrt-v3's FourierBSDFTable::Read): flags at byte 8, nMu 12, nCoeffs 16,
+     * mMax 20, nChannels 24, nBases 28, nMetadataBytes 32 (what follows the coefficients:
+     * a description pbrt-v3 never reads), two unused, eta 44, four unused. */
     int32_t flags = le_i32(buf + 8), n_mu = le_i32(buf + 12), n_coeffs = le_i32(buf + 16), m_max = le_i32(buf + 20),
             n_channels = le_i32(buf + 24), n_bases = le_i32(buf + 28);
     float eta = le_f32(buf + 44);
     if (flags != 1) {
         st = ts_error_set(err, TS_ERR_UNSUPPORTED,
-                          "%s: unsupported flags %d (only 1, a uniform non-textured material, is supported)", path,
-                          (int)flags);
+                          "%s: unsupported flags %d at byte 8 (only 1, a uniform non-textured material, is supported, "
+                          "as in pbrt-v3)",
+                          path, (int)flags);
         return st;
     }
     if (n_channels != 1 && n_channels != 3) {
-        st = ts_error_set(err, TS_ERR_UNSUPPORTED, "%s: unsupported channel count %d (expected 1 or 3)", path,
+        st = ts_error_set(err, TS_ERR_UNSUPPORTED, "%s: unsupported channel count %d at byte 24 (expected 1 or 3)", path,
                           (int)n_channels);
         return st;
     }
     if (n_bases != 1) {
-        st = ts_error_set(err, TS_ERR_UNSUPPORTED, "%s: unsupported basis count %d (expected 1)", path, (int)n_bases);
+        st = ts_error_set(err, TS_ERR_UNSUPPORTED, "%s: unsupported basis count %d at byte 28 (expected 1)", path,
+                          (int)n_bases);
         return st;
     }
     if (n_mu < 2 || n_mu > MAX_MU || n_coeffs < 0 || m_max < 1) {
-        st = ts_error_set(err, TS_ERR_INVALID, "%s: invalid sizes (nMu %d, nCoeffs %d, mMax %d)", path, (int)n_mu,
-                          (int)n_coeffs, (int)m_max);
+        st = ts_error_set(err, TS_ERR_INVALID, "%s: invalid sizes at bytes 12-23 (nMu %d, nCoeffs %d, mMax %d)", path,
+                          (int)n_mu, (int)n_coeffs, (int)m_max);
         return st;
     }
     if ((int64_t)m_max * n_channels > AK_STACK) {
         st = ts_error_set(err, TS_ERR_UNSUPPORTED,
-                          "%s: mMax %d with %d channel(s) exceeds the supported %d coefficients per lookup", path,
+                          "%s: mMax %d (byte 20) with %d channel(s) exceeds the supported %d coefficients per lookup", path,
                           (int)m_max, (int)n_channels, AK_STACK);
         return st;
     }
     if (!(eta > 0) || !isfinite(eta)) {
-        st = ts_error_set(err, TS_ERR_INVALID, "%s: invalid index of refraction %g", path, eta);
+        st = ts_error_set(err, TS_ERR_INVALID, "%s: invalid index of refraction %g at byte 44", path, eta);
         return st;
     }
     uint64_t nn = (uint64_t)n_mu * (uint64_t)n_mu;
     uint64_t expect = HEADER_BYTES + 4 * ((uint64_t)n_mu + nn + 2 * nn + (uint64_t)n_coeffs);
-    if ((uint64_t)size != expect) {
-        st = ts_error_set(err, TS_ERR_INVALID, "%s: %s Fourier BSDF file: %zu bytes, the header announces %llu", path,
-                          (uint64_t)size < expect ? "truncated" : "inconsistent (trailing data)", size,
-                          (unsigned long long)expect);
+    /* What follows the coefficients (the nMetadataBytes of description the collection's
+     * tables carry, or anything else) is not read, as pbrt-v3 reads none of it. */
+    if ((uint64_t)size < expect) {
+        st = ts_error_set(err, TS_ERR_INVALID,
+                          "%s: truncated Fourier BSDF file: %zu bytes, the header announces tables up to byte %llu", path,
+                          size, (unsigned long long)expect);
         return st;
     }
     t = calloc(1, sizeof *t);
@@ -163,19 +170,32 @@ ts_status ts_fourier_table_load_memory(const unsigned char *buf, size_t size, co
     t->recip = malloc(sizeof(float) * (size_t)m_max);
     if (!t->mu || !t->cdf || !t->a0 || !t->m || !t->a_offset || !t->a || !t->recip) goto fail_nomem;
 
+    /* The cosine nodes may repeat (the collection's tables hold μ = 0 twice, splitting
+     * reflection from transmission): the spline's interval search never lands on an empty
+     * interval but the last, so only decreasing nodes and an empty last interval (reached
+     * at μ = its node) are refused. */
     const unsigned char *p = buf + HEADER_BYTES;
     for (int i = 0; i < n_mu; i++, p += 4) {
         t->mu[i] = le_f32(p);
-        if (!isfinite(t->mu[i]) || t->mu[i] < -1.0001f || t->mu[i] > 1.0001f || (i > 0 && !(t->mu[i] > t->mu[i - 1]))) {
-            st = ts_error_set(err, TS_ERR_INVALID, "%s: cosine node %d (%g) is not in [-1, 1] or not increasing", path, i,
-                              t->mu[i]);
+        if (!isfinite(t->mu[i]) || (i > 0 && t->mu[i] < t->mu[i - 1])) {
+            st = ts_error_set(err, TS_ERR_INVALID,
+                              "%s: cosine node %d at byte %d (%g) is not finite or is below the node before it (the "
+                              "nodes must not decrease)",
+                              path, i, HEADER_BYTES + 4 * i, t->mu[i]);
             goto fail_table;
         }
+    }
+    if (!(t->mu[n_mu - 1] > t->mu[n_mu - 2])) {
+        st = ts_error_set(err, TS_ERR_INVALID,
+                          "%s: cosine node %d at byte %d (%g) equals the one before it: the last interval is empty", path,
+                          n_mu - 1, HEADER_BYTES + 4 * (n_mu - 1), t->mu[n_mu - 1]);
+        goto fail_table;
     }
     for (uint64_t i = 0; i < nn; i++, p += 4) {
         t->cdf[i] = le_f32(p);
         if (!isfinite(t->cdf[i])) {
-            st = ts_error_set(err, TS_ERR_INVALID, "%s: CDF entry %llu is not finite", path, (unsigned long long)i);
+            st = ts_error_set(err, TS_ERR_INVALID, "%s: CDF entry %llu at byte %llu is not finite", path,
+                              (unsigned long long)i, (unsigned long long)(p - buf));
             goto fail_table;
         }
     }
@@ -183,9 +203,10 @@ ts_status ts_fourier_table_load_memory(const unsigned char *buf, size_t size, co
         int32_t off = le_i32(p), len = le_i32(p + 4);
         if (off < 0 || len < 0 || len > m_max || (int64_t)off + (int64_t)len * n_channels > (int64_t)n_coeffs) {
             st = ts_error_set(err, TS_ERR_INVALID,
-                              "%s: series %llu (offset %d, length %d, %d channel(s)) lies past the end of the %d "
-                              "coefficients or exceeds mMax %d",
-                              path, (unsigned long long)i, (int)off, (int)len, (int)n_channels, (int)n_coeffs, (int)m_max);
+                              "%s: series %llu at byte %llu (offset %d, length %d, %d channel(s)) lies past the end of "
+                              "the %d coefficients or exceeds mMax %d",
+                              path, (unsigned long long)i, (unsigned long long)(p - buf), (int)off, (int)len,
+                              (int)n_channels, (int)n_coeffs, (int)m_max);
             goto fail_table;
         }
         t->a_offset[i] = off;
@@ -194,7 +215,8 @@ ts_status ts_fourier_table_load_memory(const unsigned char *buf, size_t size, co
     for (int i = 0; i < n_coeffs; i++, p += 4) {
         t->a[i] = le_f32(p);
         if (!isfinite(t->a[i])) {
-            st = ts_error_set(err, TS_ERR_INVALID, "%s: coefficient %d is not finite", path, i);
+            st = ts_error_set(err, TS_ERR_INVALID, "%s: coefficient %d at byte %llu is not finite", path, i,
+                              (unsigned long long)(p - buf));
             goto fail_table;
         }
     }
@@ -399,6 +421,7 @@ static float sample_mu(const ts_fourier_table *t, float alpha, float u, float *p
     int idx = lo > n - 2 ? n - 2 : lo;
     double f0 = interp_row(t, t->a0, offset, w, idx), f1 = interp_row(t, t->a0, offset, w, idx + 1);
     double x0 = t->mu[idx], x1 = t->mu[idx + 1], width = x1 - x0;
+    if (!(width > 0)) return 0; /* an empty interval (repeated node) whose CDF rises: no sample */
     double d0 = idx > 0 ? width * (f1 - interp_row(t, t->a0, offset, w, idx - 1)) / (x1 - t->mu[idx - 1]) : f1 - f0;
     double d1 = idx + 2 < n ? width * (interp_row(t, t->a0, offset, w, idx + 2) - f0) / (t->mu[idx + 2] - x0) : f1 - f0;
     uu = (uu - interp_row(t, t->cdf, offset, w, idx)) / width;

@@ -8,10 +8,13 @@
  * are in the shading frame; by the file convention μi is the cosine of −wi.
  *
  * A table is immutable after loading and may be shared by any number of threads. The
- * loader checks everything a malformed file could break (magic, flags, counts, monotone
- * nodes, offsets and lengths inside the coefficient array, mMax × channels ≤ 4096 — the
- * evaluator's stack scratch) so evaluation never reads out of bounds or silently drops
- * terms; errors name the file and the problem. */
+ * loader reads every table pbrt-v3's FourierBSDFTable::Read reads — repeated cosine nodes
+ * (μ = 0 twice in the pbrt-v3-scenes collection's tables), bytes after the coefficients
+ * (the header's nMetadataBytes of description) left unread — and checks everything a
+ * malformed file could break (magic, flags, counts, non-decreasing nodes with a non-empty
+ * last interval, offsets and lengths inside the coefficient array, mMax × channels ≤ 4096
+ * — the evaluator's stack scratch) so evaluation never reads out of bounds or silently
+ * drops terms; errors name the file, the problem and its byte. */
 #ifndef TS_FOURIER_BSDF_H
 #define TS_FOURIER_BSDF_H
 

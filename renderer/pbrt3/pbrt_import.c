@@ -1696,8 +1696,20 @@ static ts_status run(imp *im)
                                   ts_scene_builder_base_dir(im->b),
                                   ts_scene_builder_limits(im->b)->max_file_bytes, im->err));
         im->has_textures = true;
-        for (size_t i = 0; i < s->texture_count; i++)
+        for (size_t i = 0; i < s->texture_count; i++) {
+            if (!strcmp(s->textures[i].class_name, "dots"))
+                dwarn(im, &s->textures[i].params, s->textures[i].loc,
+                      "paints its dots with \"outside\" and the rest with \"inside\", as pbrt-v3 renders it "
+                      "(pbrt-v3's textures/dots.cpp passes the two swapped); its JSON conversion names them by "
+                      "what they paint");
+            if (!strcmp(s->textures[i].class_name, "marble"))
+                dwarn(im, &s->textures[i].params, s->textures[i].loc,
+                      "renders as the book's marble, not pbrt-v3's: its spline segment is min(floor(6t), 5) with "
+                      "colours in [0.3, 0.9], where pbrt-v3's source clamps it to min(1, floor(6t)) and "
+                      "extrapolates to reflectances up to about 40, so the image differs from pbrt-v3's (its mean "
+                      "up to 15 times; docs/design.md, the marble Decision)");
             warn_unused(im, &s->textures[i].params);
+        }
         if (im->doc) {
             /* Every texture in definition order (children before parents, as v1 wants),
              * under its name; a name given again in another scope gets "#k". */

@@ -295,9 +295,13 @@ static ts_status make_one(const ts_texture_pbrt *tp, ts_pbrt_texture *def, const
             t.checkerboard3d.map = map3d(&m);
         }
     } else if (strcmp(cls, "dots") == 0) {
+        /* pbrt-v3's CreateDotsFloatTexture / CreateDotsSpectrumTexture pass "inside" where
+         * DotsTexture takes its outside texture and "outside" where it takes the inside one:
+         * pbrt-v3 paints the dots with "outside". A .pbrt file means what pbrt-v3 renders,
+         * so the two are swapped here (the importer warns; JSON keeps the names' meaning). */
         t.type = TS_TEXTURE_DOTS;
-        if ((st = child(&m, "inside", 1, &t.dots.inside, err)) ||
-            (st = child(&m, "outside", 0, &t.dots.outside, err)) || (st = map2d(&m, &t.dots.map, err)))
+        if ((st = child(&m, "inside", 1, &t.dots.outside, err)) ||
+            (st = child(&m, "outside", 0, &t.dots.inside, err)) || (st = map2d(&m, &t.dots.map, err)))
             return st;
     } else if (strcmp(cls, "fbm") == 0 || strcmp(cls, "wrinkled") == 0) {
         t.type = cls[0] == 'f' ? TS_TEXTURE_FBM : TS_TEXTURE_WRINKLED;

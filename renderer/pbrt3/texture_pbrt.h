@@ -10,7 +10,9 @@
  *   uv            2D mapping (color only)
  *   checkerboard  "dimension" 2 (or 3), "tex1" 1, "tex2" 0; 2D: mapping and "aamode"
  *                 "closedform" (or "none")
- *   dots          "inside" 1, "outside" 0, 2D mapping
+ *   dots          "inside" 1, "outside" 0, 2D mapping; as pbrt-v3 renders them: the dots
+ *                 painted with "outside" and the rest with "inside" (its dots.cpp passes
+ *                 the two swapped; the importer warns)
  *   fbm, wrinkled "octaves" 8, "roughness" 0.5
  *   windy         —
  *   marble        "octaves" 8, "roughness" 0.5, "scale" 1, "variation" 0.2 (color only)

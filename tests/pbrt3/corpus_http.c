@@ -317,12 +317,13 @@ static void position_naming(const char *text, const char *file, char *out, size_
 
 static void test_bad_bundles(const test_server *srv, const char *data, const scene_job *jobs, int n_jobs, int accepted)
 {
-    /* A missing PLY mesh, image texture, environment map and included file. */
+    /* A missing PLY mesh, image texture, environment map, included file and Fourier table. */
     static const struct { const char *scene, *omit; } bad[] = {
         {"veach-mis", "geometry/floor.ply"},
         {"spheres-texfilt", "textures/lines.png"},
         {"f10-1ac", "textures/20060807_wells6_hd.exr"},
         {"killeroo-simple", "geometry/killeroo.pbrt"},
+        {"fourier-spheres", "bsdfs/paint.bsdf"}, /* pbrt-v3-next */
     };
     for (size_t b = 0; b < sizeof bad / sizeof bad[0]; b++) {
         const scene_job *sj = NULL;
