@@ -208,6 +208,23 @@ static void dots_swap_warned(void **state)
     ts_scene_destroy(s);
 }
 
+/* NamedMaterial of a material not (yet) defined: pbrt-v3 reports an error and keeps the
+ * material in force; so does the import, with a warning at the directive. */
+static void named_material_unknown_kept(void **state)
+{
+    (void)state;
+    warnings w = {0};
+    ts_scene *s = load("WorldBegin\nMaterial \"mirror\"\nNamedMaterial \"later\"\nShape \"sphere\"\n"
+                       "MakeNamedMaterial \"later\" \"string type\" \"matte\"\nWorldEnd\n",
+                       &w);
+    assert_int_equal(w.n, 1);
+    assert_string_equal(w.last, "t.pbrt:3:1: NamedMaterial \"later\": no material of that name is defined here; the "
+                                "material in force stays (pbrt-v3 reports an error and goes on the same way)");
+    assert_int_equal(s->n_shapes, 1);
+    assert_int_equal(s->materials[s->shapes[0].material].type, TS_MATERIAL_MIRROR);
+    ts_scene_destroy(s);
+}
+
 /* pbrt-v3's gaussian: f(x) = exp(−α x²) − exp(−α r²), α = 2, r = 2 by default. */
 static void filter_gaussian(void **state)
 {
@@ -1050,6 +1067,7 @@ int main(void)
         cmocka_unit_test(filter_gaussian),
         cmocka_unit_test(film_scale_and_clamp),
         cmocka_unit_test(dots_swap_warned),
+        cmocka_unit_test(named_material_unknown_kept),
         cmocka_unit_test(spectrum_equal_energy),
         cmocka_unit_test(error_sentences),
         cmocka_unit_test(lights_mapped),

@@ -505,8 +505,11 @@ static void test_texture_and_material_scoping(void **state)
     assert_true(ts_pbrt_params_get((ts_pbrt_params *)&b->params, "type")->used);
     assert_true(has_warning(s, "MakeNamedMaterial \"m\" redefines the named material \"m\""));
     assert_true(has_warning(s, "Texture \"t\" redefines the spectrum texture \"t\""));
-    /* NamedMaterial resolves when the shape uses it (pbrt-v3) */
-    assert_string_equal(s->materials[s->shapes[2].material].type, "metal");
+    /* NamedMaterial resolves where it is written (pbrt-v3's pbrtNamedMaterial): "later" is not
+     * defined yet, so the material in force ("m", matte) stays, with a warning. */
+    assert_string_equal(s->materials[s->shapes[2].material].type, "matte");
+    assert_true(has_warning(s, "NamedMaterial \"later\": no material of that name is defined here; the material "
+                               "in force stays"));
     const ts_pbrt_material *x = &s->materials[s->shapes[3].material];
     assert_string_equal(x->type, "mix");
     assert_string_equal(s->materials[x->mix[0]].type, "matte");
@@ -516,9 +519,13 @@ static void test_texture_and_material_scoping(void **state)
     expect_error(WORLD("AttributeBegin Texture \"in\" \"float\" \"constant\" AttributeEnd\n"
                        "Material \"matte\" \"texture sigma\" \"in\"\n"),
                  "t.pbrt:3:18: Material \"matte\": \"texture sigma\" names texture \"in\", which is not defined here");
-    expect_error(WORLD("AttributeBegin MakeNamedMaterial \"in\" \"string type\" \"matte\" AttributeEnd\n"
-                       "NamedMaterial \"in\"\nShape \"sphere\"\n"),
-                 "t.pbrt:4:1: Shape \"sphere\": the NamedMaterial \"in\" in force (t.pbrt:3:1) is not defined here");
+    /* A name defined only inside an attribute block is unknown after it: the material in
+     * force (the default, -1) stays. */
+    s = parse_ok(WORLD("AttributeBegin MakeNamedMaterial \"in\" \"string type\" \"mirror\" AttributeEnd\n"
+                       "NamedMaterial \"in\"\nShape \"sphere\"\n"));
+    assert_int_equal(s->shapes[0].material, -1);
+    assert_true(s->warning_count == 1 && s->warnings[0].loc.line == 3 && s->warnings[0].loc.column == 1);
+    ts_pbrt_scene_destroy(s);
     expect_error(WORLD("MakeNamedMaterial \"x\" \"string type\" \"mix\" \"string namedmaterial1\" \"nope\"\n"
                        "  \"string namedmaterial2\" \"nope\"\n"),
                  "t.pbrt:2:43: MakeNamedMaterial \"x\": \"string namedmaterial1\" names material \"nope\", which is "
@@ -773,8 +780,6 @@ static void test_error_sentences(void **state)
         {WORLD("Material \"matte\" \"bool b\" \"maybe\"\n"),
          "t.pbrt:2:27: Material \"matte\": \"bool b\" expects true or false, got the string \"maybe\""},
         {WORLD("Material \"matte\" \"bool b\" 1\n"), "\"bool b\" expects true or false, got the number 1"},
-        {WORLD("NamedMaterial \"nope\" Shape \"sphere\"\n"),
-         "t.pbrt:2:22: Shape \"sphere\": the NamedMaterial \"nope\" in force (t.pbrt:2:1) is not defined here"},
         {WORLD("MakeNamedMaterial \"m\" \"rgb Kd\" [1 1 1]\n"),
          "t.pbrt:2:1: MakeNamedMaterial \"m\" has no \"string type\" parameter"},
         {WORLD("MakeNamedMedium \"m\" \"rgb sigma_a\" [1 1 1]\n"),

@@ -57,9 +57,7 @@ typedef struct undo_entry {
 enum { BLOCK_ATTRIBUTE, BLOCK_TRANSFORM, BLOCK_OBJECT };
 
 typedef struct gstate {
-    int32_t material;           /* index, or -1 (default) — unless named_material is set */
-    const char *named_material; /* NamedMaterial in force (resolved at Shape), or NULL */
-    ts_pbrt_loc named_material_loc;
+    int32_t material; /* index, or -1 (default): Material or NamedMaterial, resolved where it is written */
     int32_t area_light;
     bool reverse_orientation;
     const char *inside_medium, *outside_medium;
@@ -1204,7 +1202,6 @@ static ts_status directive(parser *p)
         int32_t idx;
         if ((st = add_material(p, NULL, type, &ps, loc, &idx))) return st;
         p->gs.material = idx;
-        p->gs.named_material = NULL;
         return TS_OK;
     }
     case DIR_MAKE_NAMED_MATERIAL: {
@@ -1224,9 +1221,16 @@ static ts_status directive(parser *p)
     case DIR_NAMED_MATERIAL: {
         const char *mn = NULL;
         if ((st = expect_string(p, name, "a material name", &mn, NULL))) return st;
-        p->gs.named_material = mn;
-        p->gs.named_material_loc = loc;
-        p->gs.material = -1;
+        /* pbrt-v3's pbrtNamedMaterial: the named material defined here and now becomes the
+         * current one; an unknown name is an error it reports and goes on from, keeping the
+         * material in force. */
+        int32_t idx = name_lookup(p, NS_MATERIAL, mn);
+        if (idx < 0)
+            return warn(p, loc,
+                        "NamedMaterial \"%s\": no material of that name is defined here; the material in force "
+                        "stays (pbrt-v3 reports an error and goes on the same way)",
+                        mn);
+        p->gs.material = idx;
         return TS_OK;
     }
     case DIR_TEXTURE: {
@@ -1284,15 +1288,6 @@ static ts_status directive(parser *p)
         if (!sh.object_to_world) return nomem(p);
         sh.reverse_orientation = p->gs.reverse_orientation;
         sh.material = p->gs.material;
-        if (p->gs.named_material) {
-            sh.material = name_lookup(p, NS_MATERIAL, p->gs.named_material);
-            if (sh.material < 0) {
-                ts_pbrt_loc nl = p->gs.named_material_loc;
-                return perr(p, loc, TS_ERR_INVALID,
-                            "Shape \"%s\": the NamedMaterial \"%s\" in force (%s:%u:%u) is not defined here", sh.type,
-                            p->gs.named_material, nl.file, nl.line, nl.column);
-            }
-        }
         if (p->gs.area_light >= 0) {
             if (p->current_object >= 0) {
                 if ((st = warn(p, loc, "Shape \"%s\": area lights are not supported inside object definitions; the "
