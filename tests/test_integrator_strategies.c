@@ -173,6 +173,15 @@ static void test_closed_box_of_lights(void **state)
          "{\"type\":\"path\",\"max_depth\":3,\"rr_depth\":1000,\"light_sampling\":\"spatial\","
          "\"sampling\":\"light\"}",
          0},
+        /* the light hierarchy: pmfs by the vertex's point and normal, in NEE and in the MIS
+         * weight of what the BSDF ray finds (light_bvh.h); one-sided emitters facing in */
+        {"path MIS, bvh selection",
+         "{\"type\":\"path\",\"max_depth\":3,\"rr_depth\":1000,\"light_sampling\":\"bvh\"}", 0},
+        {"path light sampling, bvh selection",
+         "{\"type\":\"path\",\"max_depth\":3,\"rr_depth\":1000,\"light_sampling\":\"bvh\","
+         "\"sampling\":\"light\"}",
+         0},
+        {"direct, one light, bvh selection", "{\"type\":\"direct\",\"strategy\":\"one\",\"light_sampling\":\"bvh\"}", 1},
     };
     const int nc = sizeof cases / sizeof *cases;
     bool ok = true;
@@ -451,6 +460,17 @@ static const glossy_case plates = {"glossy plates under four lights",
                                    plates_ref_se,
                                    sizeof plates_ref / sizeof *plates_ref,
                                    false};
+/* The same plates and reference with the light hierarchy choosing among the four lights. */
+static const glossy_case plates_bvh = {"glossy plates under four lights, bvh selection",
+                                       NULL,
+                                       "{\"type\":\"path\",\"max_depth\":3,\"light_sampling\":\"bvh\","
+                                       "\"sampling\":\"%s\"}",
+                                       16,
+                                       4,
+                                       plates_ref,
+                                       plates_ref_se,
+                                       sizeof plates_ref / sizeof *plates_ref,
+                                       false};
 static const glossy_case box = {
     "box with glossy and plastic spheres, 34 lights, 4 bounces",
     NULL,
@@ -467,6 +487,14 @@ static void test_glossy_plates_four_lights(void **state)
 {
     (void)state;
     glossy_case g = plates;
+    g.fmt = plates_fmt;
+    check_strategies(&g);
+}
+
+static void test_glossy_plates_bvh(void **state)
+{
+    (void)state;
+    glossy_case g = plates_bvh;
     g.fmt = plates_fmt;
     check_strategies(&g);
 }
@@ -497,6 +525,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_closed_box_of_lights),
         cmocka_unit_test(test_glossy_plates_four_lights),
+        cmocka_unit_test(test_glossy_plates_bvh),
         cmocka_unit_test(test_multibounce_box),
     };
     if (getenv("TS_TEST_FILTER"))

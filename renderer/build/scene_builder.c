@@ -308,7 +308,7 @@ ts_status ts_scene_builder_set_integrator(ts_scene_builder *b, const ts_integrat
         TRY(int_in(in->max_depth, 0, 65535, "max_depth", err));
         TRY(int_in(in->rr_depth, 0, 65535, "rr_depth", err));
         if (in->light_sampling != TS_LIGHT_SELECT_UNIFORM && in->light_sampling != TS_LIGHT_SELECT_POWER &&
-            in->light_sampling != TS_LIGHT_SELECT_SPATIAL)
+            in->light_sampling != TS_LIGHT_SELECT_SPATIAL && in->light_sampling != TS_LIGHT_SELECT_BVH)
             return ts_error_set(err, TS_ERR_INVALID, "integrator.light_sampling: unknown selection %d",
                                 (int)in->light_sampling);
         if (!sampling_ok)
@@ -321,9 +321,11 @@ ts_status ts_scene_builder_set_integrator(ts_scene_builder *b, const ts_integrat
         if (in->strategy != TS_LIGHTS_ALL && in->strategy != TS_LIGHTS_ONE)
             return ts_error_set(err, TS_ERR_INVALID, "integrator.strategy: unknown strategy %d",
                                 (int)in->strategy);
-        /* Strategy one's selection: pbrt-v3's uniform, or by power. */
-        if (in->light_sampling != TS_LIGHT_SELECT_UNIFORM && in->light_sampling != TS_LIGHT_SELECT_POWER)
-            return ts_error_set(err, TS_ERR_INVALID, "integrator.light_sampling: direct selects uniform or power, not %d",
+        /* Strategy one's selection: pbrt-v3's uniform, by power, or by the light hierarchy. */
+        if (in->light_sampling != TS_LIGHT_SELECT_UNIFORM && in->light_sampling != TS_LIGHT_SELECT_POWER &&
+            in->light_sampling != TS_LIGHT_SELECT_BVH)
+            return ts_error_set(err, TS_ERR_INVALID,
+                                "integrator.light_sampling: direct selects uniform, power or bvh, not %d",
                                 (int)in->light_sampling);
         if (!sampling_ok)
             return ts_error_set(err, TS_ERR_INVALID, "integrator.sampling: unknown strategy %d",
@@ -1199,6 +1201,8 @@ static ts_status build(ts_scene_builder *b, ts_error *err)
         mode = TS_LIGHT_SAMPLING_UNIFORM;
     else if (selects && s->integrator.light_sampling == TS_LIGHT_SELECT_SPATIAL)
         mode = TS_LIGHT_SAMPLING_SPATIAL;
+    else if (selects && s->integrator.light_sampling == TS_LIGHT_SELECT_BVH)
+        mode = TS_LIGHT_SAMPLING_BVH;
     TRY(ts_light_distribution_init(&s->light_distribution, s->lights, s->n_lights, s->shapes, mode, s->bounds,
                                    &s->arena, err));
     s->infinite_lights = ts_arena_calloc(&s->arena, (size_t)s->n_lights + 1, sizeof *s->infinite_lights);

@@ -206,7 +206,7 @@ static ts_rgb sample_one_light(const ts_scene *s, uint32_t fx, const ts_interact
         st->dim += 2;
     }
     float pmf;
-    uint32_t li = ts_light_distribution_sample(&s->light_distribution, si->p, u_select, &pmf);
+    uint32_t li = ts_light_distribution_sample_at(&s->light_distribution, si->p, si->ns, u_select, &pmf);
     if (li == TS_NONE || !(pmf > 0)) return ts_rgb_gray(0);
     return ts_rgb_scale(estimate_direct(s, si, bsdf, li, u_light, u_lobe, u_bsdf, c), 1.0f / pmf);
 }
@@ -274,7 +274,7 @@ static ts_rgb path_nee(const ts_scene *s, const ts_interaction *si, const ts_bsd
                        ts_vec2 u_light, ts_counters *c)
 {
     float pmf;
-    uint32_t li = ts_light_distribution_sample(&s->light_distribution, si->p, u_select, &pmf);
+    uint32_t li = ts_light_distribution_sample_at(&s->light_distribution, si->p, si->ns, u_select, &pmf);
     if (li == TS_NONE || !(pmf > 0)) return ts_rgb_gray(0);
     ts_light_sample ls = {0};
     if (!ts_light_sample_li(&s->lights[li], s->shapes, si, u_light, &ls) || !(ls.pdf > 0)) return ts_rgb_gray(0);
@@ -307,7 +307,8 @@ static ts_rgb path_emission(const ts_scene *s, uint32_t fx, const ts_ray *ray, b
         const ts_light *l = &s->lights[li];
         L = ts_area_light_l(l, si, si->wo);
         if (full || ts_rgb_is_black(L)) return L;
-        float light_pdf = ts_light_distribution_pmf(d, prev->p, li) * ts_light_pdf_li_hit(l, s->shapes, prev, si->p);
+        float light_pdf =
+            ts_light_distribution_pmf_at(d, prev->p, prev->ns, li) * ts_light_pdf_li_hit(l, s->shapes, prev, si->p);
         return ts_rgb_scale(L, power_heuristic(prev_pdf, light_pdf));
     }
     if (!(fx & TS_EFFECT_ENVIRONMENT)) return L;
@@ -316,7 +317,8 @@ static ts_rgb path_emission(const ts_scene *s, uint32_t fx, const ts_ray *ray, b
         const ts_light *l = &s->lights[li];
         ts_rgb Le = ts_light_le(l, ray);
         if (!full && !ts_rgb_is_black(Le)) {
-            float light_pdf = ts_light_distribution_pmf(d, prev->p, li) * ts_light_pdf_li(l, s->shapes, prev, ray->d);
+            float light_pdf =
+                ts_light_distribution_pmf_at(d, prev->p, prev->ns, li) * ts_light_pdf_li(l, s->shapes, prev, ray->d);
             Le = ts_rgb_scale(Le, power_heuristic(prev_pdf, light_pdf));
         }
         L = ts_rgb_add(L, Le);

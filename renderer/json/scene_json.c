@@ -327,7 +327,7 @@ static ts_status parse_integrator(loader *ld, const cJSON *doc)
         v = in->rr_depth;
         TRY(ts_json_int(it, "integrator", "rr_depth", false, 0, 65535, &v, ld->err));
         in->rr_depth = (int)v;
-        static const char *const sel[] = {"uniform", "power", "spatial", NULL};
+        static const char *const sel[] = {"uniform", "power", "spatial", "bvh", NULL};
         int k = 1;
         TRY(ts_json_enum(it, "integrator", "light_sampling", false, sel, &k, ld->err));
         in->light_sampling = (ts_light_selection)k;
@@ -338,11 +338,14 @@ static ts_status parse_integrator(loader *ld, const cJSON *doc)
         int k = 0;
         TRY(ts_json_enum(it, "integrator", "strategy", false, strat, &k, ld->err));
         in->strategy = (ts_light_strategy)k;
-        /* Strategy one's light selection: uniform (pbrt-v3's directlighting) or power. */
-        static const char *const sel[] = {"uniform", "power", NULL};
+        /* Strategy one's light selection: uniform (pbrt-v3's directlighting), power or the
+         * light hierarchy (no spatial: its voxels are path's). */
+        static const char *const sel[] = {"uniform", "power", "bvh", NULL};
+        static const ts_light_selection sel_of[] = {TS_LIGHT_SELECT_UNIFORM, TS_LIGHT_SELECT_POWER,
+                                                    TS_LIGHT_SELECT_BVH};
         k = 1;
         TRY(ts_json_enum(it, "integrator", "light_sampling", false, sel, &k, ld->err));
-        in->light_sampling = (ts_light_selection)k;
+        in->light_sampling = sel_of[k];
         v = in->max_depth;
         TRY(ts_json_int(it, "integrator", "max_depth", false, 0, 1000, &v, ld->err));
         in->max_depth = (int)v;

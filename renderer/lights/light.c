@@ -366,6 +366,13 @@ ts_status ts_light_distribution_init(ts_light_distribution *d, const ts_light *l
 {
     memset(d, 0, sizeof *d);
     if (n == 0) return TS_OK;
+    if (mode == TS_LIGHT_SAMPLING_BVH) {
+        ts_status st = ts_light_bvh_build(&d->tree, lights, n, shapes, arena, err);
+        if (st) return st;
+        d->bvh = true;
+        d->n = n;
+        return TS_OK;
+    }
     if (mode == TS_LIGHT_SAMPLING_SPATIAL) {
         ts_vec3 diag = ts_vec3_sub(bounds.hi, bounds.lo);
         float bmax = fmaxf(diag.x, fmaxf(diag.y, diag.z));
@@ -423,9 +430,25 @@ void ts_light_distribution_fini(ts_light_distribution *d)
 
 uint32_t ts_light_distribution_sample(const ts_light_distribution *d, ts_vec3 p, ts_vec2 u, float *pmf)
 {
+    return ts_light_distribution_sample_at(d, p, (ts_vec3){0, 0, 0}, u, pmf);
+}
+
+float ts_light_distribution_pmf(const ts_light_distribution *d, ts_vec3 p, uint32_t i)
+{
+    return ts_light_distribution_pmf_at(d, p, (ts_vec3){0, 0, 0}, i);
+}
+
+uint32_t ts_light_distribution_sample_at(const ts_light_distribution *d, ts_vec3 p, ts_vec3 n, ts_vec2 u, float *pmf)
+{
     if (d->n == 0) {
         if (pmf) *pmf = 0;
         return TS_NONE;
+    }
+    if (d->bvh) {
+        float pm;
+        uint32_t i = ts_light_bvh_sample(&d->tree, p, n, u.x, &pm);
+        if (pmf) *pmf = pm;
+        return i;
     }
     if (!d->spatial) return ts_alias_table_sample(&d->table, u, pmf);
     const float *cdf = spatial_cdf(d, p);
@@ -440,9 +463,10 @@ uint32_t ts_light_distribution_sample(const ts_light_distribution *d, ts_vec3 p,
     return lo;
 }
 
-float ts_light_distribution_pmf(const ts_light_distribution *d, ts_vec3 p, uint32_t i)
+float ts_light_distribution_pmf_at(const ts_light_distribution *d, ts_vec3 p, ts_vec3 n, uint32_t i)
 {
     if (d->n == 0 || i >= d->n) return 0.0f;
+    if (d->bvh) return ts_light_bvh_pmf(&d->tree, p, n, i);
     if (!d->spatial) return ts_alias_table_pmf(&d->table, i);
     const float *cdf = spatial_cdf(d, p);
     return cdf[i + 1] - cdf[i];

@@ -34,6 +34,7 @@
 #include "geometry/shape.h"
 #include "geometry/shape_sample.h"
 #include "lights/envmap.h"
+#include "lights/light_bvh.h"
 #include "sampling/distribution.h"
 
 struct ts_envmap; /* envmap.h */
@@ -142,6 +143,7 @@ typedef enum ts_light_sampling {
     TS_LIGHT_SAMPLING_UNIFORM,
     TS_LIGHT_SAMPLING_POWER,   /* ∝ luminance of ts_light_power; uniform if all powers are 0 */
     TS_LIGHT_SAMPLING_SPATIAL, /* pbrt-v3's SpatialLightDistribution, below */
+    TS_LIGHT_SAMPLING_BVH,     /* pbrt-v4's BVHLightSampler (light_bvh.h): by the point and its normal */
 } ts_light_sampling;
 
 /* Spatial selection (pbrt-v3's default for `path`): the scene's bounds are cut into voxels,
@@ -173,6 +175,9 @@ typedef struct ts_light_distribution {
     int voxels[3];
     _Atomic uint32_t *state; /* per voxel, x fastest */
     float *cdf;              /* (n + 1) per voxel: cdf[0] = 0 ≤ … ≤ cdf[n] = 1 */
+    /* bvh (n > 0): the hierarchy, in the arena */
+    bool bvh;
+    ts_light_bvh tree;
 } ts_light_distribution;
 
 /* Builds over lights[0..n) (prepared), memory from arena (the spatial cache from calloc:
@@ -190,5 +195,9 @@ void ts_light_distribution_fini(ts_light_distribution *d);
 uint32_t ts_light_distribution_sample(const ts_light_distribution *d, ts_vec3 p, ts_vec2 u, float *pmf);
 /* Probability of selecting light i at p (0 if out of range). Thread-safe. */
 float ts_light_distribution_pmf(const ts_light_distribution *d, ts_vec3 p, uint32_t i);
+/* The same for a point p with shading normal n (zero: none; only bvh reads it): the
+ * integrators' calls at surface vertices, the pmf at the same (p, n) as the sample. */
+uint32_t ts_light_distribution_sample_at(const ts_light_distribution *d, ts_vec3 p, ts_vec3 n, ts_vec2 u, float *pmf);
+float ts_light_distribution_pmf_at(const ts_light_distribution *d, ts_vec3 p, ts_vec3 n, uint32_t i);
 
 #endif

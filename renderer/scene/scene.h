@@ -34,6 +34,7 @@ typedef enum ts_light_selection {
     TS_LIGHT_SELECT_UNIFORM,
     TS_LIGHT_SELECT_POWER,
     TS_LIGHT_SELECT_SPATIAL, /* pbrt-v3's per-voxel distributions (lights/light.h) */
+    TS_LIGHT_SELECT_BVH,     /* pbrt-v4's light hierarchy (lights/light_bvh.h) */
 } ts_light_selection;
 /* How direct light is estimated at a vertex: both strategies combined by the power
  * heuristic, light sampling only, or BSDF sampling only (delta lights are always light
@@ -43,7 +44,7 @@ typedef enum ts_direct_sampling { TS_SAMPLING_MIS, TS_SAMPLING_LIGHT, TS_SAMPLIN
 typedef struct ts_integrator_desc {
     ts_integrator_type type;
     int max_depth, rr_depth;            /* path; direct: max_depth of specular recursion */
-    ts_light_selection light_sampling;  /* path; direct's strategy one (uniform or power) */
+    ts_light_selection light_sampling;  /* path; direct's strategy one (uniform, power or bvh) */
     ts_light_strategy strategy;         /* direct */
     ts_direct_sampling sampling;        /* path, direct */
     int samples_per_light;              /* direct, all */
