@@ -265,6 +265,74 @@ ts_rgb ts_light_power(const ts_light *l, const ts_shape *shapes)
     return ts_rgb_gray(0);
 }
 
+/* ---------------------------------------------------------------- a light's bounds for the hierarchy (light_bvh.h) */
+
+static ts_light_bounds no_bounds(void)
+{
+    ts_light_bounds lb;
+    memset(&lb, 0, sizeof lb);
+    lb.box = ts_bounds3_empty();
+    return lb;
+}
+
+/* Emits into every direction from every point of box. */
+static ts_light_bounds everywhere(ts_bounds3 box, float phi)
+{
+    ts_light_bounds lb = {.box = box, .phi = phi, .w = {0, 0, 1}, .cos_o = -1, .cos_e = 0, .two_sided = false};
+    lb.cos_e = (float)cos(TS_PI_D / 2 + TS_LIGHT_BVH_MARGIN);
+    return lb;
+}
+
+/* A flat emitter with front normal n: the hemisphere around n (both sides if two_sided). */
+static ts_light_bounds flat(ts_bounds3 box, float phi, ts_vec3 n, bool two_sided)
+{
+    ts_light_bounds lb = everywhere(box, phi);
+    lb.w = n;
+    lb.cos_o = 1;
+    lb.two_sided = two_sided;
+    return lb;
+}
+
+ts_light_bounds ts_light_bounds_of(const ts_light *l, const ts_shape *shapes)
+{
+    ts_rgb power = ts_light_power(l, shapes);
+    double lum = ts_rgb_luminance(power);
+    float phi = ts_rgb_is_finite(power) && ts_rgb_max(power) > 0 && lum > 0 ? (float)lum : 0;
+    if (!(phi > 0) || !isfinite(phi)) return no_bounds();
+    switch (l->type) {
+    case TS_LIGHT_POINT: return everywhere((ts_bounds3){l->position, l->position}, phi);
+    case TS_LIGHT_SPOT: {
+        ts_light_bounds lb = everywhere((ts_bounds3){l->position, l->position}, phi);
+        double theta = acos(fmax(-1.0, fmin(1.0, (double)l->cos_total))) + TS_LIGHT_BVH_MARGIN;
+        lb.w = l->direction;
+        lb.cos_o = (float)cos(theta < TS_PI_D ? theta : TS_PI_D);
+        lb.cos_e = (float)cos((double)TS_LIGHT_BVH_MARGIN);
+        return lb;
+    }
+    case TS_LIGHT_AREA: {
+        const ts_shape *sh = &shapes[l->shape];
+        if (sh->type == TS_SHAPE_MESH) {
+            ts_bounds3 box = ts_shape_triangle_bounds(sh, l->prim);
+            if (l->rect) box = ts_bounds3_union(box, ts_shape_triangle_bounds(sh, l->prim_b));
+            ts_vec3 n = ts_dvec3_to_vec3(l->geom.tri_n);
+            if (!ts_vec3_is_finite(n) || !(ts_vec3_length_sq(n) > 0)) return everywhere(box, phi);
+            return flat(box, phi, n, l->two_sided);
+        }
+        ts_bounds3 box = ts_shape_bounds(sh);
+        if (sh->type == TS_SHAPE_DISK) {
+            ts_shape_point pt;
+            if (ts_shape_sample_area(sh, 0, &l->geom, (ts_vec2){0.5f, 0.5f}, &pt) && ts_vec3_is_finite(pt.n) &&
+                ts_vec3_length_sq(pt.n) > 0)
+                return flat(box, phi, ts_vec3_normalize(pt.n), l->two_sided);
+        }
+        return everywhere(box, phi); /* spheres and cylinders: normals in every direction */
+    }
+    case TS_LIGHT_DISTANT:
+    case TS_LIGHT_INFINITE: return no_bounds();
+    }
+    return no_bounds();
+}
+
 /* ---------------------------------------------------------------- light selection */
 
 /* Radical inverse of i in the prime base of dimension dim (2, 3, 5, 7, 11): the Halton
@@ -367,7 +435,22 @@ ts_status ts_light_distribution_init(ts_light_distribution *d, const ts_light *l
     memset(d, 0, sizeof *d);
     if (n == 0) return TS_OK;
     if (mode == TS_LIGHT_SAMPLING_BVH) {
-        ts_status st = ts_light_bvh_build(&d->tree, lights, n, shapes, arena, err);
+        ts_light_bounds *lb = malloc((size_t)n * sizeof *lb);
+        bool *far = malloc((size_t)n * sizeof *far);
+        if (!lb || !far) {
+            free(lb);
+            free(far);
+            return ts_error_set(err, TS_ERR_NOMEM, "light distribution: out of memory for %u lights", n);
+        }
+        for (uint32_t i = 0; i < n; i++) {
+            lb[i] = ts_light_bounds_of(&lights[i], shapes);
+            ts_rgb phi = ts_light_power(&lights[i], shapes);
+            far[i] = (lights[i].type == TS_LIGHT_DISTANT || lights[i].type == TS_LIGHT_INFINITE) &&
+                     ts_rgb_is_finite(phi) && ts_rgb_max(phi) > 0;
+        }
+        ts_status st = ts_light_bvh_build(&d->tree, lb, far, n, arena, err);
+        free(lb);
+        free(far);
         if (st) return st;
         d->bvh = true;
         d->n = n;

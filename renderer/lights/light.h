@@ -138,6 +138,10 @@ ts_rgb ts_area_light_l(const ts_light *l, const ts_interaction *si, ts_vec3 w);
 /* Total emitted power Φ (needs ts_lights_prepare for area, distant, infinite lights). */
 ts_rgb ts_light_power(const ts_light *l, const ts_shape *shapes);
 
+/* The bounds of a prepared light for the light hierarchy (light_bvh.h): phi 0 for lights with
+ * no bounds (distant, infinite) or no power. */
+ts_light_bounds ts_light_bounds_of(const ts_light *l, const ts_shape *shapes);
+
 /* Light selection for the integrators (docs/design.md §4 `light_sampling`). */
 typedef enum ts_light_sampling {
     TS_LIGHT_SAMPLING_UNIFORM,

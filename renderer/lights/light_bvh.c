@@ -6,14 +6,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "lights/light.h"
 
 #define BUCKETS 12
 #define COUNT_SPLIT_DEPTH 32 /* from here on, splits at the middle of the list (depth ≤ 32 + log2 n ≤ 64) */
 
 static double clamp1(double x) { return x < -1 ? -1 : x > 1 ? 1 : x; }
-
-/* ---------------------------------------------------------------- bounds of one light */
 
 static ts_light_bounds unbounded(void)
 {
@@ -21,64 +18,6 @@ static ts_light_bounds unbounded(void)
     memset(&lb, 0, sizeof lb);
     lb.box = ts_bounds3_empty();
     return lb;
-}
-
-/* Emits into every direction from every point of box. */
-static ts_light_bounds everywhere(ts_bounds3 box, float phi)
-{
-    ts_light_bounds lb = {.box = box, .phi = phi, .w = {0, 0, 1}, .cos_o = -1, .cos_e = 0, .two_sided = false};
-    lb.cos_e = (float)cos(TS_PI_D / 2 + TS_LIGHT_BVH_MARGIN);
-    return lb;
-}
-
-/* A flat emitter with front normal n: the hemisphere around n (both sides if two_sided). */
-static ts_light_bounds flat(ts_bounds3 box, float phi, ts_vec3 n, bool two_sided)
-{
-    ts_light_bounds lb = everywhere(box, phi);
-    lb.w = n;
-    lb.cos_o = 1;
-    lb.two_sided = two_sided;
-    return lb;
-}
-
-ts_light_bounds ts_light_bounds_of(const ts_light *l, const ts_shape *shapes)
-{
-    ts_rgb power = ts_light_power(l, shapes);
-    double lum = ts_rgb_luminance(power);
-    float phi = ts_rgb_is_finite(power) && ts_rgb_max(power) > 0 && lum > 0 ? (float)lum : 0;
-    if (!(phi > 0) || !isfinite(phi)) return unbounded();
-    switch (l->type) {
-    case TS_LIGHT_POINT: return everywhere((ts_bounds3){l->position, l->position}, phi);
-    case TS_LIGHT_SPOT: {
-        ts_light_bounds lb = everywhere((ts_bounds3){l->position, l->position}, phi);
-        double theta = acos(clamp1(l->cos_total)) + TS_LIGHT_BVH_MARGIN;
-        lb.w = l->direction;
-        lb.cos_o = (float)cos(theta < TS_PI_D ? theta : TS_PI_D);
-        lb.cos_e = (float)cos((double)TS_LIGHT_BVH_MARGIN);
-        return lb;
-    }
-    case TS_LIGHT_AREA: {
-        const ts_shape *sh = &shapes[l->shape];
-        if (sh->type == TS_SHAPE_MESH) {
-            ts_bounds3 box = ts_shape_triangle_bounds(sh, l->prim);
-            if (l->rect) box = ts_bounds3_union(box, ts_shape_triangle_bounds(sh, l->prim_b));
-            ts_vec3 n = ts_dvec3_to_vec3(l->geom.tri_n);
-            if (!ts_vec3_is_finite(n) || !(ts_vec3_length_sq(n) > 0)) return everywhere(box, phi);
-            return flat(box, phi, n, l->two_sided);
-        }
-        ts_bounds3 box = ts_shape_bounds(sh);
-        if (sh->type == TS_SHAPE_DISK) {
-            ts_shape_point pt;
-            if (ts_shape_sample_area(sh, 0, &l->geom, (ts_vec2){0.5f, 0.5f}, &pt) && ts_vec3_is_finite(pt.n) &&
-                ts_vec3_length_sq(pt.n) > 0)
-                return flat(box, phi, ts_vec3_normalize(pt.n), l->two_sided);
-        }
-        return everywhere(box, phi); /* spheres and cylinders: normals in every direction */
-    }
-    case TS_LIGHT_DISTANT:
-    case TS_LIGHT_INFINITE: return unbounded();
-    }
-    return unbounded();
 }
 
 /* ---------------------------------------------------------------- importance */
@@ -279,8 +218,8 @@ static uint32_t build(builder *bd, item *items, uint32_t n, uint64_t trail, int 
     return at;
 }
 
-ts_status ts_light_bvh_build(ts_light_bvh *bvh, const ts_light *lights, uint32_t n, const ts_shape *shapes,
-                             ts_arena *arena, ts_error *err)
+ts_status ts_light_bvh_build(ts_light_bvh *bvh, const ts_light_bounds *bounds, const bool *unbounded_light,
+                             uint32_t n, ts_arena *arena, ts_error *err)
 {
     memset(bvh, 0, sizeof *bvh);
     bvh->n_lights = n;
@@ -296,20 +235,16 @@ ts_status ts_light_bvh_build(ts_light_bvh *bvh, const ts_light *lights, uint32_t
     }
     uint32_t m = 0;
     for (uint32_t i = 0; i < n; i++) {
-        const ts_light *l = &lights[i];
-        if (l->type == TS_LIGHT_DISTANT || l->type == TS_LIGHT_INFINITE) {
-            ts_rgb phi = ts_light_power(l, shapes);
-            if (ts_rgb_is_finite(phi) && ts_rgb_max(phi) > 0) {
-                bvh->unbounded[bvh->n_unbounded++] = i;
-                bvh->in_tree[i] = 2;
-            }
+        if (unbounded_light[i]) {
+            bvh->unbounded[bvh->n_unbounded++] = i;
+            bvh->in_tree[i] = 2;
             continue;
         }
-        ts_light_bounds lb = ts_light_bounds_of(l, shapes);
-        if (!(lb.phi > 0)) continue;
+        const ts_light_bounds *lb = &bounds[i];
+        if (!(lb->phi > 0) || !isfinite(lb->phi)) continue;
         items[m].light = i;
-        items[m].lb = lb;
-        items[m].centroid = ts_vec3_scale(ts_vec3_add(lb.box.lo, lb.box.hi), 0.5f);
+        items[m].lb = *lb;
+        items[m].centroid = ts_vec3_scale(ts_vec3_add(lb->box.lo, lb->box.hi), 0.5f);
         bvh->in_tree[i] = 1;
         m++;
     }

@@ -37,9 +37,7 @@
 #include "core/arena.h"
 #include "core/error.h"
 #include "core/vecmath.h"
-#include "geometry/shape.h"
-
-struct ts_light; /* light.h */
+#include "geometry/interaction.h" /* TS_NONE */
 
 #define TS_LIGHT_BVH_MARGIN 1e-3f /* radians added to the cones' angles */
 #define TS_LIGHT_BVH_MAX_DEPTH 60
@@ -73,14 +71,13 @@ typedef struct ts_light_bvh {
     uint8_t *in_tree; /* per light: 1 in the hierarchy, 2 among the unbounded, 0 never chosen */
 } ts_light_bvh;
 
-/* The bounds of a prepared light (phi 0 for lights with no bounds or no power). */
-ts_light_bounds ts_light_bounds_of(const struct ts_light *l, const ts_shape *shapes);
-
 /* Importance of bounds lb for a point p with normal n (n zero: no cosine at p). */
 float ts_light_bounds_importance(const ts_light_bounds *lb, ts_vec3 p, ts_vec3 n);
 
-/* Builds the hierarchy over lights[0..n) (prepared), memory from arena. */
-ts_status ts_light_bvh_build(ts_light_bvh *bvh, const struct ts_light *lights, uint32_t n, const ts_shape *shapes,
+/* Builds the hierarchy over n lights: light i has bounds[i] (phi 0: never chosen, unless
+ * unbounded[i]: a distant or infinite light that emits, chosen apart). Memory from arena;
+ * the lights' bounds come from light.h's ts_light_bounds_of. */
+ts_status ts_light_bvh_build(ts_light_bvh *bvh, const ts_light_bounds *bounds, const bool *unbounded, uint32_t n,
                              ts_arena *arena, ts_error *err);
 
 /* A light for point p with shading normal n (zero for none), from the 1-D sample u in [0, 1),
