@@ -9,6 +9,12 @@
 // restart with --data) and none for a job without; a broken scene's message beside its field; the preview's view (fit, 1:1,
 // zoom about the cursor, pan), pixel readout (against the EXR the API serves) and error and
 // sample-count channels; layout at 1280×800 and phone width; labelled, keyboard-operable controls.
+// Issue #32: the spp plot never runs backwards; the list's error in percent and effects in
+// words; the spp field's range is the server's (GET /api/v1/limits) and is checked before
+// posting; a bundle takes the form's name and spp and disables the rest, and is named after
+// its file; the wheel scrolls the page unless the image has the focus or Ctrl is held; the
+// outline past 1:1; the legend under the image, in whole samples; pixels without signal;
+// the preview, readout and warnings in the window at 1280×800 and 1920×1080 (screenshots).
 import { spawn } from 'node:child_process';
 import fs from 'node:fs';
 import net from 'node:net';
@@ -126,7 +132,7 @@ page.on('pageerror', (e) => pageErrors.push(String(e)));
 page.on('console', (m) => { if (m.type() === 'error' && !/Failed to load resource/.test(m.text())) pageErrors.push('console: ' + m.text()); });
 const shot = (name, p = page) => p.screenshot({ path: path.join(TS_ARTIFACTS, name + '.png'), fullPage: true });
 
-let first = null, second = null;
+let first = null, second = null, warnedId = null;
 try {
   await page.goto(url, { waitUntil: 'load' });
 
@@ -161,7 +167,13 @@ try {
     await shot('01-live-preview');
   });
 
-  await check('the error and spp plots gain points', async () => {
+  await check('the error and spp plots gain points; the list says the error in percent and the effects in words', async () => {
+    await page.waitForFunction((id) => /^\d[\d.]*%$/.test(document.querySelector(`#jobs tr[data-id="${id}"] td[data-label="Error"]`).textContent),
+      first.id, { timeout: 15000 }).catch(async () => {
+      throw new Error('the error column reads ' + await page.textContent(`#jobs tr[data-id="${first.id}"] td[data-label="Error"]`));
+    });
+    const fx = await page.textContent(`#jobs tr[data-id="${first.id}"] td[data-label="Effects"]`);
+    assert(fx.includes('indirect light') && fx.includes('area lights') && !fx.includes('_'), 'effects in words (issue #32.7): ' + fx);
     const before = Number(await page.getAttribute('#plot-spp', 'data-points'));
     await page.waitForFunction((n) => Number(document.getElementById('plot-spp').dataset.points) > n && 
       Number(document.getElementById('plot-error').dataset.points) >= 2, before, { timeout: 15000 });
@@ -183,6 +195,15 @@ try {
     assert(d.lit > 0.9 * d.n, 'after reload the canvas is whole, lit ' + d.lit + ' of ' + d.n);
     log(`  image back ${ms} ms after the reload`);
     await shot('03-after-reload');
+    // The spp plot, the server's history then live points, never runs backwards: one quantity
+    // (spp_mean) in both (issue #32.2: history ticks carried the fractional spp, live points the
+    // last finished pass, …25.3, 25.7, 16, 32).
+    const n0 = Number(await page.getAttribute('#plot-spp', 'data-points'));
+    await page.waitForFunction((n) => Number(document.getElementById('plot-spp').dataset.points) >= n + 3, n0, { timeout: 15000 });
+    const series = (await page.getAttribute('#plot-spp', 'data-spp-values')).split(',').map(Number);
+    const back = series.findIndex((v, i) => i > 0 && v < series[i - 1]);
+    assert(back < 0, `the spp series runs backwards at point ${back}: ${series.join(', ')}`);
+    log(`  spp series after the reload: ${series.length} points, ${series[0]} … ${series[series.length - 1]}`);
   });
 
   await check('a dropped connection: the stream comes back and repaints the current image', async () => {
@@ -300,13 +321,16 @@ try {
     const obj = 'v 100 100 100\nv 101 100 100\nv 100 101 100\nf 1 2 3\n';
     const text = (s) => new TextEncoder().encode(s);
     const waitJob = async (p, name) => {
-      const r = await p.waitForResponse((x) => x.url().endsWith('/api/v1/jobs') && x.request().method() === 'POST');
+      const r = await p.waitForResponse((x) => new URL(x.url()).pathname === '/api/v1/jobs' && x.request().method() === 'POST');
       const body = await r.json();
       assert(r.status() === 201 && body.id, name + ': POST answered ' + r.status() + ' ' + JSON.stringify(body));
       assert(r.request().headers()['content-type'] === 'application/x-tar', name + ' is posted as a tar');
       await jobRow(page, body.id).locator('.state-done').waitFor({ timeout: 30000 });
       return body;
     };
+    // The form's name and spp apply to a bundle (?name=, ?spp=): empty here, the scene's own.
+    await page.fill('#f-name', '');
+    await page.fill('#f-spp', '');
     // A .tar file (made by the page's own tar writer, checked by the server's libarchive).
     await page.setInputFiles('#f-bundle', { name: 'box.tar', mimeType: 'application/x-tar',
       buffer: Buffer.from(makeTar([{ path: 'scene.json', data: text(JSON.stringify(doc)) }, { path: 'meshes/tri.obj', data: text(obj) }])) });
@@ -355,7 +379,7 @@ try {
     // Posts what setFiles puts in a bundle field through the form; waits until the job is done.
     const postViaForm = async (p, setFiles) => {
       await setFiles();
-      const resp = p.waitForResponse((x) => x.url().endsWith('/api/v1/jobs') && x.request().method() === 'POST');
+      const resp = p.waitForResponse((x) => new URL(x.url()).pathname === '/api/v1/jobs' && x.request().method() === 'POST');
       await p.click('#f-submit');
       const r = await resp, body = await r.json();
       assert(r.status() === 201 && body.id, 'POST answered ' + r.status() + ' ' + JSON.stringify(body));
@@ -391,7 +415,22 @@ try {
 
     // Whatever fails, the form goes back to the JSON scene for the checks after this one.
     try {
-    const warned = await postViaForm(page, () => page.setInputFiles('#f-bundle', { name: 'warns.tar', mimeType: 'application/x-tar', buffer: Buffer.from(warnTar) }));
+    // While a bundle is chosen, the fields the API takes beside it (the name: ?name=, the spp:
+    // ?spp=) apply and the JSON scene's are disabled (issue #32.4); the job is named after the
+    // bundle's file, not "scene".
+    const warned = await postViaForm(page, async () => {
+      await page.setInputFiles('#f-bundle', { name: 'warns.tar', mimeType: 'application/x-tar', buffer: Buffer.from(warnTar) });
+      const form = await page.evaluate(() => Object.fromEntries(['f-scene', 'f-priority', 'f-integrator', 'f-maxdepth', 'f-time', 'f-target',
+        'f-name', 'f-spp'].map((id) => [id, document.getElementById(id).disabled])));
+      assert(!form['f-name'] && !form['f-spp'] && Object.entries(form).every(([id, off]) => off === !['f-name', 'f-spp'].includes(id)),
+        'a bundle disables what it ignores: ' + JSON.stringify(form));
+      assert(await page.getAttribute('#f-name', 'placeholder') === 'warns', 'the name defaults to the bundle\'s');
+      await page.fill('#f-name', '');
+      await page.fill('#f-spp', '2');
+    });
+    assert(warned.name === 'warns' && warned.spp_target === 2, 'the bundle job is named warns with 2 spp: ' + JSON.stringify([warned.name, warned.spp_target]));
+    await page.fill('#f-spp', '');
+    warnedId = warned.id;
     expectShown(await shown(page, warned.id), warned, 'a .tar bundle');
     await shot('20-import-warnings');
     const clean = await postViaForm(page, () => page.setInputFiles('#f-bundle', { name: 'clean.tar', mimeType: 'application/x-tar', buffer: Buffer.from(cleanTar) }));
@@ -413,6 +452,7 @@ try {
     } finally {
       if (await page.isVisible('#bundle-row')) await page.click('#f-bundle-clear');
     }
+    assert(!(await page.isDisabled('#f-priority')), 'back to the JSON scene: its fields are enabled again');
     // A server with --data, restarted: the restored job (its scene.pbrt loaded again) still lists them.
     const data = fs.mkdtempSync(path.join(os.tmpdir(), 'tessera-warn-data-'));
     let s1 = null, s2 = null;
@@ -484,9 +524,25 @@ try {
     assert(/^shapes\[\d+\]\.radius/.test(r2.error), 'server error ' + JSON.stringify(r2));
     await page.waitForFunction(() => document.getElementById('err-scene').textContent.includes('.radius'));
     assert(await page.textContent('#err-maxdepth') === '', 'the old message is gone');
-    const r3 = await submit(page, { scene: small(), spp: 100000 });
-    assert(/^job\.spp/.test(r3.error), 'server error ' + JSON.stringify(r3));
-    await page.waitForFunction(() => document.getElementById('err-spp').textContent.includes('job.spp'));
+    // The spp range is this server's (GET /api/v1/limits: --max-spp 65536), said by the field
+    // and checked before posting — not the loader's [1, 16777216] (issue #32.7).
+    assert(await page.getAttribute('#f-spp', 'max') === '65536' && (await page.textContent('#spp-range')).includes('1–65536'),
+      'the spp field states the server\'s range: max ' + await page.getAttribute('#f-spp', 'max'));
+    let posts = 0;
+    const countPosts = (rq) => { if (rq.method() === 'POST' && rq.url().endsWith('/api/v1/jobs')) posts++; };
+    page.on('request', countPosts);
+    for (const spp of ['100000', '0']) {
+      await page.fill('#f-scene', small());
+      await page.fill('#f-spp', spp);
+      await page.click('#f-submit');
+      await page.waitForFunction(() => document.getElementById('err-spp').textContent.includes('job.spp'), null, { timeout: 5000 });
+      const msg = await page.textContent('#err-spp');
+      assert(msg.includes('from 1 to 65536') && !msg.includes('16777216'), `spp ${spp}: the message says the server's range: ${msg}`);
+    }
+    await new Promise((res) => setTimeout(res, 300));
+    page.off('request', countPosts);
+    assert(posts === 0, 'an spp out of the server\'s range is not posted, posts: ' + posts);
+    await page.fill('#f-spp', '');
     await page.fill('#f-scene', '{"tessera": 1,');
     await page.click('#f-submit');
     await page.waitForFunction(() => document.getElementById('err-scene').textContent.includes('not valid JSON'));
@@ -521,6 +577,34 @@ try {
     v = await viewState(); sb = await stage.boundingBox();
     assert(v.mode === '1:1' && v.s === 1 && Math.abs(sb.width - W) < 0.01 && Math.abs(sb.height - H) < 0.01, '1:1: the stage is ' + sb.width + '×' + sb.height);
     assert(Number.isInteger(v.tx) && Number.isInteger(v.ty), '1:1 sits on whole pixels');
+    // The pixel under the cursor is outlined past 1:1 (README), not from 6 screen pixels on (issue #32.7).
+    const overImage = async () => { const b = await stage.boundingBox(); await page.mouse.move(b.x + b.width / 2 + 0.3, b.y + b.height / 2 + 0.3); };
+    await overImage();
+    assert(await page.isHidden('#hover'), 'at 1:1 no pixel is outlined');
+    await page.click('#zoom-in');
+    await page.click('#zoom-in'); // √2 · √2: two screen pixels per image pixel
+    assert(Math.abs((await viewState()).s - 2) < 1e-9, 'two zoom steps from 1:1 are 2×');
+    await overImage();
+    assert(await page.isVisible('#hover'), 'at 2× the pixel under the cursor is outlined');
+    await page.click('#view-1to1');
+
+    // The wheel over the image scrolls the page unless the image has the focus or Ctrl is held
+    // (issue #32.5: it zoomed, and the page under it could not be scrolled).
+    await page.evaluate(() => { document.activeElement && document.activeElement.blur(); window.scrollTo(0, 0); });
+    await overImage();
+    const s0 = (await viewState()).s;
+    await page.mouse.wheel(0, 240);
+    await page.waitForFunction(() => window.scrollY > 0, null, { timeout: 3000 }).catch(() => {});
+    const scrolled = await page.evaluate(() => window.scrollY);
+    assert((await viewState()).s === s0 && scrolled > 0, `the wheel scrolled the page (by ${scrolled}) and left the zoom (${(await viewState()).s} from ${s0})`);
+    await page.evaluate(() => window.scrollTo(0, 0));
+    await overImage();
+    await page.keyboard.down('Control');
+    await page.mouse.wheel(0, -240);
+    await page.keyboard.up('Control');
+    await page.waitForFunction((a) => Number(document.getElementById('viewport').dataset.scale) > a * 1.9, s0, { timeout: 3000 });
+    await page.click('#view-1to1');
+    await page.focus('#viewport'); // the wheel alone zooms once the image has the focus
 
     // Zoom about the cursor: the image point under the cursor stays put; the view and the picture change.
     const shotBefore = await vp.screenshot(); // (scrolls the view into the window first)
@@ -587,6 +671,7 @@ try {
     for (let i = 1; i < W * H; i++) if (exr.channels.R[i] + exr.channels.G[i] > exr.channels.R[best] + exr.channels.G[best]) best = i;
     const bx = best % W, by = Math.floor(best / W);
     await pointAt(bx, by);
+    await page.focus('#viewport'); // (the Fit button had it)
     await page.mouse.wheel(0, -480);
     await page.waitForFunction(() => document.getElementById('viewport').dataset.mode === 'free', null, { timeout: 3000 });
     const ro = await pointAt(bx, by);
@@ -598,6 +683,11 @@ try {
     const rgbDigest = await canvasDigest(page);
     await page.selectOption('#channel', 'error');
     assert(await page.isVisible('#legend') && (await page.textContent('#legend')).includes('10%'), 'the error legend is shown');
+    // The legend is under the image, never over it (issue #32.6).
+    const lb = await page.locator('#legend').boundingBox(), vpb = await vp.boundingBox();
+    assert(lb.y >= vpb.y + vpb.height - 0.5 || lb.y + lb.height <= vpb.y + 0.5 || lb.x >= vpb.x + vpb.width || lb.x + lb.width <= vpb.x,
+      'the legend does not cover the image: legend ' + JSON.stringify(lb) + ', view ' + JSON.stringify(vpb));
+    assert((await page.textContent('#legend-keys')).includes('no signal'), 'the legend names the no-signal colour');
     const errDigest = await canvasDigest(page);
     assert(errDigest.h !== rgbDigest.h && errDigest.lit > 0.9 * errDigest.n, 'the error channel repainted the canvas');
     const corr = await page.evaluate((exrErr) => {
@@ -614,10 +704,39 @@ try {
     await shot('14-preview-error-channel');
     await page.selectOption('#channel', 'count');
     assert((await page.textContent('#legend')).includes('samples per pixel'), 'the count legend is shown');
+    const ticks = await page.evaluate(() => [...document.querySelectorAll('#legend-ticks span')].map((e) => e.textContent).join(' '));
+    assert(ticks === '0 8 16', 'the count legend is in whole samples (issue #32.7: it read "16.00"): ' + ticks);
     assert((await canvasDigest(page)).h !== errDigest.h, 'the count channel repainted the canvas');
     await shot('15-preview-sample-count');
     await page.selectOption('#channel', 'rgb');
     assert(await page.isHidden('#legend'), 'no legend for RGB');
+  });
+
+  await check('the error channel shows pixels without signal as such, not as 0% error', async () => {
+    // A wide view of the box: past its walls the camera sees nothing (no environment light):
+    // black pixels with no variance (issue #32.6: "rel. error 0.00%" in the best colour).
+    const job = await submit(page, { scene: small({ camera: { ...cornell.camera, fov: 100 } }), spp: 4, name: 'no-signal' });
+    assert(job.id, 'POST answered ' + JSON.stringify(job));
+    await jobRow(page, job.id).locator('.state-done').waitFor({ timeout: 30000 });
+    await page.getByRole('button', { name: 'show job no-signal (' + job.id + ') in the preview' }).click();
+    await page.waitForFunction(() => Number(document.getElementById('canvas').dataset.painted) >= 9 &&
+      document.getElementById('preview-status').textContent.startsWith('done'), null, { timeout: 10000 });
+    await page.selectOption('#channel', 'error');
+    await page.waitForTimeout(300); // the legend takes its place under the image; the view refits
+    await page.click('#view-fit');
+    const st = await page.evaluate(() => { const d = document.getElementById('viewport').dataset; return { s: Number(d.scale), tx: Number(d.tx), ty: Number(d.ty) }; });
+    const b = await page.locator('#viewport').boundingBox();
+    await page.mouse.move(b.x + st.tx + 0.5 * st.s, b.y + st.ty + 0.5 * st.s); // pixel (0, 0), outside the box
+    const ro = await page.evaluate(() => ({ ...document.getElementById('readout').dataset, text: document.getElementById('readout').textContent }));
+    assert(ro.x === '0' && ro.y === '0' && ro.signal === 'none' && /rel\. error no signal/.test(ro.text) && Number(ro.r) === 0,
+      'the readout of a black pixel says no signal: ' + JSON.stringify(ro));
+    const px = await page.evaluate(() => Array.from(document.getElementById('canvas').getContext('2d').getImageData(0, 0, 1, 1).data.slice(0, 3)));
+    assert(px.join() === '168,40,120', 'a pixel without signal has its own colour, got ' + px);
+    await page.mouse.move(b.x + st.tx + 48.5 * st.s, b.y + st.ty + 60.5 * st.s); // inside the box: lit
+    const lit = await page.evaluate(() => document.getElementById('readout').dataset);
+    assert(lit.signal === 'some' && Number(lit.err) > 0, 'a lit pixel has its relative error: ' + JSON.stringify(lit));
+    await shot('14b-error-channel-no-signal');
+    await page.selectOption('#channel', 'rgb');
   });
 
   await check('controls are labelled and keyboard-operable', async () => {
@@ -663,16 +782,42 @@ try {
   await check('layout at 1280×800 and at phone width', async () => {
     await page.waitForFunction((id) => document.querySelector(`#jobs tr[data-id="${id}"] .state`).textContent !== 'running',
       second.id, { timeout: 20000 });
-    await page.screenshot({ path: path.join(TS_ARTIFACTS, '08-desktop-1280x800.png') });
-    const overflow = await page.evaluate(() => document.documentElement.scrollWidth - window.innerWidth);
-    assert(overflow <= 0, 'no horizontal scrolling at 1280 px, overflow ' + overflow);
+    // The preview (the image fitted, its readout, its import warnings) in view at the top of the
+    // page, with several jobs in the list, at both desktop sizes (issue #32.5: at 1280×800 Fit
+    // spilled past the window and the readout and warnings were below it).
+    assert(await page.locator('#jobs tbody tr').count() >= 4, 'several jobs are listed');
+    await jobRow(page, warnedId).locator('button.link').click();
+    await page.waitForFunction((id) => document.getElementById('preview-warnings').dataset.job === id &&
+      document.getElementById('preview-status').textContent.startsWith('done · '), warnedId, { timeout: 10000 });
+    for (const [w, h] of [[1280, 800], [1920, 1080]]) {
+      await page.setViewportSize({ width: w, height: h });
+      await page.evaluate(() => window.scrollTo(0, 0));
+      await page.click('#view-fit');
+      await page.waitForTimeout(300); // the resize observer settles the view's height
+      await page.click('#view-fit');
+      const boxes = await page.evaluate(() => Object.fromEntries(['viewport', 'stage', 'readout', 'preview-warnings', 'exposure'].map((id) => {
+        const r = document.getElementById(id).getBoundingClientRect();
+        return [id, { top: r.top, bottom: r.bottom, left: r.left, right: r.right, h: r.height }];
+      })));
+      for (const [id, b] of Object.entries(boxes))
+        assert(b.h > 0 && b.top >= 0 && b.bottom <= h + 0.5 && b.left >= 0 && b.right <= w + 0.5,
+          `${w}×${h}: #${id} is not wholly in the window: ${JSON.stringify(b)}`);
+      const zoom = await page.textContent('#zoom-level');
+      log(`  ${w}×${h}: view ${Math.round(boxes.viewport.h)} px high, fit at ${zoom}, warnings end at ${Math.round(boxes['preview-warnings'].bottom)}`);
+      await page.screenshot({ path: path.join(TS_ARTIFACTS, `08-desktop-${w}x${h}.png`) });
+      const overflow = await page.evaluate(() => document.documentElement.scrollWidth - window.innerWidth);
+      assert(overflow <= 0, `no horizontal scrolling at ${w} px, overflow ${overflow}`);
+    }
+    await page.setViewportSize({ width: 1280, height: 800 });
     const phone = await context.newPage();
     await phone.setViewportSize({ width: 390, height: 844 });
     await phone.goto(url, { waitUntil: 'load' });
     await phone.getByRole('button', { name: 'show job ' + 'cornell-path (' + first.id + ') in the preview' }).click();
     await phone.waitForFunction(() => Number(document.getElementById('canvas').dataset.tiles) >= 9, null, { timeout: 5000 });
     const o = await phone.evaluate(() => document.documentElement.scrollWidth - window.innerWidth);
-    assert(o <= 0, 'no horizontal scrolling at phone width, overflow ' + o);
+    const wide = o <= 0 ? [] : await phone.evaluate(() => [...document.querySelectorAll('body *')].filter((e) => e.getBoundingClientRect().right > window.innerWidth + 0.5 &&
+      !e.closest('.table-wrap thead')).slice(0, 8).map((e) => `${e.tagName.toLowerCase()}#${e.id}.${e.className} ${e.textContent.slice(0, 40)}`));
+    assert(o <= 0, 'no horizontal scrolling at phone width, overflow ' + o + ': ' + wide.join(' | '));
     const box = await phone.locator('#canvas').boundingBox();
     assert(box && box.width <= 390 && box.width > 200, 'the canvas fits the phone, width ' + (box && box.width));
     await shot('09-phone-390', phone);

@@ -23,7 +23,9 @@ async function api(path, opts = {}) {
 // ------------------------------------------------------------------ state
 const jobs = new Map();      // id -> latest status document
 // id -> [{t, err, spp}]: points seen while this page (or an earlier load of it in this tab,
-// through sessionStorage) was open; the API reports only the present.
+// through sessionStorage) was open; the API reports only the present. spp is the server's
+// spp_mean (samples held ÷ pixels, API v1.4), the quantity of the history's points too, so
+// the plotted series never runs backwards (a live spp_done after a history tick did).
 const history = new Map();
 try {
   for (const [id, h] of JSON.parse(sessionStorage.getItem('tessera.history') || '[]')) history.set(id, h);
@@ -46,12 +48,12 @@ function addPoint(id, t, err, spp) {
   const last = h[h.length - 1];
   if (last && last.spp === spp && last.err === err) return;
   if (last && t < last.t) return;
+  if (spp > 0 && last && last.spp > spp) return; // an older reading than the last point
   h.push({ t, err: err == null || !(err > 0) ? null : err, spp: spp > 0 ? spp : null });
   saveHistory();
 }
 
 // ------------------------------------------------------------------ formatting
-const fmtNum = (v, d = 3) => (v == null || !isFinite(v) ? '–' : Number(v).toPrecision(d));
 function fmtRate(v) {
   if (v == null || !isFinite(v)) return '–';
   if (v >= 1e9) return (v / 1e9).toFixed(2) + ' G';
@@ -65,6 +67,13 @@ function fmtTime(s) {
   const m = Math.floor(s / 60);
   return m + ' min ' + Math.round(s - 60 * m) + ' s';
 }
+// Relative errors are shown in percent, as the CLI and the readout say them.
+const fmtPct = (e) => (e == null || !isFinite(e) ? 'n/a' : (100 * e).toPrecision(3) + '%');
+// The effects a job simulates (its status's identifiers), in words; the identifier is the title.
+const EFFECT_TEXT = { delta_lights: 'point and spot lights', area_lights: 'area lights', environment: 'environment light',
+  diffuse: 'diffuse', glossy: 'glossy', specular_reflection: 'mirror reflection', specular_transmission: 'refraction',
+  fourier: 'Fourier BSDFs', depth_of_field: 'depth of field', indirect: 'indirect light', lobe_choice: 'layered materials' };
+const effectText = (e) => EFFECT_TEXT[e] || e.replace(/_/g, ' ');
 const finished = (st) => st === 'done' || st === 'cancelled' || st === 'failed';
 const jobLabel = (j) => (j.name ? j.name + ' ' : '') + '(' + j.id + ')';
 
@@ -114,9 +123,10 @@ function renderJobs() {
       el('td', { 'data-label': 'spp', class: 'num' }, j.spp_done + ' / ' + j.spp_target),
       el('td', { 'data-label': 'Samples/s', class: 'num' }, fmtRate(j.samples_per_s)),
       el('td', { 'data-label': 'Error', class: 'num', title: j.error_estimate == null ? 'not known yet (fewer than 2 samples per pixel)' : '' },
-        j.error_estimate == null ? 'n/a' : fmtNum(j.error_estimate)),
+        fmtPct(j.error_estimate)),
       el('td', { 'data-label': 'Elapsed', class: 'num' }, fmtTime(j.elapsed_s)),
-      el('td', { 'data-label': 'Effects', class: 'effects small' }, (j.effects || []).join(', ')),
+      el('td', { 'data-label': 'Effects', class: 'effects small', title: (j.effects || []).join(', ') },
+        (j.effects || []).map(effectText).join(', ')),
       el('td', { 'data-label': 'Actions', class: 'actions' },
         finished(j.state)
           ? el('button', { type: 'button', class: 'cancel', 'aria-label': 'delete job ' + j.id,
@@ -179,7 +189,7 @@ async function poll() {
       for (const j of r.body.jobs) {
         seen.add(j.id);
         jobs.set(j.id, j);
-        addPoint(j.id, j.elapsed_s, j.error_estimate, j.spp_done);
+        addPoint(j.id, j.elapsed_s, j.error_estimate, j.spp_mean);
       }
       for (const id of [...jobs.keys()]) if (!seen.has(id)) jobs.delete(id);
       renderJobs();
@@ -268,6 +278,14 @@ function relError(i) {
   const vy = 0.2126 * 0.2126 * v[i * 3] + 0.7152 * 0.7152 * v[i * 3 + 1] + 0.0722 * 0.0722 * v[i * 3 + 2];
   return vy > 0 ? Math.sqrt(vy / (y * y + 1e-3)) : 0;
 }
+// A pixel with no signal: samples taken, all black, no variance (the relative error of a
+// zero is not a small error; it gets a colour of its own, outside viridis).
+function noSignal(i) {
+  const v = base.vars, c = base.rgb;
+  return base.count[i] >= 1 && c[i * 3] === 0 && c[i * 3 + 1] === 0 && c[i * 3 + 2] === 0 && v[i * 3] === 0 &&
+    v[i * 3 + 1] === 0 && v[i * 3 + 2] === 0;
+}
+const NO_SIGNAL_RGB = [168, 40, 120], UNKNOWN_GREY = 96;
 const channelMode = () => $('channel').value;
 
 function paintRegion(x, y, w, h) {
@@ -288,12 +306,13 @@ function paintRegion(x, y, w, h) {
           d[di + ch] = v > 0 ? Math.round(255 * linearToSrgb(Math.min(1, v))) : 0;
         }
       } else if (mode === 'error') {
+        if (noSignal(si)) { [d[di], d[di + 1], d[di + 2]] = NO_SIGNAL_RGB; continue; }
         const e = relError(si);
-        if (e === null) { d[di] = d[di + 1] = d[di + 2] = 96; continue; }
+        if (e === null) { d[di] = d[di + 1] = d[di + 2] = UNKNOWN_GREY; continue; }
         put(di, e > 0 ? (Math.log10(e) - ERR_LO) / (ERR_HI - ERR_LO) : 0);
       } else {
         const n = base.count[si];
-        if (!(n >= 0)) { d[di] = d[di + 1] = d[di + 2] = 96; continue; }
+        if (!(n >= 0)) { d[di] = d[di + 1] = d[di + 2] = UNKNOWN_GREY; continue; }
         put(di, base.maxCount > 0 ? n / base.maxCount : 0);
       }
     }
@@ -387,15 +406,32 @@ function oneToOne() {
   applyView();
 }
 const zoomStep = (f) => setScaleAbout(viewport.clientWidth / 2, viewport.clientHeight / 2, view.s * f);
-// The viewport takes the image's aspect ratio, within 200 px and 72 % of the window height.
+// The viewport takes the image's aspect ratio, at least 200 px high. On a desktop-wide window
+// the preview panel is a column of its own and must fit the window whole, image, readout,
+// legend and warnings (issue #32.5): the image gets the height the rest leaves; narrower, it
+// takes at most 72 % of the window's height.
+const desktop = window.matchMedia('(min-width: 1200px)');
 function sizeViewport() {
   if (!base) return;
-  const h = Math.round(Math.max(200, Math.min(viewport.clientWidth * (base.h / base.w), 0.72 * window.innerHeight)));
-  viewport.style.height = h + 'px';
+  let room = 0.72 * window.innerHeight;
+  if (desktop.matches) {
+    const panel = viewport.closest('.panel');
+    // Where the panel starts on the unscrolled page (it is sticky: its own box moves).
+    const layout = panel.parentElement;
+    const top = layout.getBoundingClientRect().top + window.scrollY + parseFloat(getComputedStyle(layout).paddingTop);
+    const rest = panel.offsetHeight - viewport.offsetHeight; // its other parts and padding
+    room = window.innerHeight - top - rest - 12;
+  }
+  const h = Math.round(Math.max(200, Math.min(viewport.clientWidth * (base.h / base.w), room)));
+  if (viewport.style.height !== h + 'px') viewport.style.height = h + 'px';
 }
+desktop.addEventListener('change', () => { sizeViewport(); if (view.mode === 'fit') fitView(); });
 
+// The wheel scrolls the page, as everywhere else; it zooms with Ctrl (or ⌘; a trackpad's pinch
+// comes as a wheel with Ctrl) or once the image has the focus (clicked, or tabbed to).
 viewport.addEventListener('wheel', (e) => {
   if (!base) return;
+  if (!(e.ctrlKey || e.metaKey || document.activeElement === viewport)) return;
   e.preventDefault();
   const r = viewport.getBoundingClientRect();
   const dy = e.deltaMode === 1 ? 16 * e.deltaY : e.deltaMode === 2 ? 400 * e.deltaY : e.deltaY;
@@ -404,6 +440,7 @@ viewport.addEventListener('wheel', (e) => {
 let drag = null;
 viewport.addEventListener('pointerdown', (e) => {
   if (e.button !== 0 || !base) return;
+  viewport.focus({ preventScroll: true });
   drag = { x: e.clientX, y: e.clientY, tx: view.tx, ty: view.ty, id: e.pointerId };
   viewport.setPointerCapture(e.pointerId);
   viewport.classList.add('dragging');
@@ -446,10 +483,11 @@ new ResizeObserver(() => {
 }).observe(viewport.parentElement);
 
 // ------------------------------------------------------------------ pixel readout
-// The pixel under the cursor is outlined once pixels are large enough to see one.
+// The pixel under the cursor is outlined past 1:1 (an image pixel over more than one screen
+// pixel), where pixels are drawn crisp.
 let hover = null;
 function placeHover() {
-  const hv = $('hover'), big = view.s * (window.devicePixelRatio || 1) >= 6;
+  const hv = $('hover'), big = view.s * (window.devicePixelRatio || 1) > 1 + 1e-9;
   hv.hidden = !hover || !big;
   if (hv.hidden) return;
   Object.assign(hv.style, { left: view.tx + hover[0] * view.s + 'px', top: view.ty + hover[1] * view.s + 'px', width: view.s + 'px', height: view.s + 'px' });
@@ -472,19 +510,22 @@ function showReadout(x, y) {
     return;
   }
   const rgb = [0, 1, 2].map((c) => base.rgb[i * 3 + c]), vars = [0, 1, 2].map((c) => base.vars[i * 3 + c]);
-  const e = relError(i), n = base.count[i];
+  const dark = noSignal(i), e = dark ? null : relError(i), n = base.count[i];
   Object.assign(d, { r: rgb[0], g: rgb[1], b: rgb[2], spp: n, vr: vars[0], vg: vars[1], vb: vars[2], err: e });
   for (const [k, v] of Object.entries(d)) ro.dataset[k] = v == null || Number.isNaN(v) ? '' : String(v);
+  ro.dataset.signal = dark ? 'none' : 'some';
   const kv = (k, v, cls = '') => el('span', { class: 'kv ' + cls }, el('b', {}, k + ' '), v);
   ro.replaceChildren(
     kv('x', String(fx)), kv('y', String(fy)),
     kv('R', fmtVal(rgb[0]), 'r'), kv('G', fmtVal(rgb[1]), 'g'), kv('B', fmtVal(rgb[2]), 'b'),
     kv('spp', Number.isNaN(n) ? '–' : String(n)),
     kv('var', vars.map(fmtVal).join(' / ')),
-    kv('rel. error', e == null ? '–' : (100 * e).toPrecision(3) + '%'));
+    kv('rel. error', dark ? 'no signal' : e == null ? '–' : (100 * e).toPrecision(3) + '%'));
 }
 
 // ------------------------------------------------------------------ legend
+// Sample counts are whole numbers ("32", not "32.00"); a half of an odd count keeps its .5.
+const fmtCount = (n) => (Number.isInteger(n) ? String(n) : n.toFixed(1));
 function drawLegend() {
   const mode = channelMode(), lg = $('legend');
   lg.hidden = mode === 'rgb' || !base;
@@ -494,9 +535,13 @@ function drawLegend() {
   for (let r = 0; r < bar.height; r++) bctx.putImageData(img, 0, r);
   const ticks = mode === 'error'
     ? ['0.1%', '1%', '10%', '≥100%'].map((t, k) => [k / 3, t])
-    : [[0, '0'], [0.5, fmtVal(base.maxCount / 2)], [1, fmtVal(base.maxCount)]];
+    : [[0, '0'], [0.5, fmtCount(base.maxCount / 2)], [1, fmtCount(base.maxCount)]];
   $('legend-ticks').replaceChildren(...ticks.map(([p, t]) => el('span', { style: `left: ${100 * p}%` }, t)));
   $('legend-title').textContent = mode === 'error' ? 'relative error √Var[Y] / Y, log scale' : 'samples per pixel';
+  const key = (rgb, text) => el('span', {}, el('span', { class: 'sw', style: `background: rgb(${rgb.join(',')})` }), text);
+  const grey = [UNKNOWN_GREY, UNKNOWN_GREY, UNKNOWN_GREY];
+  $('legend-keys').replaceChildren(...(mode === 'error'
+    ? [key(NO_SIGNAL_RGB, 'no signal (black, no variance)'), key(grey, 'not known (< 2 samples)')] : [key(grey, 'not known')]));
   lg.dataset.mode = mode;
 }
 $('channel').addEventListener('change', () => { paintAll(); drawLegend(); canvas.dataset.channel = channelMode(); });
@@ -526,14 +571,14 @@ function setPreviewStatus(p) {
   jobState = p.state;
   if (p.pass_spp) passSpp = p.pass_spp;
   $('preview-status').textContent = `${p.state} · ${p.spp} / ${p.spp_target} spp · ${fmtTime(p.elapsed_s)} · ` +
-    `error ${p.error_estimate == null ? 'n/a' : fmtNum(p.error_estimate)} · ${fmtRate(p.samples_per_s)} samples/s` +
+    `error ${fmtPct(p.error_estimate)} · ${fmtRate(p.samples_per_s)} samples/s` +
     (finished(p.state) ? (HALT_TEXT[p.halt_reason] ? ' · ' + HALT_TEXT[p.halt_reason] : '') : ' · ' + progressOf(p));
   canvas.dataset.state = p.state;
   drawOutlines();
 }
 
 function onProgress(id, p, isDone) {
-  addPoint(id, p.elapsed_s, p.error_estimate, p.spp);
+  addPoint(id, p.elapsed_s, p.error_estimate, p.spp_mean);
   const j = jobs.get(id);
   if (j) {
     Object.assign(j, { state: p.state, spp_done: p.spp, spp_target: p.spp_target, pass_spp: p.pass_spp, elapsed_s: p.elapsed_s,
@@ -760,6 +805,8 @@ function updatePlots(rebuild) {
   const e = seriesData('err'), s = seriesData('spp');
   plots.err.setData(e);
   plots.spp.setData(s);
+  // The shown job's spp series, in time order (for tests: it never decreases).
+  $('plot-spp').dataset.sppValues = (s[1] || []).filter((v) => v != null).join(',');
   $('plot-error').dataset.series = $('plot-spp').dataset.series = String(ids.length);
   // Points per series (for tests and curious readers of the DOM), e.g. "5,3".
   $('plot-error').dataset.seriesPoints = e.slice(1).map((y) => y.filter((v) => v != null).length).join(',');
@@ -811,18 +858,38 @@ function numberOrNull(id) {
 
 // A bundle to post instead of the JSON scene: a tar the user chose, or one made here from a
 // folder (tar.js). It is posted as it is: the form's other fields belong to the JSON scene.
-let bundle = null; // { blob, label }
+// Its scene file's settings apply, with what the API takes beside a bundle (?name=, ?spp=): the
+// job name (the bundle's file or folder name when left empty) and the samples per pixel; the
+// fields of a JSON scene are disabled meanwhile.
+let bundle = null; // { blob, label, stem }
+let jsonNameHint = ''; // the name placeholder of the JSON scene (its file's or example's name)
+const JSON_ONLY = ['f-example', 'f-file', 'f-scene', 'f-priority', 'f-integrator', 'f-maxdepth', 'f-time', 'f-target'];
 function setBundle(b) {
   bundle = b;
   $('bundle-row').hidden = !b;
-  $('bundle-info').textContent = b ? `Posting ${b.label} as a bundle (its scene file's own settings apply; the fields below do not).` : '';
+  $('bundle-info').textContent = b ? `Posting ${b.label} as a bundle: its scene file's settings apply, with the job name and ` +
+    'samples per pixel given here; the other fields are for a JSON scene.' : '';
   $('err-bundle').textContent = '';
+  for (const id of JSON_ONLY) $(id).disabled = !!b;
+  $('f-name').placeholder = b ? b.stem : jsonNameHint;
   if (!b) { $('f-bundle').value = ''; $('f-folder').value = ''; }
+}
+const stemOf = (file) => file.replace(/\.(tar\.gz|tgz|tar|gz)$/i, '') || file;
+// The samples per pixel of the form, checked against this server's limit (GET /api/v1/limits)
+// before posting: undefined when the field is bad (its error is shown), null when empty.
+function sppOfForm() {
+  const spp = numberOrNull('f-spp'), max = limits ? limits.max_spp : 16777216;
+  if (spp !== null && !(Number.isInteger(spp) && spp >= 1 && spp <= max)) {
+    showError('spp', `job.spp: expected a whole number of samples per pixel from 1 to ${max} (this server's --max-spp)`);
+    $('f-spp').focus();
+    return undefined;
+  }
+  return spp;
 }
 $('f-bundle').addEventListener('change', (e) => {
   const f = e.target.files && e.target.files[0];
   $('f-folder').value = '';
-  setBundle(f ? { blob: f, label: `${f.name} (${fmtBytes(f.size)})` } : null);
+  setBundle(f ? { blob: f, label: `${f.name} (${fmtBytes(f.size)})`, stem: stemOf(f.name) } : null);
 });
 $('f-folder').addEventListener('change', async (e) => {
   const list = [...(e.target.files || [])];
@@ -837,7 +904,7 @@ $('f-folder').addEventListener('change', async (e) => {
     for (const f of list) files.push({ path: rel(f), data: new Uint8Array(await f.arrayBuffer()) });
     const tar = makeTar(files);
     const top = (list[0].webkitRelativePath || '').split('/')[0] || 'folder';
-    setBundle({ blob: new Blob([tar], { type: 'application/x-tar' }), label: `folder ${top} (${files.length} files, ${fmtBytes(tar.length)})` });
+    setBundle({ blob: new Blob([tar], { type: 'application/x-tar' }), label: `folder ${top} (${files.length} files, ${fmtBytes(tar.length)})`, stem: top });
   } catch (err) {
     setBundle(null);
     $('bundle-row').hidden = false;
@@ -860,10 +927,16 @@ function queued(r) {
 $('submit-form').addEventListener('submit', async (e) => {
   e.preventDefault();
   clearErrors();
+  const formSpp = sppOfForm();
+  if (formSpp === undefined) return;
   if (bundle) {
+    const q = new URLSearchParams();
+    if (formSpp !== null) q.set('spp', String(formSpp));
+    q.set('name', $('f-name').value.trim() || bundle.stem);
     $('f-submit').disabled = true;
     try {
-      const r = await api('/api/v1/jobs', { method: 'POST', headers: { 'Content-Type': 'application/x-tar' }, body: bundle.blob });
+      const r = await api('/api/v1/jobs?' + q.toString().replace(/\+/g, '%20'), { method: 'POST',
+        headers: { 'Content-Type': 'application/x-tar' }, body: bundle.blob });
       if (r.status === 201 && r.body) queued(r);
       else {
         $('err-form').className = 'err';
@@ -892,9 +965,10 @@ $('submit-form').addEventListener('submit', async (e) => {
   const job = { ...(doc.job || {}) };
   const name = $('f-name').value.trim();
   if (name) job.name = name;
+  else if (!doc.name && jsonNameHint) doc.name = jsonNameHint; // named after its file, as render names it
   const prio = numberOrNull('f-priority');
   if (prio !== null) job.priority = prio;
-  const spp = numberOrNull('f-spp'), tl = numberOrNull('f-time'), te = numberOrNull('f-target');
+  const spp = formSpp, tl = numberOrNull('f-time'), te = numberOrNull('f-target');
   if (spp !== null) job.spp = spp;
   if (tl !== null) job.time_limit_s = tl;
   if (te !== null) job.target_error = te;
@@ -926,10 +1000,13 @@ function loadSceneText(text, name) {
     $('f-spp').placeholder = d.sampler && d.sampler.spp ? 'scene: ' + d.sampler.spp : '';
     $('f-maxdepth').placeholder = d.integrator && d.integrator.max_depth != null ? 'scene: ' + d.integrator.max_depth : '';
     $('f-integrator').options[0].textContent = '(scene\'s: ' + ((d.integrator && d.integrator.type) || 'path') + ')';
-    if (!$('f-name').value && name) $('f-name').placeholder = name;
+    jsonNameHint = d.name ? '' : name || '';
+    $('f-name').placeholder = bundle ? bundle.stem : jsonNameHint;
   } catch { /* shown on submit */ }
 }
 
+// Text typed or pasted has no file name to name the job after.
+$('f-scene').addEventListener('input', () => { jsonNameHint = ''; if (!bundle) $('f-name').placeholder = ''; });
 $('f-example').addEventListener('change', async (e) => {
   if (!e.target.value) return;
   const r = await fetch('scenes/' + e.target.value);
@@ -949,5 +1026,18 @@ async function loadExamples() {
   } catch { /* no examples shipped */ }
 }
 
+// The limits this server checks a job against (API v1.4), said beside the fields they bound.
+let limits = null;
+async function loadLimits() {
+  try {
+    const r = await api('/api/v1/limits');
+    if (!r.ok || !r.body) return;
+    limits = r.body;
+    $('f-spp').max = String(limits.max_spp);
+    $('spp-range').textContent = `(1–${limits.max_spp} on this server)`;
+  } catch { /* an older server: the form says nothing */ }
+}
+
 loadExamples();
+loadLimits();
 poll();
