@@ -6,6 +6,9 @@
 
 #include "server_harness.h"
 
+#include "image/exr.h"
+#include "image/image.h"
+
 #include <curl/curl.h>
 #include <dirent.h>
 #include <fcntl.h>
@@ -310,4 +313,16 @@ char *ts_ao_scene(const char *name, int w, int h, int spp)
              "\"material\":\"w\"}]}",
              name, w, h, spp);
     return s;
+}
+
+void ts_job_exr(const test_server *s, const char *id, ts_image *out)
+{
+    char path[160];
+    snprintf(path, sizeof path, "/api/v1/jobs/%s/image.exr", id);
+    http_resp r;
+    ts_http(s, "GET", path, NULL, 0, NULL, &r);
+    if (r.status != 200) fail_msg("GET %s: %ld %s", path, r.status, r.body ? r.body : "");
+    ts_error err = {0};
+    if (ts_exr_read_memory((const unsigned char *)r.body, r.len, out, &err)) fail_msg("%s: %s", path, err.message);
+    ts_http_free(&r);
 }

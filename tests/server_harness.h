@@ -44,6 +44,10 @@ void ts_http_free(http_resp *r);
 /* GET path and parse the JSON body (caller deletes); asserts the status. */
 cJSON *ts_http_json(const test_server *s, const char *path, long expect_status);
 
+/* GET the job's image.exr and decode it into *out (caller finis it); fails the test on
+ * another status or an unreadable file. */
+struct ts_image;
+void ts_job_exr(const test_server *s, const char *id, struct ts_image *out);
 /* Streams the job's events until the server ends the stream (after `done`) or timeout_s;
  * returns the raw text (caller frees). */
 char *ts_http_stream(const test_server *s, const char *path, double timeout_s);

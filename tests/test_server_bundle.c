@@ -596,18 +596,12 @@ static void assert_named(const test_server *s, const char *id, const char *want,
     const char *name = ts_json_str(o, "name");
     if (!name || strcmp(name, want)) fail_msg("%s: the job is named '%s', expected '%s'", what, name ? name : "(none)", want);
     cJSON_Delete(o);
-    snprintf(p, sizeof p, "/api/v1/jobs/%s/image.exr", id);
-    http_resp r;
-    ts_http(s, "GET", p, NULL, 0, NULL, &r);
-    assert_int_equal(r.status, 200);
     ts_image img;
-    ts_error err = {0};
-    if (ts_exr_read_memory((const unsigned char *)r.body, r.len, &img, &err)) fail_msg("%s: %s", what, err.message);
+    ts_job_exr(s, id, &img);
     const ts_image_attr *a = ts_image_attr_find(&img, "tessera_scene");
     if (!a || a->type != TS_ATTR_STRING || strcmp(a->s, want))
         fail_msg("%s: image.exr's tessera_scene is '%s', expected '%s'", what, a ? a->s : "(none)", want);
     ts_image_fini(&img);
-    ts_http_free(&r);
 }
 
 /* Issue #32.4 and .7: a job is named as `tessera render` names it — job.name, else the

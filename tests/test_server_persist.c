@@ -32,15 +32,8 @@ static void start(test_server *s)
 /* Every pixel of the job's EXR holds exactly `spp` samples. */
 static void assert_counts(const test_server *s, const char *id, int w, int h, int spp)
 {
-    char path[160];
-    snprintf(path, sizeof path, "/api/v1/jobs/%s/image.exr", id);
-    http_resp r;
-    ts_http(s, "GET", path, NULL, 0, NULL, &r);
-    assert_int_equal(r.status, 200);
     ts_image img;
-    ts_error err = {0};
-    if (ts_exr_read_memory((const unsigned char *)r.body, r.len, &img, &err)) fail_msg("%s", err.message);
-    ts_http_free(&r);
+    ts_job_exr(s, id, &img);
     assert_int_equal(img.width, w);
     assert_int_equal(img.height, h);
     int cc = ts_image_channel(&img, "count");
