@@ -112,8 +112,9 @@ function renderJobs() {
     const progressText = finished(j.state) ? (HALT_TEXT[j.halt_reason] || j.state) : progressOf(j);
     const row = el('tr', { 'data-id': j.id, class: j.id === selectedId ? 'selected' : '' },
       el('td', { 'data-label': 'Job' }, el('button', { class: 'link', type: 'button', 'aria-label': 'show job ' + jobLabel(j) + ' in the preview',
-        'aria-pressed': j.id === selectedId ? 'true' : 'false', onclick: () => select(j.id) }, jobLabel(j)),
-        el('div', { class: 'muted small' }, j.integrator || '')),
+        'aria-pressed': j.id === selectedId ? 'true' : 'false', onclick: () => select(j.id) }, j.name || j.id),
+        // The id under the name (a narrow column beside the preview), with the integrator.
+        el('div', { class: 'muted small' }, (j.name ? j.id + ' · ' : '') + (j.integrator || ''))),
       el('td', { 'data-label': 'State' }, el('span', { class: 'state state-' + j.state, title: j.error || j.halt_reason || '' }, j.state),
         j.error ? el('div', { class: 'err small' }, j.error) : '',
         warningCount(j) ? el('div', { class: 'warn small', title: 'listed under the preview when the job is shown' },
