@@ -441,6 +441,7 @@ static int get_events(srv_request *r, srv_job *j)
 static bool parse_decimal(const char *s, size_t n, uint64_t *out);
 
 static void json_task(void *arg);
+static int defer_load(srv_request *r, struct image_task *t, void (*fn)(void *));
 
 /* The state of a load (a posted scene or bundle) about to go to the loader pool: its time
  * (--max-load-seconds) runs from now, so waiting in the queue counts. */
@@ -461,8 +462,9 @@ static int post_job(srv_request *r)
     if (MHD_lookup_connection_value(r->conn, MHD_GET_ARGUMENT_KIND, "name"))
         return srv_http_error(r, 400, "name: the query parameter is for bundles; a JSON scene sets name or job.name");
     if (!r->body_len) return srv_http_error(r, 400, "the request body is empty: send a scene document (JSON)");
-    if (!load_state(r)) return srv_http_error(r, 500, "out of memory");
-    return srv_http_defer_to(r, ((srv_api *)r->app)->loaders, json_task);
+    image_task *t = load_state(r);
+    if (!t) return srv_http_error(r, 500, "out of memory");
+    return defer_load(r, t, json_task);
 }
 
 /* ---------------------------------------------------------------- bundles */
@@ -489,6 +491,25 @@ static void accepted(srv_request *r, srv_job *j)
     r->reply_body = (unsigned char *)s;
     r->reply_len = strlen(s);
     snprintf(r->reply_location, sizeof r->reply_location, API_PREFIX "/%s", j->id);
+}
+
+/* A load whose time ran out while it waited for a loader (the pool's watchdog runs this
+ * instead of its task): 503 at its bound. */
+static void load_expired(void *arg)
+{
+    srv_request *r = arg;
+    const srv_api *a = r->app;
+    atomic_fetch_add(&a->loads->timed_out, 1);
+    srv_http_set_error(r, 503, "the server's scene loaders were busy for this request's whole --max-load-seconds (%g s); "
+                               "try again later", a->max_load_s);
+    srv_http_complete(r);
+}
+
+/* Defers a load (its state made by load_state) to the loader pool, bounded by its deadline. */
+static int defer_load(srv_request *r, struct image_task *t, void (*fn)(void *))
+{
+    const srv_api *a = r->app;
+    return srv_http_defer_bounded(r, a->loaders, fn, t->load.deadline > 0 ? load_expired : NULL, t->load.deadline);
 }
 
 /* At a load's start on a loader thread: false, with the reply set, when the server is

@@ -261,7 +261,7 @@ int srv_http_method_not_allowed(srv_request *r, const char *allow)
 }
 
 
-typedef struct deferred { srv_request *r; void (*fn)(void *); } deferred;
+typedef struct deferred { srv_request *r; void (*fn)(void *), (*expired)(void *); } deferred;
 
 static void run_deferred(void *arg)
 {
@@ -270,18 +270,32 @@ static void run_deferred(void *arg)
     free(d);
 }
 
+static void run_expired(void *arg)
+{
+    deferred *d = arg;
+    d->expired(d->r);
+    free(d);
+}
+
 int srv_http_defer(srv_request *r, void (*fn)(void *r)) { return srv_http_defer_to(r, r->http->cfg.offload, fn); }
 
 int srv_http_defer_to(srv_request *r, struct srv_offload *pool, void (*fn)(void *r))
+{
+    return srv_http_defer_bounded(r, pool, fn, NULL, 0);
+}
+
+int srv_http_defer_bounded(srv_request *r, struct srv_offload *pool, void (*fn)(void *r), void (*expired)(void *r),
+                           double deadline)
 {
     deferred *d = malloc(sizeof *d);
     if (!d) return srv_http_error(r, 500, "out of memory");
     d->r = r;
     d->fn = fn;
+    d->expired = expired;
     r->deferred = true;
     r->completed = false;
     MHD_suspend_connection(r->conn);
-    if (!srv_offload_submit(pool, run_deferred, d)) {
+    if (!srv_offload_submit_bounded(pool, run_deferred, expired ? run_expired : NULL, d, deadline)) {
         free(d);
         srv_http_set_error(r, 503, "the server is shutting down");
         srv_http_complete(r);

@@ -116,6 +116,10 @@ int srv_http_queue(srv_request *r, unsigned status, struct MHD_Response *resp);
 int srv_http_defer(srv_request *r, void (*fn)(void *r));
 /* The same on another pool (the loaders, offload.h). */
 int srv_http_defer_to(srv_request *r, struct srv_offload *pool, void (*fn)(void *r));
+/* The same, and if the task still waits in the pool's queue at deadline (monotonic
+ * seconds), expired(r) runs instead of fn (it too must end with srv_http_complete). */
+int srv_http_defer_bounded(srv_request *r, struct srv_offload *pool, void (*fn)(void *r), void (*expired)(void *r),
+                           double deadline);
 /* Marks the deferred reply ready and resumes the connection (from the task). */
 void srv_http_complete(srv_request *r);
 

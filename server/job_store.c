@@ -75,12 +75,15 @@ void srv_job_release(srv_job *j)
     if (j && atomic_fetch_sub(&j->refs, 1) == 1) job_free(j);
 }
 
+static void release_for_scheduler(srv_job *j);
+
 void srv_store_destroy(srv_store *st)
 {
     if (!st) return;
     srv_job *j = st->jobs;
     while (j) {
         srv_job *next = j->next;
+        release_for_scheduler(j); /* the scheduler is gone: no callback runs any more */
         srv_job_release(j);
         j = next;
     }
@@ -339,6 +342,24 @@ static void on_done(void *user, ts_sched_job *sj, const ts_job_progress *p)
     srv_events_close(j->events);
     if (j->display) srv_display_finish(j->display);
     if (j->store->cfg.on_job_finished) j->store->cfg.on_job_finished(j->store->cfg.user);
+    /* The scheduler's reference, last: the job's state reads finished before this callback
+     * runs, so a DELETE may drop the store's reference meanwhile (this one keeps j alive). */
+    if (atomic_exchange(&j->sched_ref, false)) srv_job_release(j);
+}
+
+/* A reference for the scheduler's callbacks, taken before the job is submitted (its
+ * on_done may run before ts_scheduler_submit returns) and dropped by on_done; undone when
+ * the submission failed; a job that never ends (the server stopped first) gives it back
+ * in srv_store_destroy. */
+static void retain_for_scheduler(srv_job *j)
+{
+    srv_job_retain(j);
+    atomic_store(&j->sched_ref, true);
+}
+
+static void release_for_scheduler(srv_job *j)
+{
+    if (atomic_exchange(&j->sched_ref, false)) srv_job_release(j);
 }
 
 /* ---------------------------------------------------------------- creation */
@@ -640,8 +661,10 @@ static srv_job *submit(srv_store *st, const char *text, size_t len, const char *
     /* j->sj is set before the job is listed (store_add's lock publishes it to the threads
      * that find the job there); our reference keeps j alive for the scheduler's callbacks
      * until the store holds its own, which outlives them. */
+    retain_for_scheduler(j);
     j->sj = ts_scheduler_submit(st->cfg.sched, &d, err);
     if (!j->sj) {
+        release_for_scheduler(j);
         /* Unlikely (out of memory): it stays in the store as failed. */
         snprintf(j->failure, sizeof j->failure, "%s", err->message);
         srv_events_close(j->events);
@@ -726,7 +749,10 @@ srv_job *srv_store_restore(srv_store *st, const srv_restore *r, ts_error *err)
         d.full_width = r->film->full_width;
         d.full_height = r->film->full_height;
     }
+    bool renders = !ts_job_state_finished(d.finished); /* only those get an on_done */
+    if (renders) retain_for_scheduler(j);
     j->sj = ts_scheduler_submit(st->cfg.sched, &d, err);
+    if (!j->sj && renders) release_for_scheduler(j);
     store_add(st, j); /* after j->sj is set, as in submit */
     if (!j->sj) {
         snprintf(j->failure, sizeof j->failure, "%s", err->message);

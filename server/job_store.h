@@ -66,6 +66,7 @@ typedef struct srv_job {
     /* atomic: bumped whenever the pixels or the state change */
     atomic_uint_fast64_t version;
     atomic_bool started_logged;  /* the job.started line is written once */
+    atomic_bool sched_ref;       /* the scheduler's callbacks hold a reference (dropped by on_done) */
     uint64_t saved_version;      /* maintenance thread only */
     double ckpt_backoff_s, ckpt_retry_at; /* failing checkpoints' retry (persist.c); maintenance thread only */
     /* The convergence series (GET …/history): a point at every pass end, once a second

@@ -1,5 +1,6 @@
-/* test_offload.c — the encoder/loader pools (server/offload.h): tasks run in order, and the
- * status /healthz reads tells a task running past its bound (stuck) from a busy pool. */
+/* test_offload.c — the encoder/loader pools (server/offload.h): tasks run in order, the
+ * status /healthz reads tells a task running past its bound (stuck) from a busy pool, and
+ * a task that waited in the queue past its deadline is answered by the watchdog. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -67,8 +68,48 @@ static void test_stuck_task(void **state)
     srv_offload_destroy(o);
 }
 
+static atomic_int g_ran_fn, g_ran_expired;
+static void count_fn(void *arg) { (void)arg, atomic_fetch_add(&g_ran_fn, 1); }
+static void count_expired(void *arg) { (void)arg, atomic_fetch_add(&g_ran_expired, 1); }
+
+static double mono_s(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* A bounded task queued behind a held thread is answered by the watchdog at its deadline
+ * (expired runs, not fn), within the scheduling of one thread (0.5 s allowed on a loaded
+ * machine; the deadline is 0.1 s); one whose deadline has not come runs fn. */
+static void test_deadline_in_queue(void **state)
+{
+    (void)state;
+    gate g = {PTHREAD_MUTEX_INITIALIZER, PTHREAD_COND_INITIALIZER, false, 0};
+    srv_offload *o = srv_offload_create(1);
+    assert_true(srv_offload_submit(o, wait_gate, &g));
+    double t0 = mono_s();
+    assert_true(srv_offload_submit_bounded(o, count_fn, count_expired, NULL, t0 + 0.1));
+    assert_true(srv_offload_submit_bounded(o, count_fn, count_expired, NULL, t0 + 60));
+    while (atomic_load(&g_ran_expired) == 0 && mono_s() - t0 < 5) sleep_ms(5);
+    double took = mono_s() - t0;
+    assert_int_equal(atomic_load(&g_ran_expired), 1);
+    assert_true(took >= 0.1 && took < 0.5);
+    srv_offload_status st;
+    srv_offload_get_status(o, 10, &st);
+    assert_int_equal(st.queued, 1);
+    pthread_mutex_lock(&g.mu);
+    g.open = true;
+    pthread_cond_broadcast(&g.cv);
+    pthread_mutex_unlock(&g.mu);
+    srv_offload_drain(o);
+    assert_int_equal(atomic_load(&g_ran_fn), 1);
+    assert_int_equal(atomic_load(&g_ran_expired), 1);
+    srv_offload_destroy(o);
+}
+
 int main(void)
 {
-    const struct CMUnitTest tests[] = {cmocka_unit_test(test_stuck_task)};
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_stuck_task), cmocka_unit_test(test_deadline_in_queue)};
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

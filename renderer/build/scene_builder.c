@@ -625,11 +625,11 @@ static ts_status check_material(const ts_scene_builder *b, const ts_material *m,
     uint64_t lobes = 0, cost = 0;
     material_counts(b, m, &lobes, &cost);
     if (lobes > TS_BSDF_MAX_BXDFS)
-        return ts_error_set(err, TS_ERR_LIMIT,
+        return ts_error_set(err, TS_ERR_INVALID,
                             "materials: the two materials mixed have up to %llu lobes together, more than a BSDF's %d",
                             (unsigned long long)lobes, TS_BSDF_MAX_BXDFS);
     if (cost > TS_MATERIAL_MAX_COST)
-        return ts_error_set(err, TS_ERR_LIMIT,
+        return ts_error_set(err, TS_ERR_INVALID,
                             "one shading of this material evaluates up to %llu textures (its parameters', its bump "
                             "map's three%s), more than the limit of %d",
                             (unsigned long long)cost, m->type == TS_MATERIAL_MIX ? " and the two materials mixed" : "",

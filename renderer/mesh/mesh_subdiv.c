@@ -70,9 +70,29 @@ static inline uint32_t prev_vert(const level *L, uint32_t f, uint32_t vert)
     return L->v[3 * (size_t)f + PREV(vnum(L, f, vert))];
 }
 
+/* Sorts the half-edges h[0, n) of one bucket (one lo) by half_cmp: insertion for the
+ * usual few, qsort for a vertex of high valence (no quadratic case). */
+static void sort_bucket(half *h, size_t n)
+{
+    if (n > 16) {
+        qsort(h, n, sizeof *h, half_cmp);
+        return;
+    }
+    for (size_t i = 1; i < n; i++) {
+        half x = h[i];
+        size_t j = i;
+        while (j > 0 && half_cmp(&h[j - 1], &x) > 0) h[j] = h[j - 1], j--;
+        h[j] = x;
+    }
+}
+
+#define SUBDIV_POLL 65536u
+
 /* Adjacency, boundary flags and start triangles of L (v and p set), checking the topology
- * (only the control mesh can fail). */
-static ts_status adjacency(level *L, ts_error *err)
+ * (only the control mesh can fail). The half-edges are sorted by (lo, hi, f, k) in linear
+ * time — placed into buckets by lo in face order, each bucket sorted by hi — polling cancel
+ * as it goes (the last level of a large surface has millions). */
+static ts_status adjacency(level *L, ts_cancel *cancel, ts_error *err)
 {
     size_t nh = 3 * (size_t)L->nf;
     L->nb = malloc(nh * sizeof *L->nb);
@@ -81,18 +101,38 @@ static ts_status adjacency(level *L, ts_error *err)
     L->count = calloc((size_t)L->nv + 1, sizeof *L->count);
     L->boundary = calloc((size_t)L->nv + 1, 1);
     half *h = malloc((nh + 1) * sizeof *h);
-    if (!L->nb || !L->nb_k || !L->start || !L->count || !L->boundary || !h) {
-        free(h);
+    size_t *first = calloc((size_t)L->nv + 2, sizeof *first); /* bucket lo starts at first[lo] */
+    if (!L->nb || !L->nb_k || !L->start || !L->count || !L->boundary || !h || !first) {
+        free(h), free(first);
         return nomem(err);
     }
+    ts_status polled = TS_OK;
     for (uint32_t f = 0; f < L->nf; f++)
         for (uint32_t k = 0; k < 3; k++) {
             uint32_t a = L->v[3 * f + k], b = L->v[3 * f + NEXT(k)];
-            h[3 * (size_t)f + k] = (half){a < b ? a : b, a < b ? b : a, f, k};
+            first[(a < b ? a : b) + 1]++;
             L->nb[3 * (size_t)f + k] = NONE;
             L->count[a]++;
         }
-    qsort(h, nh, sizeof *h, half_cmp);
+    for (size_t i = 1; i <= (size_t)L->nv + 1; i++) first[i] += first[i - 1];
+    for (uint32_t f = 0; f < L->nf && !polled; f++) {
+        if (f % SUBDIV_POLL == 0 && (polled = ts_cancel_check(cancel, err))) break;
+        for (uint32_t k = 0; k < 3; k++) {
+            uint32_t a = L->v[3 * f + k], b = L->v[3 * f + NEXT(k)], lo = a < b ? a : b;
+            h[first[lo]++] = (half){lo, a < b ? b : a, f, k};
+        }
+    }
+    /* first[lo] is now the end of bucket lo, the start of lo + 1. */
+    for (uint32_t v = 0; v < L->nv && !polled; v++) {
+        if (v % SUBDIV_POLL == 0 && (polled = ts_cancel_check(cancel, err))) break;
+        size_t b0 = v ? first[v - 1] : 0;
+        sort_bucket(h + b0, first[v] - b0);
+    }
+    free(first);
+    if (polled) {
+        free(h);
+        return polled;
+    }
     for (size_t i = 0; i < nh;) {
         size_t j = i + 1;
         while (j < nh && h[j].lo == h[i].lo && h[j].hi == h[i].hi) j++;
@@ -290,14 +330,14 @@ ts_status ts_mesh_loop_subdivide(const float *p, uint32_t n_vertices, const uint
     }
     for (uint32_t i = 0; i < n_vertices; i++) L.p[i] = (ts_dvec3){p[3 * i], p[3 * i + 1], p[3 * i + 2]};
     memcpy(L.v, index, 3 * (size_t)n_triangles * sizeof *L.v);
-    if ((st = adjacency(&L, err))) goto done;
+    if ((st = adjacency(&L, cancel, err))) goto done;
     for (uint32_t l = 0; l < levels; l++) {
         if ((st = ts_cancel_check(cancel, err))) goto done;
         if ((st = refine(&L, &N, err))) goto done;
         level_free(&L);
         L = N;
         memset(&N, 0, sizeof N);
-        if ((st = ts_cancel_check(cancel, err)) || (st = adjacency(&L, err))) goto done;
+        if ((st = ts_cancel_check(cancel, err)) || (st = adjacency(&L, cancel, err))) goto done;
     }
     if ((st = ts_cancel_check(cancel, err))) goto done;
 

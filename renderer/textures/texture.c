@@ -341,7 +341,7 @@ ts_status ts_texture_make(ts_arena *arena, const ts_texture *proto, const ts_tex
         return ts_error_set(err, TS_ERR_LIMIT, "%s texture: textures nest more than %d deep", what,
                             TS_TEXTURE_MAX_DEPTH);
     if (cost + 1 > TS_TEXTURE_MAX_COST)
-        return ts_error_set(err, TS_ERR_LIMIT,
+        return ts_error_set(err, TS_ERR_INVALID,
                             "%s texture: one lookup of it would evaluate %llu textures (each use of a child counted), "
                             "more than the limit of %d",
                             what, (unsigned long long)(cost + 1), TS_TEXTURE_MAX_COST);
