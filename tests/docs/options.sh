@@ -61,14 +61,15 @@ for cmd in render serve merge convert; do
     done
 done
 
-# design.md §2: the layout names every cli/ source and every make target.
+# design.md §2: the layout names every cli/ source and every make target. (A here-string,
+# not `echo | grep -q`: under pipefail grep's early exit makes echo's SIGPIPE a failure.)
 layout=$(awk '/^## 2\. /{on=1; next} /^## /{on=0} on' "$src/docs/design.md")
 for f in "$src"/cli/*.c; do
     b=$(basename "$f" .c)
-    echo "$layout" | grep -qE "(^|[^a-z_])$b([^a-z_]|$)" || say "docs/design.md §2 does not name cli/$b.c"
+    grep -qE "(^|[^a-z_])$b([^a-z_]|$)" <<<"$layout" || say "docs/design.md §2 does not name cli/$b.c"
 done
 for t in $(sed -nE 's/^\.PHONY: *//p' "$src/Makefile"); do
-    echo "$layout" | grep -qE "(^|[^a-z-])$t([^a-z-]|$)" || say "docs/design.md §2 does not name the make target $t"
+    grep -qE "(^|[^a-z-])$t([^a-z-]|$)" <<<"$layout" || say "docs/design.md §2 does not name the make target $t"
 done
 [ $fail = 0 ] && echo "docs_options: README.md and docs/design.md agree with --help of render, serve, merge and convert"
 exit $fail
