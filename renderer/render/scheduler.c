@@ -43,6 +43,7 @@ struct ts_sched_job {
     uint32_t sample_begin;
     double max_pass_s;
     uint32_t done_before;       /* spp every tile held at submission (a resume) */
+    bool external;              /* rendered elsewhere: fed by ts_sched_job_publish, never listed */
     uint64_t seq;
     ts_job_callbacks cb;
     int full_w, full_h, x0, y0, w, h, nx, ny, n_tiles;
@@ -562,6 +563,7 @@ ts_sched_job *ts_scheduler_submit(ts_scheduler *s, const ts_sched_job_desc *d, t
     j->settings = d->settings;
     j->sample_begin = d->sample_begin;
     j->max_pass_s = d->max_pass_s;
+    j->external = d->external;
     j->cb = d->callbacks;
     j->error = j->prev_error = -1;
     if (d->scene) {
@@ -627,6 +629,11 @@ ts_sched_job *ts_scheduler_submit(ts_scheduler *s, const ts_sched_job_desc *d, t
         return j;
     }
     j->state = TS_JOB_QUEUED;
+    if (d->external) {
+        /* Not in the workers' list: ts_sched_job_publish and _finish drive it. */
+        pthread_mutex_unlock(&s->mu);
+        return j;
+    }
     ts_sched_job **pp = &s->jobs;
     int prio = j->settings.priority;
     while (*pp && ((*pp)->settings.priority > prio || ((*pp)->settings.priority == prio && (*pp)->seq < j->seq)))
@@ -651,6 +658,10 @@ bool ts_sched_job_cancel(ts_sched_job *j)
         return was;
     }
     j->cancel = true;
+    if (j->external) { /* cancelling until its owner has stopped it elsewhere (ts_sched_job_finish) */
+        pthread_mutex_unlock(&s->mu);
+        return true;
+    }
     interrupt_job(s, j);
     if ((s->stopping || j->state == TS_JOB_QUEUED) && j->outstanding == 0 && !j->closing) {
         /* No workers left to close it, or it has not started (no tile to wait for): finish
@@ -735,6 +746,127 @@ ts_film *ts_sched_job_film(ts_sched_job *j, uint32_t *tile_spp, ts_error *err)
     }
     free(snaps);
     return f;
+}
+
+/* ---------------------------------------------------------------- external jobs */
+
+/* j->mu held. */
+static void external_start(ts_sched_job *j)
+{
+    if (j->state != TS_JOB_QUEUED) return;
+    j->state = TS_JOB_RUNNING;
+    j->t_start = ts_now_seconds();
+}
+
+void ts_sched_job_start(ts_sched_job *j)
+{
+    if (!j->external) return;
+    pthread_mutex_lock(&j->s->mu);
+    external_start(j);
+    pthread_mutex_unlock(&j->s->mu);
+}
+
+/* The fewest samples a pixel of tile t of film holds. */
+static uint32_t tile_min_count(const ts_film *f, const tile_state *t)
+{
+    uint64_t m = UINT64_MAX;
+    for (int y = 0; y < t->h; y++) {
+        const ts_film_pixel *row = ts_film_pixel_at(f, t->x, t->y + y);
+        for (int x = 0; x < t->w; x++)
+            if (row[x].count < m) m = row[x].count;
+    }
+    return m > UINT32_MAX ? UINT32_MAX : (uint32_t)m;
+}
+
+ts_status ts_sched_job_publish(ts_sched_job *j, const ts_film *film, uint64_t samples, ts_error *err)
+{
+    if (!j->external) return ts_error_set(err, TS_ERR_INVALID, "only an external job takes published pixels");
+    if (film->x0 != j->x0 || film->y0 != j->y0 || film->width != j->w || film->height != j->h ||
+        film->full_width != j->full_w || film->full_height != j->full_h)
+        return ts_error_set(err, TS_ERR_INVALID, "the published film does not match the job's film window");
+    ts_tile_snapshot **fresh = calloc((size_t)j->n_tiles, sizeof *fresh), **old = calloc((size_t)j->n_tiles, sizeof *old);
+    if (!fresh || !old) {
+        free(fresh), free(old);
+        return ts_error_set(err, TS_ERR_NOMEM, "out of memory for a job's tiles");
+    }
+    ts_scheduler *s = j->s;
+    pthread_mutex_lock(&s->mu);
+    for (int i = 0; i < j->n_tiles; i++)
+        if ((old[i] = j->tiles[i].snap)) atomic_fetch_add(&old[i]->refs, 1);
+    pthread_mutex_unlock(&s->mu);
+    ts_status st = TS_OK;
+    uint32_t least = UINT32_MAX; /* the spp every pixel of film holds */
+    for (int i = 0; i < j->n_tiles && !st; i++) {
+        const tile_state *t = &j->tiles[i];
+        uint32_t spp = tile_min_count(film, t);
+        if (spp < least) least = spp;
+        ts_tile_snapshot *n = snapshot_from_film(film, t, spp);
+        if (!n) st = ts_error_set(err, TS_ERR_NOMEM, "out of memory for a tile snapshot");
+        else if (old[i] && old[i]->spp == spp &&
+                 !memcmp(old[i]->pixels, n->pixels, sizeof(ts_film_pixel) * (size_t)t->w * (size_t)t->h))
+            ts_tile_snapshot_release(n); /* unchanged */
+        else
+            fresh[i] = n;
+    }
+    for (int i = 0; i < j->n_tiles; i++) ts_tile_snapshot_release(old[i]), old[i] = NULL;
+    /* One sample gives no variance: the estimate means something from two on. */
+    double error = !st && j->n_tiles && least >= 2 ? ts_film_relative_error(film) : -1;
+    pthread_mutex_lock(&s->mu);
+    if (!st && ts_job_state_finished(j->state))
+        st = ts_error_set(err, TS_ERR_INVALID, "the job has ended: it takes no more pixels");
+    ts_job_progress p;
+    if (!st) {
+        for (int i = 0; i < j->n_tiles; i++) {
+            if (!fresh[i]) continue;
+            old[i] = j->tiles[i].snap; /* released below, outside the lock */
+            j->tiles[i].snap = fresh[i];
+            j->tiles[i].spp = fresh[i]->spp;
+        }
+        external_start(j);
+        j->samples = samples;
+        uint32_t done = job_spp_done(j);
+        j->pass_end = done;
+        if (error >= 0 && done != j->error_spp) {
+            j->prev_error = j->error, j->prev_error_spp = j->error_spp;
+            j->error = error, j->error_spp = done;
+        }
+        fill_progress(j, &p);
+    }
+    pthread_mutex_unlock(&s->mu);
+    if (st) {
+        for (int i = 0; i < j->n_tiles; i++) ts_tile_snapshot_release(fresh[i]);
+        free(fresh), free(old);
+        return st;
+    }
+    for (int i = 0; i < j->n_tiles; i++) {
+        if (!fresh[i]) continue;
+        ts_tile_snapshot_release(old[i]);
+        const tile_state *t = &j->tiles[i];
+        ts_tile_event ev = {t->tx, t->ty, t->x, t->y, t->w, t->h, fresh[i]->spp};
+        if (j->cb.on_tile) j->cb.on_tile(j->cb.user, j, &ev);
+    }
+    if (j->cb.on_pass) j->cb.on_pass(j->cb.user, j, &p);
+    free(fresh), free(old);
+    return TS_OK;
+}
+
+bool ts_sched_job_finish(ts_sched_job *j, ts_job_state state, ts_halt_reason halt)
+{
+    if (!j->external || !ts_job_state_finished(state)) return false;
+    ts_scheduler *s = j->s;
+    pthread_mutex_lock(&s->mu);
+    if (ts_job_state_finished(j->state)) {
+        pthread_mutex_unlock(&s->mu);
+        return false;
+    }
+    j->state = state;
+    j->halt = halt;
+    if (j->t_start > 0) j->t_end = ts_now_seconds();
+    ts_job_progress p;
+    fill_progress(j, &p);
+    pthread_mutex_unlock(&s->mu);
+    if (j->cb.on_done) j->cb.on_done(j->cb.user, j, &p);
+    return true;
 }
 
 ts_film *ts_tile_snapshot_film(const ts_tile_snapshot *t, int full_w, int full_h, ts_error *err)

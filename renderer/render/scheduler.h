@@ -132,6 +132,11 @@ typedef struct ts_sched_job_desc {
      * _FAILED) and never rendered; `film` is required then, with width/height below. */
     ts_job_state finished;      /* 0 (TS_JOB_QUEUED) = render it */
     int full_width, full_height; /* only when scene is NULL */
+    /* Rendered elsewhere (a farm, docs/design.md §7): never given to the workers. The caller
+     * feeds its pixels with ts_sched_job_publish and ends it with ts_sched_job_finish; a
+     * cancel only marks it cancelling until then. Snapshots, progress and callbacks are
+     * those of a rendered job. */
+    bool external;
 } ts_sched_job_desc;
 
 /* Starts `threads` workers (≥ 1); at most `max_running` jobs (≥ 1) are active at once.
@@ -183,6 +188,24 @@ void ts_tile_snapshot_release(ts_tile_snapshot *t); /* NULL is fine */
  * (with the scene's output scale, film.h), and optionally (tile_spp: nx·ny entries, caller-allocated) each tile's spp. Tiles not
  * rendered yet are empty. Consistent per tile; reads no working state. */
 ts_film *ts_sched_job_film(ts_sched_job *j, uint32_t *tile_spp, ts_error *err);
+
+/* External jobs (desc.external): marks the job running (its first samples are being
+ * rendered elsewhere; elapsed time counts from here). Idempotent; no effect on a finished
+ * or rendered job. */
+void ts_sched_job_start(ts_sched_job *j);
+
+/* External jobs: replaces the job's pixels with film (its window; e.g. an exact merge of
+ * shards) and `samples` camera samples in all. Each tile whose pixels changed gets a new
+ * snapshot, its spp the fewest samples a pixel of it holds, and an on_tile call; then the
+ * error estimate is taken (from 2 spp on) and on_pass reports the progress. The job is
+ * marked running. TS_ERR_INVALID for a rendered or finished job or a film of another
+ * window, TS_ERR_NOMEM. */
+ts_status ts_sched_job_publish(ts_sched_job *j, const ts_film *film, uint64_t samples, ts_error *err);
+
+/* External jobs: ends the job in `state` (TS_JOB_DONE, _CANCELLED or _FAILED) with `halt`,
+ * keeping the pixels published so far, and calls on_done. False (nothing done) when it
+ * had ended already or is not external. */
+bool ts_sched_job_finish(ts_sched_job *j, ts_job_state state, ts_halt_reason halt);
 
 /* A new film (caller destroys) covering just one snapshot's tile (scale 1: the caller sets
  * the scene's). */
