@@ -16,6 +16,7 @@
 
 #include "assets.h"
 #include "bundle.h"
+#include "farm.h"
 #include "job_store.h"
 #include "offload.h"
 #include "persist.h"
@@ -280,6 +281,7 @@ typedef struct image_task {
     int tx, ty;
     uint32_t spp;
     char name[256];
+    uint32_t shards;             /* a bundle's ?shards= (a farm job), 0: none */
     ts_cancel load;
 } image_task;
 
@@ -461,6 +463,8 @@ static int post_job(srv_request *r)
         return srv_http_error(r, 400, "spp: the query parameter is for bundles; a JSON scene sets job.spp");
     if (MHD_lookup_connection_value(r->conn, MHD_GET_ARGUMENT_KIND, "name"))
         return srv_http_error(r, 400, "name: the query parameter is for bundles; a JSON scene sets name or job.name");
+    if (MHD_lookup_connection_value(r->conn, MHD_GET_ARGUMENT_KIND, "shards"))
+        return srv_http_error(r, 400, "shards: the query parameter is for bundles; a JSON scene sets job.farm.shards");
     if (!r->body_len) return srv_http_error(r, 400, "the request body is empty: send a scene document (JSON)");
     image_task *t = load_state(r);
     if (!t) return srv_http_error(r, 500, "out of memory");
@@ -555,8 +559,17 @@ static void json_task(void *arg)
     if (load_begin(r, t)) {
         ts_error err = {0};
         int status = 500;
-        srv_job *j = srv_store_submit_cancellable(((srv_api *)r->app)->store, r->body, r->body_len, NULL, &t->load,
-                                                  &status, &err);
+        /* A farm job ("job": {"farm": {"shards": N}}) goes to the farm without job.farm. */
+        const srv_api *a = r->app;
+        uint32_t shards = 0;
+        char *plain = NULL;
+        size_t plain_len = 0;
+        srv_job *j = NULL;
+        if (srv_farm_parse_request(r->body, r->body_len, srv_farm_max_shards(a->farm), &shards, &plain, &plain_len,
+                                   &status, &err))
+            j = shards ? srv_farm_submit(a->farm, a->store, plain, plain_len, NULL, &t->load, shards, &status, &err)
+                       : srv_store_submit_cancellable(a->store, r->body, r->body_len, NULL, &t->load, &status, &err);
+        free(plain);
         if (j) {
             accepted(r, j);
             srv_job_release(j);
@@ -648,7 +661,8 @@ static void bundle_task(void *arg)
         goto done;
     }
     srv_submit_files files = {!strcmp(info.scene_file, "scene.pbrt"), staging, root, t->spp, t->name[0] ? t->name : NULL};
-    srv_job *j = srv_store_submit_cancellable(a->store, text, len, &files, &t->load, &status, &err);
+    srv_job *j = t->shards ? srv_farm_submit(a->farm, a->store, text, len, &files, &t->load, t->shards, &status, &err)
+                           : srv_store_submit_cancellable(a->store, text, len, &files, &t->load, &status, &err);
     free(text);
     if (!j) {
         load_failed(r, t, status, &err);
@@ -709,9 +723,19 @@ static int post_bundle(srv_request *r)
         if (!n || strlen(name) != n || !name_text_ok(name))
             return srv_http_error(r, 400, "name: expected 1 to 255 bytes of UTF-8 text without control characters");
     }
+    /* ?shards=N: a farm job of N tasks (farm.h). */
+    uint32_t shards = 0;
+    ts_error serr = {0};
+    if (!srv_farm_parse_shards(MHD_lookup_connection_value(r->conn, MHD_GET_ARGUMENT_KIND, "shards"),
+                               srv_farm_max_shards(a->farm), &shards, &serr))
+        return srv_http_error(r, 400, "%s", serr.message);
+    if (shards && !a->farm)
+        return srv_http_error(r, 422, "shards: this server has no farm to send the job to (start it with --farm slurm "
+                                      "--farm-dir DIR)");
     image_task *t = load_state(r);
     if (!t) return srv_http_error(r, 500, "out of memory");
     t->spp = (uint32_t)v;
+    t->shards = shards;
     snprintf(t->name, sizeof t->name, "%s", name);
     return srv_http_defer_to(r, a->loaders, bundle_task);
 }
@@ -1044,6 +1068,7 @@ static int handle(srv_request *r)
                                       state, API_PREFIX, p.id);
             }
             bool removed = srv_store_remove(cfg->store, j);
+            if (removed && j->external) srv_farm_forget(cfg->farm, j); /* its folder under --farm-dir */
             if (removed && cfg->data_dir) srv_persist_remove(cfg->data_dir, j); /* the bundle's folder with it */
             else if (removed && j->files_dir) {
                 char folder[4096];

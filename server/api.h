@@ -64,6 +64,7 @@ typedef struct srv_api {
         uint64_t max_pixels, max_body, max_bundle_bytes;
         double max_work; /* 0: none */
     } limits;
+    struct srv_farm *farm;    /* --farm (farm.h), or NULL: a farm job is 422 */
 } srv_api;
 
 /* The handler table of API v1 over api (srv_http_start takes it). */

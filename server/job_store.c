@@ -31,6 +31,8 @@ srv_store *srv_store_create(const srv_store_config *cfg)
     return st;
 }
 
+void srv_store_set_describe_user(srv_store *st, void *user) { st->cfg.describe_user = user; }
+
 void srv_warnings_collect(void *ctx, const char *msg)
 {
     srv_warnings *w = ctx;
@@ -454,9 +456,10 @@ static void release_slot(srv_store *st)
 }
 
 static srv_job *submit(srv_store *st, const char *text, size_t len, const char *name, const srv_submit_files *files,
-                       ts_cancel *cancel, int *http_status, ts_error *err);
+                       ts_cancel *cancel, bool external, int *http_status, ts_error *err);
 static srv_job *submit_reserved(srv_store *st, const char *text, size_t len, const char *name,
-                                const srv_submit_files *files, ts_cancel *cancel, int *http_status, ts_error *err);
+                                const srv_submit_files *files, ts_cancel *cancel, bool external, int *http_status,
+                                ts_error *err);
 
 bool srv_store_has_room(srv_store *st)
 {
@@ -468,29 +471,36 @@ bool srv_store_has_room(srv_store *st)
 
 srv_job *srv_store_submit(srv_store *st, const char *text, size_t len, int *http_status, ts_error *err)
 {
-    return submit_reserved(st, text, len, NULL, NULL, NULL, http_status, err);
+    return submit_reserved(st, text, len, NULL, NULL, NULL, false, http_status, err);
 }
 
 srv_job *srv_store_submit_named(srv_store *st, const char *text, size_t len, const char *name, int *http_status,
                                 ts_error *err)
 {
-    return submit_reserved(st, text, len, name, NULL, NULL, http_status, err);
+    return submit_reserved(st, text, len, name, NULL, NULL, false, http_status, err);
 }
 
 srv_job *srv_store_submit_files(srv_store *st, const char *text, size_t len, const srv_submit_files *files,
                                 int *http_status, ts_error *err)
 {
-    return submit_reserved(st, text, len, files->name, files, NULL, http_status, err);
+    return submit_reserved(st, text, len, files->name, files, NULL, false, http_status, err);
 }
 
 srv_job *srv_store_submit_cancellable(srv_store *st, const char *text, size_t len, const srv_submit_files *files,
                                       ts_cancel *cancel, int *http_status, ts_error *err)
 {
-    return submit_reserved(st, text, len, files ? files->name : NULL, files, cancel, http_status, err);
+    return submit_reserved(st, text, len, files ? files->name : NULL, files, cancel, false, http_status, err);
+}
+
+srv_job *srv_store_submit_external(srv_store *st, const char *text, size_t len, const srv_submit_files *files,
+                                   ts_cancel *cancel, int *http_status, ts_error *err)
+{
+    return submit_reserved(st, text, len, files ? files->name : NULL, files, cancel, true, http_status, err);
 }
 
 static srv_job *submit_reserved(srv_store *st, const char *text, size_t len, const char *name,
-                                const srv_submit_files *files, ts_cancel *cancel, int *http_status, ts_error *err)
+                                const srv_submit_files *files, ts_cancel *cancel, bool external, int *http_status,
+                                ts_error *err)
 {
     /* Checked before the document is parsed: a full server allocates nothing for it. */
     int max_jobs = st->cfg.max_jobs;
@@ -500,7 +510,7 @@ static srv_job *submit_reserved(srv_store *st, const char *text, size_t len, con
                      "this server already holds %d jobs, its limit (--max-jobs); no new job can be queued", max_jobs);
         return NULL;
     }
-    srv_job *j = submit(st, text, len, name, files, cancel, http_status, err);
+    srv_job *j = submit(st, text, len, name, files, cancel, external, http_status, err);
     release_slot(st); /* after store_add: the job now counts in n_jobs */
     return j;
 }
@@ -547,7 +557,7 @@ static void log_warnings(srv_log *log, const srv_job *j)
 }
 
 static srv_job *submit(srv_store *st, const char *text, size_t len, const char *name, const srv_submit_files *files,
-                       ts_cancel *cancel, int *http_status, ts_error *err)
+                       ts_cancel *cancel, bool external, int *http_status, ts_error *err)
 {
     const srv_store_config *cfg = &st->cfg;
     /* Every string has a length limit (255 bytes, 1024 for file references: names end up
@@ -648,6 +658,7 @@ static srv_job *submit(srv_store *st, const char *text, size_t len, const char *
         }
     }
     j->settings = js;
+    j->external = external;
     j->warnings = warnings;
     warnings = (srv_warnings){0};
     srv_events_set_items(j->events, j->nx * j->ny);
@@ -657,6 +668,7 @@ static srv_job *submit(srv_store *st, const char *text, size_t len, const char *
     ts_sched_job_desc d = {0};
     d.scene = s;
     d.settings = js;
+    d.external = external;
     d.callbacks = (ts_job_callbacks){on_tile, on_pass, on_done, j};
     /* j->sj is set before the job is listed (store_add's lock publishes it to the threads
      * that find the job there); our reference keeps j alive for the scheduler's callbacks
@@ -705,6 +717,7 @@ srv_job *srv_store_restore(srv_store *st, const srv_restore *r, ts_error *err)
         return NULL;
     }
     j->scene_pbrt = r->scene_pbrt;
+    j->external = r->external;
     if (r->warnings) {
         j->warnings = *r->warnings;
         *r->warnings = (srv_warnings){0};
@@ -744,6 +757,7 @@ srv_job *srv_store_restore(srv_store *st, const srv_restore *r, ts_error *err)
     d.elapsed_s = r->elapsed_s;
     d.samples = samples;
     d.nonfinite = r->nonfinite;
+    d.external = r->external;
     d.finished = r->failure ? TS_JOB_FAILED : ts_job_state_finished(r->state) ? r->state : TS_JOB_QUEUED;
     if (r->film) {
         d.full_width = r->film->full_width;
@@ -892,5 +906,6 @@ cJSON *srv_job_status_json(srv_job *j)
     cJSON_AddStringToObject(urls, "tile_png", url);
     snprintf(url, sizeof url, "/api/v1/jobs/%s/tiles/{tx}/{ty}.exr", j->id);
     cJSON_AddStringToObject(urls, "tile_exr", url);
+    if (j->external && j->store->cfg.describe) j->store->cfg.describe(j->store->cfg.describe_user, j, o);
     return o;
 }

@@ -44,6 +44,7 @@ typedef struct srv_job {
     size_t scene_len;
     char *files_dir;             /* a bundle's folder (ROOT/jobs/<id>/files, bundle.h), or NULL */
     bool scene_pbrt;             /* scene_text is pbrt-v3 text (a bundle's scene.pbrt) */
+    bool external;               /* a farm job (farm.h): rendered elsewhere, its scheduler job external */
     srv_warnings warnings;       /* what the scene's import warned about (a bundle's scene.pbrt) */
     srv_display *display;        /* streaming to a tev display server, or NULL (thread-safe itself) */
     char integrator[16];
@@ -98,10 +99,16 @@ typedef struct srv_store_config {
      * connect to addresses its operator did not choose). */
     const char *display_server;
     bool allow_job_display_server;
+    /* Optional: adds to an external (farm) job's status document what its owner knows
+     * (farm.h's srv_farm_describe). */
+    void (*describe)(void *user, srv_job *j, cJSON *status);
+    void *describe_user;
 } srv_store_config;
 
 /* NULL when out of memory. */
 srv_store *srv_store_create(const srv_store_config *cfg);
+/* Sets cfg.describe_user (the farm, made after the store), before any request is served. */
+void srv_store_set_describe_user(srv_store *st, void *user);
 /* Releases every job (after the scheduler and HTTP daemon stopped). */
 void srv_store_destroy(srv_store *st);
 
@@ -140,6 +147,10 @@ srv_job *srv_store_submit_cancellable(srv_store *st, const char *text, size_t le
 /* False when the store holds config.max_jobs jobs (a hint before unpacking a bundle; the
  * submission itself decides). */
 bool srv_store_has_room(srv_store *st);
+/* A farm job (farm.h): loaded and checked like any other (files may be NULL: a JSON
+ * document), but its scheduler job is external — nothing renders it here. */
+srv_job *srv_store_submit_external(srv_store *st, const char *text, size_t len, const srv_submit_files *files,
+                                   ts_cancel *cancel, int *http_status, ts_error *err);
 
 /* Restores a checkpointed job (persist.c): takes ownership of scene (may be NULL when
  * finished) and film; tile_spp per tile. Returns a new reference or NULL. */
@@ -158,6 +169,7 @@ typedef struct srv_restore {
     const char *files_dir;       /* a bundle job's folder (copied), or NULL */
     bool scene_pbrt;             /* scene_text is a bundle's scene.pbrt */
     srv_warnings *warnings;      /* the reloaded scene's import warnings (moved into the job), or NULL */
+    bool external;               /* a farm job (its folder holds farm.json): never rendered here */
 } srv_restore;
 srv_job *srv_store_restore(srv_store *st, const srv_restore *r, ts_error *err);
 

@@ -431,6 +431,8 @@ static void restore_one(const char *dir, const char *id, srv_store *st, const ts
     r.scene_len = slen;
     r.files_dir = bundle ? files : NULL;
     r.scene_pbrt = pbrt;
+    snprintf(path, sizeof path, "%s/farm.json", folder); /* a farm job (farm.h): its farm re-attaches */
+    r.external = lstat(path, &fsb) == 0;
     ts_scene *scene = NULL;
     ts_film *film = NULL;
     uint32_t *tile_spp = NULL;

@@ -73,6 +73,14 @@ static void usage(FILE *f)
             "  --display-server HOST:PORT  stream every job to a tev viewer there, as tiles finish (default: none)\n"
             "  --allow-job-display-server  let a job's job.display_server name any address (default: only the\n"
             "                              --display-server one; others get 403)\n"
+            "Farm jobs (\"job\": {\"farm\": {\"shards\": N}}, or a bundle's ?shards=N) run as one Slurm job array:\n"
+            "  --farm slurm                send farm jobs to Slurm (sbatch, squeue, scontrol, scancel on PATH)\n"
+            "  --farm-dir DIR              where their scenes, task scripts and shards go: storage every node sees\n"
+            "  --farm-sbatch-arg ARG       one more sbatch option for every array, repeatable (e.g. --partition=render)\n"
+            "  --farm-retries N            requeues of a failed task before its job fails (default 2)\n"
+            "  --farm-checkpoint-interval S  the tasks' --checkpoint-interval: how often the image grows (default 10)\n"
+            "  --farm-tessera PATH         the tessera the tasks run (default: this program)\n"
+            "  --max-shards N              most tasks a farm job may ask for (default 1000)\n"
             "docs/security.md has the threat model and every limit.\n");
 }
 
@@ -217,6 +225,7 @@ bool srv_server_start(srv_server *srv, int *port_out, char *err, size_t err_len)
     srv->sched = ts_scheduler_create(cfg->threads, cfg->max_running, &e);
     srv_store_config sc = {cfg->limits, cfg->assets_dir, cfg->max_jobs, cfg->max_work, srv->sched, on_job_finished, srv,
                            &srv->log, cfg->display_server, cfg->allow_job_display_server};
+    sc.describe = srv_farm_describe; /* farm jobs' status (its user, the farm, is set below) */
     srv->store = srv->sched ? srv_store_create(&sc) : NULL;
     if (!srv->metrics || !srv->store || !srv->offload || !srv->loaders || !srv->sched) {
         snprintf(err, err_len, "%s", e.message[0] ? e.message : "out of memory");
@@ -230,6 +239,10 @@ bool srv_server_start(srv_server *srv, int *port_out, char *err, size_t err_len)
         int n = srv_persist_restore_all(cfg->data_dir, srv->store, &cfg->limits, cfg->assets_dir, &srv->persist);
         if (n) fprintf(stderr, "tessera serve: %d job(s) restored from %s\n", n, cfg->data_dir);
     }
+    if (cfg->farm.slurm && !(srv->farm = srv_farm_create(&cfg->farm, srv->store, cfg->data_dir, &srv->log, err, err_len)))
+        goto fail;
+    srv_store_set_describe_user(srv->store, srv->farm);
+    if (cfg->data_dir) srv_farm_attach(srv->farm, srv->store, cfg->data_dir);
     /* Where bundles' files go: under --data (a crashed run's half-unpacked bundles are
      * swept), else a temporary folder made at the first bundle, removed at shutdown. */
     srv_bundle_root_init(&srv->files_root, cfg->data_dir);
@@ -269,7 +282,7 @@ bool srv_server_start(srv_server *srv, int *port_out, char *err, size_t err_len)
                          &srv->sse_limits, &srv->persist, &cfg->bundle, &srv->files_root, srv->loaders, srv->offload,
                          cfg->max_load_s, &srv->loads_stop, &srv->loads,
                          {cfg->limits.max_spp, cfg->limits.max_width, cfg->limits.max_pixels, cfg->max_body,
-                          cfg->bundle.max_bytes, cfg->max_work}};
+                          cfg->bundle.max_bytes, cfg->max_work}, srv->farm};
     srv_http_config hc = {cfg->bind,       cfg->port,        cfg->http_threads, cfg->client_timeout_s,
                           cfg->request_timeout_s, cfg->max_client_conns, cfg->max_body, cfg->cors_origin, srv->metrics,
                           srv->offload, &srv->log, (size_t)cfg->bundle.max_bytes};
@@ -299,6 +312,7 @@ void srv_server_stop(srv_server *srv, bool checkpoint)
         srv->maint_started = false;
     }
     if (srv->sched) ts_scheduler_stop(srv->sched);
+    srv_farm_stop(srv->farm); /* its jobs' arrays go on with --data (a restart re-attaches) */
     if (cfg->data_dir && srv->store && checkpoint) {
         int n = srv_persist_save_changed(cfg->data_dir, srv->store, NULL, &srv->persist);
         fprintf(stderr, "tessera serve: checkpointed %d job(s) to %s\n", n, cfg->data_dir);
@@ -306,6 +320,8 @@ void srv_server_stop(srv_server *srv, bool checkpoint)
     if (srv->store) shutdown_streams(srv->store);
     if (srv->offload) srv_offload_drain(srv->offload);
     srv_http_stop(srv->http);
+    srv_farm_destroy(srv->farm); /* after the last status document */
+    srv->farm = NULL;
     srv_offload_destroy(srv->offload);
     srv_offload_destroy(srv->loaders);
     srv_store_destroy(srv->store);
@@ -334,7 +350,7 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
         OPT_MAX_PIXELS, OPT_MAX_RES, OPT_MAX_SPP, OPT_MAX_TRIS, OPT_MAX_SHAPES, OPT_CKPT, OPT_CORS, OPT_BUILTIN, OPT_HELP,
         OPT_TOKEN_FILE, OPT_ASSETS, OPT_MAX_ASSET_BYTES, OPT_MAX_JOBS, OPT_CLIENT_TIMEOUT, OPT_REQUEST_TIMEOUT, OPT_MAX_CLIENT_CONNS,
         OPT_LOG_FORMAT, OPT_LOG_LEVEL, OPT_MAX_WORK, OPT_MAX_SUBS, OPT_MAX_JOB_SUBS, OPT_ALLOWED_HOSTS, OPT_DISPLAY, OPT_ALLOW_JOB_DISPLAY,
-        OPT_BUNDLE_BYTES, OPT_BUNDLE_ENTRIES, OPT_BUNDLE_EXPANDED, OPT_BUNDLE_ENTRY_BYTES, OPT_BUNDLE_PATH, OPT_MAX_LOAD
+        OPT_BUNDLE_BYTES, OPT_BUNDLE_ENTRIES, OPT_BUNDLE_EXPANDED, OPT_BUNDLE_ENTRY_BYTES, OPT_BUNDLE_PATH, OPT_MAX_LOAD, OPT_FARM
     };
     static const struct option opts[] = {
         {"bind", required_argument, NULL, OPT_BIND},
@@ -374,6 +390,13 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
         {"max-bundle-expanded", required_argument, NULL, OPT_BUNDLE_EXPANDED},
         {"max-bundle-entry-bytes", required_argument, NULL, OPT_BUNDLE_ENTRY_BYTES},
         {"max-bundle-path", required_argument, NULL, OPT_BUNDLE_PATH},
+        {"farm", required_argument, NULL, OPT_FARM},
+        {"farm-dir", required_argument, NULL, OPT_FARM},
+        {"farm-sbatch-arg", required_argument, NULL, OPT_FARM},
+        {"farm-retries", required_argument, NULL, OPT_FARM},
+        {"farm-checkpoint-interval", required_argument, NULL, OPT_FARM},
+        {"farm-tessera", required_argument, NULL, OPT_FARM},
+        {"max-shards", required_argument, NULL, OPT_FARM},
         {"help", no_argument, NULL, OPT_HELP},
         {NULL, 0, NULL, 0}};
     memset(cfg, 0, sizeof *cfg);
@@ -405,11 +428,14 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
     const char *token_file = NULL, *assets = NULL;
     cfg->limits.max_memory = 2ull << 30;
     srv_bundle_limits_default(&cfg->bundle);
+    srv_farm_options_default(&cfg->farm);
     unsigned long long v;
+    int opt_index = 0;
+    char farm_msg[512];
     optind = 1;
     opterr = 0;
     int c;
-    while ((c = getopt_long(argc, argv, ":", opts, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, ":", opts, &opt_index)) != -1) {
         switch (c) {
         case OPT_BIND: cfg->bind = optarg; break;
         case OPT_PORT:
@@ -548,6 +574,10 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
             if (!srv_log_parse_level(optarg, &cfg->log_level))
                 return usage_error("--log-level: expected error, warn, info or debug, got '%s'", optarg);
             break;
+        case OPT_FARM:
+            if (srv_farm_option(&cfg->farm, opts[opt_index].name, optarg, farm_msg, sizeof farm_msg) < 0)
+                return usage_error("%s", farm_msg);
+            break;
         case OPT_HELP: usage(stdout); return 0;
         case ':': return usage_error("option '%s' needs a value", argv[optind - 1]);
         default: return usage_error("unknown option '%s'", argv[optind - 1]);
@@ -555,6 +585,7 @@ static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *own
     }
     if (optind < argc) return usage_error("unexpected argument '%s'", argv[optind]);
     if (token_file && cfg->token) return usage_error("--token and --token-file: give one of them");
+    if (!srv_farm_options_check(&cfg->farm, farm_msg, sizeof farm_msg)) return usage_error("%s", farm_msg);
     owned[0] = owned[1] = NULL;
     if (token_file) {
         char msg[256];

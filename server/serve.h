@@ -16,6 +16,7 @@
 
 #include "api.h"
 #include "bundle.h"
+#include "farm.h"
 #include "http.h"
 #include "job_store.h"
 #include "log.h"
@@ -52,6 +53,7 @@ typedef struct srv_config {
     srv_log_level log_level;     /* --log-level: info (job events) by default, debug adds requests */
     srv_bundle_limits bundle;    /* --max-bundle-*: posted tar bundles (bundle.h) */
     double max_load_s;           /* --max-load-seconds: a posted scene's load, from its arrival */
+    srv_farm_options farm;       /* --farm, --farm-*, --max-shards (farm.h) */
 } srv_config;
 
 typedef struct srv_server {
@@ -70,6 +72,7 @@ typedef struct srv_server {
     srv_events_limits sse_limits;   /* caps from cfg; its count is atomic */
     srv_persist_stats persist;      /* checkpoint and restore counters (atomics) */
     srv_bundle_root files_root;     /* where bundles' files go (bundle.h); thread-safe itself */
+    srv_farm *farm;                 /* --farm: farm jobs on Slurm (farm.h), or NULL */
     bool files_root_made;           /* files_root initialised (start) */
     /* maintenance thread */
     pthread_t maint;

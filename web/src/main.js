@@ -144,6 +144,7 @@ function renderJobs() {
   const focusKey = activeRow ? [activeRow.dataset.id, [...activeRow.querySelectorAll('button,a')].indexOf(active)] : null;
   tbody.replaceChildren(...rows);
   showWarnings(selectedId ? jobs.get(selectedId) : null);
+  showFarm(selectedId ? jobs.get(selectedId) : null);
   if (focusKey) {
     const r = tbody.querySelector(`tr[data-id="${focusKey[0]}"]`);
     const c = r && r.querySelectorAll('button,a')[focusKey[1]];
@@ -706,6 +707,22 @@ function showWarnings(j) {
   const kept = j && Array.isArray(j.warnings) ? j.warnings : [];
   $('warnings-list').replaceChildren(...kept.map((w) => el('li', {}, w)),
     ...(j && j.warnings_dropped ? [el('li', { class: 'muted' }, `and ${j.warnings_dropped} more (the server keeps the first ${kept.length})`)] : []));
+}
+
+// A farm job's shards (API v1.4, the status's `farm`): each Slurm task's state, the samples
+// per pixel merged from it of its share, and its requeues; refreshed with the job list,
+// hidden for a job rendered on the server itself.
+function showFarm(j) {
+  const box = $('farm'), f = j && j.farm;
+  box.hidden = !f;
+  box.dataset.job = f ? j.id : '';
+  if (!f) return;
+  $('farm-h').textContent = `Slurm array ${f.slurm_job == null ? '(being submitted)' : f.slurm_job} · ${plural(f.shards, 'shard')}`;
+  $('farm-tasks').querySelector('tbody').replaceChildren(...f.tasks.map((t) => el('tr', { 'data-state': t.state },
+    el('td', { class: 'num' }, String(t.index)),
+    el('td', {}, el('span', { class: 'state state-' + t.state }, t.state)),
+    el('td', { class: 'num' }, `${t.spp} / ${t.spp_target}`),
+    el('td', { class: 'num' }, String(t.retries)))));
 }
 
 // ------------------------------------------------------------------ plots
