@@ -219,6 +219,77 @@ static void test_cancel_keeps_pixels(void **state)
     ts_scheduler_destroy(sch);
 }
 
+/* An external job (a farm's): never rendered by the workers; published films become its
+ * snapshots (only changed tiles get events), its progress and its error estimate; a cancel
+ * leaves it cancelling until ts_sched_job_finish, which keeps the pixels. */
+static void test_external_job(void **state)
+{
+    (void)state;
+    ts_error err = {0};
+    ts_scheduler *sch = ts_scheduler_create(2, 2, &err);
+    recorder r;
+    rec_init(&r);
+    ts_sched_job_desc d = {0};
+    d.scene = load(100, 230, 200, 290);
+    d.settings.integrator = TS_INTEGRATOR_AO;
+    d.settings.spp = 8;
+    d.external = true;
+    d.callbacks = (ts_job_callbacks){on_tile, on_pass, on_done, &r};
+    ts_sched_job *j = ts_scheduler_submit(sch, &d, &err);
+    assert_non_null(j);
+    struct timespec nap = {0, 50 * 1000 * 1000};
+    nanosleep(&nap, NULL);
+    ts_job_progress p;
+    ts_sched_job_progress(j, &p);
+    assert_int_equal(p.state, TS_JOB_QUEUED); /* no worker took it */
+    assert_int_equal(r.tiles, 0);
+    assert_int_equal(ts_scheduler_samples(sch), 0);
+    int nx, ny;
+    ts_sched_job_grid(j, &nx, &ny);
+    ts_film *four = reference(4), *eight = reference(8);
+    uint64_t samples = (uint64_t)four->width * four->height * 4;
+    assert_int_equal(ts_sched_job_publish(j, four, samples, &err), TS_OK);
+    assert_int_equal(r.tiles, nx * ny);
+    assert_int_equal(r.passes, 1);
+    ts_sched_job_progress(j, &p);
+    assert_int_equal(p.state, TS_JOB_RUNNING);
+    assert_int_equal(p.spp_done, 4);
+    assert_int_equal(p.samples, samples);
+    assert_true(p.error_estimate > 0);
+    ts_film *got = ts_sched_job_film(j, NULL, &err);
+    assert_same_film(got, four);
+    ts_film_destroy(got);
+    /* The same pixels again: no tile event, one progress. */
+    assert_int_equal(ts_sched_job_publish(j, four, samples, &err), TS_OK);
+    assert_int_equal(r.tiles, nx * ny);
+    assert_int_equal(r.passes, 2);
+    /* Cancel: cancelling until its owner ends it; the next publish still lands. */
+    assert_true(ts_sched_job_cancel(j));
+    ts_sched_job_progress(j, &p);
+    assert_true(p.cancelling);
+    assert_int_equal(p.state, TS_JOB_RUNNING);
+    assert_int_equal(ts_sched_job_publish(j, eight, samples * 2, &err), TS_OK);
+    assert_int_equal(r.tiles, 2 * nx * ny);
+    assert_true(ts_sched_job_finish(j, TS_JOB_CANCELLED, TS_HALT_CANCELLED));
+    assert_int_equal(r.done, 1);
+    assert_false(ts_sched_job_finish(j, TS_JOB_DONE, TS_HALT_SPP));
+    assert_int_equal(ts_sched_job_publish(j, eight, samples * 2, &err), TS_ERR_INVALID); /* ended */
+    ts_sched_job_progress(j, &p);
+    assert_int_equal(p.state, TS_JOB_CANCELLED);
+    assert_int_equal(p.spp_done, 8);
+    got = ts_sched_job_film(j, NULL, &err);
+    assert_same_film(got, eight);
+    ts_film_destroy(got);
+    /* A film of another window is refused. */
+    ts_film *other = ts_film_create(four->full_width, four->full_height, 0, 0, 16, 16, &err);
+    assert_int_equal(ts_sched_job_publish(j, other, 0, &err), TS_ERR_INVALID);
+    ts_film_destroy(other);
+    ts_film_destroy(four);
+    ts_film_destroy(eight);
+    ts_sched_job_release(j);
+    ts_scheduler_destroy(sch);
+}
+
 static void test_time_limit(void **state)
 {
     (void)state;
@@ -477,6 +548,7 @@ int main(void)
         cmocka_unit_test(test_same_pixels_as_ts_render_and_pass_order),
         cmocka_unit_test(test_priority_then_arrival),
         cmocka_unit_test(test_cancel_keeps_pixels),
+        cmocka_unit_test(test_external_job),
         cmocka_unit_test(test_time_limit),
         cmocka_unit_test(test_resume_from_partial_film),
         cmocka_unit_test(test_cancel_inside_a_sample),
