@@ -266,20 +266,7 @@ static int render(const ts_scene *s, ts_integrator_type integ, uint32_t spp, int
 
 /* ---------------------------------------------------------------- one scene */
 
-static const char *integrator_name(ts_integrator_type t)
-{
-    switch (t) {
-    case TS_INTEGRATOR_PATH:
-        return "path";
-    case TS_INTEGRATOR_DIRECT:
-        return "direct";
-    case TS_INTEGRATOR_AO:
-        return "ao";
-    case TS_INTEGRATOR_NORMALS:
-        return "normals";
-    }
-    return "unknown";
-}
+static const char *integrator_name(ts_integrator_type t) { return ts_integrator_name(t); }
 
 static int bench_integrator(const char *path, ts_scene *s, ts_integrator_type integ, const options *o)
 {

@@ -99,6 +99,30 @@ static const struct {
      "\"lights\":[{\"type\":\"point\",\"position\":[1,3,1],\"intensity\":10}]}",
      TS_EFFECT_DELTA_LIGHTS | TS_EFFECT_DIFFUSE | TS_EFFECT_GLOSSY | TS_EFFECT_SPECULAR_REFLECTION |
          TS_EFFECT_INDIRECT | TS_EFFECT_LOBE_CHOICE},
+    {"a medium in a surface-less sphere and a camera in fog, under an area light and a sky, volpath",
+     "{\"tessera\":1,\"camera\":{\"from\":[0,2,6],\"to\":[0,0.5,0],\"fov\":40,\"medium\":\"haze\"}," FILM
+     ",\"integrator\":{\"type\":\"volpath\",\"max_depth\":5},"
+     "\"media\":{\"fog\":{\"type\":\"homogeneous\",\"sigma_a\":[0.2,0.3,0.4],\"sigma_s\":[1,1.5,2],\"g\":0.4},"
+     "\"haze\":{\"type\":\"grid\",\"sigma_a\":[0.01,0.01,0.01],\"sigma_s\":[0.04,0.04,0.04],\"nx\":2,\"ny\":1,"
+     "\"nz\":1,\"density\":[1,0.5],\"p0\":[-20,-20,-20],\"p1\":[20,20,20]}},"
+     "\"materials\":{\"floor\":{\"type\":\"diffuse\"},\"black\":{\"type\":\"diffuse\",\"reflectance\":0}},"
+     "\"shapes\":[" FLOOR ",{\"type\":\"sphere\",\"center\":[0,0.7,0],\"radius\":0.7,\"material\":null,"
+     "\"medium\":{\"inside\":\"fog\",\"outside\":\"haze\"}},{\"type\":\"sphere\",\"center\":[0,3,0],\"radius\":0.3,"
+     "\"material\":\"black\",\"emission\":20}],\"lights\":[{\"type\":\"infinite\",\"radiance\":0.2}]}",
+     TS_EFFECT_AREA_LIGHTS | TS_EFFECT_ENVIRONMENT | TS_EFFECT_DIFFUSE | TS_EFFECT_INDIRECT | TS_EFFECT_MEDIA},
+    {"diffuse, point light, volpath without media",
+     "{\"tessera\":1," CAMERA "," FILM ",\"integrator\":{\"type\":\"volpath\"},"
+     "\"materials\":{\"floor\":{\"type\":\"plastic\",\"roughness\":0.2}},\"shapes\":[" FLOOR
+     ",{\"type\":\"sphere\",\"center\":[0,0.5,0],\"radius\":0.5,\"material\":\"floor\"}],"
+     "\"lights\":[{\"type\":\"point\",\"position\":[1,3,1],\"intensity\":10},{\"type\":\"infinite\",\"radiance\":0.3}]}",
+     TS_EFFECT_DELTA_LIGHTS | TS_EFFECT_ENVIRONMENT | TS_EFFECT_DIFFUSE | TS_EFFECT_GLOSSY | TS_EFFECT_INDIRECT |
+         TS_EFFECT_LOBE_CHOICE},
+    {"path given a medium: it is not simulated, its surface-less sphere is passed through",
+     "{\"tessera\":1," CAMERA "," FILM ",\"integrator\":{\"type\":\"path\"},"
+     "\"media\":{\"fog\":{\"type\":\"homogeneous\"}},\"materials\":{\"floor\":{\"type\":\"diffuse\"}},"
+     "\"shapes\":[" FLOOR ",{\"type\":\"sphere\",\"center\":[0,0.5,0],\"radius\":0.5,\"material\":null,"
+     "\"medium\":{\"inside\":\"fog\"}}],\"lights\":[{\"type\":\"point\",\"position\":[1,3,1],\"intensity\":10}]}",
+     TS_EFFECT_DELTA_LIGHTS | TS_EFFECT_DIFFUSE | TS_EFFECT_INDIRECT | TS_EFFECT_MEDIA},
     {"nothing emits",
      "{\"tessera\":1," CAMERA "," FILM ",\"integrator\":{\"type\":\"path\"},"
      "\"materials\":{\"floor\":{\"type\":\"diffuse\"}},\"shapes\":[" FLOOR "]}",

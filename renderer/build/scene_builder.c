@@ -60,6 +60,13 @@ struct ts_scene_builder {
     struct ts_envmap **envmaps;
     uint32_t n_envmaps;
     size_t cap_envmaps;
+
+    /* Participating media (their densities in the arena), named or not. */
+    ts_medium *media;
+    const char **medium_names;
+    uint32_t n_media;
+    size_t cap_media, cap_medium_names;
+    uint32_t camera_medium;
 };
 
 ts_integrator_desc ts_integrator_desc_default(void)
@@ -124,6 +131,11 @@ static ts_status usable(const ts_scene_builder *b, ts_error *err)
     return ts_cancel_check(b->lim.cancel, err);
 }
 
+/* Participating media (the section at the end of this file). */
+static ts_status check_shape_media(const ts_scene_builder *b, const ts_shape_desc *d, ts_error *err);
+static void set_shape_media(const ts_shape_desc *d, ts_shape *sh);
+static ts_status lay_out_media(ts_scene_builder *b, ts_error *err);
+
 static bool rgb_nonneg(ts_rgb c) { return c.r >= 0 && c.g >= 0 && c.b >= 0; } /* false for NaN */
 static bool rgb_unit(ts_rgb c) { return rgb_nonneg(c) && c.r <= 1 && c.g <= 1 && c.b <= 1; }
 static bool rgb_finite_nonneg(ts_rgb c)
@@ -149,6 +161,7 @@ ts_status ts_scene_builder_create(const ts_scene_limits *limits, const char *bas
         ts_scene_limits_default(&b->lim);
     b->s = s;
     b->open_object = TS_NONE;
+    b->camera_medium = TS_NONE;
     ts_arena_init(&s->arena, b->lim.max_memory);
     if (base_dir && !(s->base_dir = ts_arena_strdup(&s->arena, base_dir))) {
         ts_scene_builder_destroy(b);
@@ -174,6 +187,8 @@ void ts_scene_builder_destroy(ts_scene_builder *b)
     free(b->objects);
     free(b->object_names);
     free(b->instances);
+    free(b->media);
+    free(b->medium_names);
     ts_scene_destroy(b->s);
     free(b);
 }
@@ -303,6 +318,7 @@ ts_status ts_scene_builder_set_integrator(ts_scene_builder *b, const ts_integrat
                        in->sampling == TS_SAMPLING_BSDF;
     switch (in->type) {
     case TS_INTEGRATOR_PATH:
+    case TS_INTEGRATOR_VOLPATH:
         /* The path loop is iterative, so depth costs no stack; `direct` recurses on
          * specular chains and keeps a lower cap. */
         TRY(int_in(in->max_depth, 0, 65535, "max_depth", err));
@@ -792,9 +808,10 @@ static ts_status check_shape(const ts_scene_builder *b, const ts_shape_desc *d, 
 {
     if (b->n_shapes >= b->lim.max_shapes)
         return ts_error_set(err, TS_ERR_LIMIT, "more than the limit of %u shapes", b->lim.max_shapes);
-    if (d->material >= b->n_materials)
+    if (d->material >= b->n_materials && d->material != TS_NONE)
         return ts_error_set(err, TS_ERR_INVALID, "material: no material of id %u (%u were added)",
                             d->material, b->n_materials);
+    TRY(check_shape_media(b, d, err));
     /* Infinite channels are ts_lights_prepare's to refuse, as every light's colour. */
     if (!rgb_nonneg(d->emission)) return bad_rgb(err, "emission", "RGB ≥ 0", d->emission);
     if (d->light_samples > 4096)
@@ -912,6 +929,7 @@ ts_status ts_scene_builder_add_shape(ts_scene_builder *b, const ts_shape_desc *d
     }
     sh.type = d->type;
     sh.material = d->material;
+    set_shape_media(d, &sh);
     sh.emission = d->emission;
     sh.emissive = !ts_rgb_is_black(d->emission);
     sh.two_sided = d->two_sided;
@@ -1126,6 +1144,7 @@ static ts_status lay_out(ts_scene_builder *b, ts_error *err)
     s->n_triangles = b->n_triangles;
     if (b->n_lights) memcpy(s->lights, b->lights, b->n_lights * sizeof *b->lights);
     s->n_lights = b->n_lights;
+    TRY(lay_out_media(b, err));
     for (uint32_t k = 0; k < s->n_shapes; k++) {
         ts_shape *sh = &s->shapes[k];
         if (!sh->emissive) continue;
@@ -1196,7 +1215,8 @@ static ts_status build(ts_scene_builder *b, ts_error *err)
         return ts_error_set(err, TS_ERR_INVALID, "camera.from: farther than 1e15 units from the origin");
     TRY(ts_lights_prepare(s->lights, s->n_lights, s->shapes, s->bounds, err));
     ts_light_sampling mode = TS_LIGHT_SAMPLING_POWER;
-    bool selects = s->integrator.type == TS_INTEGRATOR_PATH || s->integrator.type == TS_INTEGRATOR_DIRECT;
+    bool selects = s->integrator.type == TS_INTEGRATOR_PATH || s->integrator.type == TS_INTEGRATOR_DIRECT ||
+                   s->integrator.type == TS_INTEGRATOR_VOLPATH;
     if (selects && s->integrator.light_sampling == TS_LIGHT_SELECT_UNIFORM)
         mode = TS_LIGHT_SAMPLING_UNIFORM;
     else if (selects && s->integrator.light_sampling == TS_LIGHT_SELECT_SPATIAL)
@@ -1252,5 +1272,165 @@ ts_status ts_scene_builder_finish(ts_scene_builder *b, ts_scene **out, ts_error 
     TRY(build(b, err));
     *out = s;
     b->s = NULL;
+    return TS_OK;
+}
+
+/* ---------------------------------------------------------------- participating media */
+
+#define MAX_MEDIA (1u << 16)
+
+static bool finite_nonneg(double v) { return v >= 0 && isfinite(v); }
+
+uint32_t ts_scene_builder_find_medium(const ts_scene_builder *b, const char *name)
+{
+    if (!name) return TS_NONE;
+    for (uint32_t k = 0; k < b->n_media; k++)
+        if (b->medium_names[k] && strcmp(b->medium_names[k], name) == 0) return k;
+    return TS_NONE;
+}
+
+/* σa, σs of the desc: given, else the preset's, else pbrt-v3's default; times scale. */
+static ts_status medium_sigmas(const ts_medium_desc *d, ts_rgb *sigma_a, ts_rgb *sigma_s, ts_error *err)
+{
+    ts_rgb a = {.0011f, .0024f, .014f}, sc = {2.55f, 3.21f, 3.77f};
+    if (d->preset && !ts_medium_preset(d->preset, &a, &sc))
+        return ts_error_set(err, TS_ERR_INVALID, "preset: unknown medium preset \"%s\" (pbrt-v3's names, e.g. "
+                                                 "\"Wholemilk\", \"Ketchup\", \"Espresso\")",
+                            d->preset);
+    if (d->has_sigma_a) a = d->sigma_a;
+    if (d->has_sigma_s) sc = d->sigma_s;
+    if (!rgb_finite_nonneg(a)) return bad_rgb(err, "sigma_a", "finite RGB ≥ 0", a);
+    if (!rgb_finite_nonneg(sc)) return bad_rgb(err, "sigma_s", "finite RGB ≥ 0", sc);
+    if (!finite_nonneg(d->scale))
+        return ts_error_set(err, TS_ERR_INVALID, "scale: expected a finite number ≥ 0, got %g", d->scale);
+    float k = (float)d->scale;
+    *sigma_a = ts_rgb_scale(a, k);
+    *sigma_s = ts_rgb_scale(sc, k);
+    if (!rgb_finite_nonneg(*sigma_a) || !rgb_finite_nonneg(*sigma_s))
+        return ts_error_set(err, TS_ERR_INVALID, "scale: %g takes σ beyond the float range", d->scale);
+    return TS_OK;
+}
+
+/* The grid's parts of m from d, its densities copied into the arena. */
+static ts_status medium_grid(ts_scene_builder *b, const ts_medium_desc *d, ts_medium *m, ts_error *err)
+{
+    if (d->nx < 1 || d->ny < 1 || d->nz < 1)
+        return ts_error_set(err, TS_ERR_INVALID, "nx, ny, nz: expected integers ≥ 1, got %u, %u, %u", d->nx, d->ny,
+                            d->nz);
+    uint64_t n = (uint64_t)d->nx * d->ny * d->nz;
+    if (d->n_density != n)
+        return ts_error_set(err, TS_ERR_INVALID, "density: %llu values, expected nx·ny·nz = %u·%u·%u = %llu",
+                            (unsigned long long)d->n_density, d->nx, d->ny, d->nz, (unsigned long long)n);
+    if (n > b->lim.max_memory / sizeof(float) && b->lim.max_memory)
+        return ts_error_set(err, TS_ERR_LIMIT, "density: %llu values exceed the scene's memory limit",
+                            (unsigned long long)n);
+    const double p0[3] = {d->p0.x, d->p0.y, d->p0.z}, p1[3] = {d->p1.x, d->p1.y, d->p1.z};
+    for (int k = 0; k < 3; k++)
+        if (!(isfinite(p0[k]) && isfinite(p1[k]) && p0[k] < p1[k]))
+            return ts_error_set(err, TS_ERR_INVALID, "p0, p1: expected finite corners with p0 < p1 on every axis, got "
+                                                     "[%g, %g, %g] and [%g, %g, %g]",
+                                p0[0], p0[1], p0[2], p1[0], p1[1], p1[2]);
+    if (m->sigma_t.r != m->sigma_t.g || m->sigma_t.r != m->sigma_t.b)
+        return ts_error_set(err, TS_ERR_INVALID,
+                            "sigma_a, sigma_s: a grid's σa + σs must be the same in every channel (pbrt-v3's "
+                            "heterogeneous medium), got [%g, %g, %g]",
+                            m->sigma_t.r, m->sigma_t.g, m->sigma_t.b);
+    float *den = ts_arena_alloc(&b->s->arena, (size_t)n * sizeof *den, _Alignof(float));
+    if (!den) return nomem(err, "the medium's density grid");
+    float mx = 0;
+    for (uint64_t i = 0; i < n; i++) {
+        float v = d->density[i];
+        if (!(v >= 0 && isfinite(v)))
+            return ts_error_set(err, TS_ERR_INVALID, "density[%llu]: expected a finite number ≥ 0, got %g",
+                                (unsigned long long)i, v);
+        den[i] = v;
+        if (v > mx) mx = v;
+    }
+    for (int i = 0; i < 4; i++)
+        for (int j = 0; j < 4; j++)
+            if (!isfinite(d->to_world.m.m[i][j]) || !isfinite(d->to_world.m_inv.m[i][j]))
+                return ts_error_set(err, TS_ERR_INVALID, "transform: not a finite, invertible transform");
+    /* unit cube → [p0, p1] → world */
+    ts_xform box = ts_xform_scale((ts_dvec3){p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]});
+    ts_xform at = ts_xform_translate(d->p0);
+    ts_xform data = ts_xform_compose(&at, &box);
+    m->to_unit = ts_xform_compose(&d->to_world, &data);
+    m->nx = d->nx;
+    m->ny = d->ny;
+    m->nz = d->nz;
+    m->density = den;
+    m->max_density = mx;
+    return TS_OK;
+}
+
+ts_status ts_scene_builder_add_medium(ts_scene_builder *b, const char *name, const ts_medium_desc *d, uint32_t *id,
+                                      ts_error *err)
+{
+    TRY(usable(b, err));
+    if (b->n_media >= MAX_MEDIA) return ts_error_set(err, TS_ERR_LIMIT, "more than the limit of %u media", MAX_MEDIA);
+    if (name && ts_scene_builder_find_medium(b, name) != TS_NONE)
+        return ts_error_set(err, TS_ERR_INVALID, "a medium named \"%s\" was added before", name);
+    if (d->type != TS_MEDIUM_HOMOGENEOUS && d->type != TS_MEDIUM_GRID)
+        return ts_error_set(err, TS_ERR_INVALID, "type: unknown medium type %d", (int)d->type);
+    ts_medium m = {.type = d->type};
+    TRY(medium_sigmas(d, &m.sigma_a, &m.sigma_s, err));
+    m.sigma_t = ts_rgb_add(m.sigma_a, m.sigma_s);
+    if (!rgb_finite_nonneg(m.sigma_t)) return bad_rgb(err, "sigma_a + sigma_s", "finite RGB ≥ 0", m.sigma_t);
+    if (!(d->g > -1 && d->g < 1))
+        return ts_error_set(err, TS_ERR_INVALID, "g: expected a number in (−1, 1), got %g", d->g);
+    m.g = (float)d->g;
+    if (m.g <= -1 || m.g >= 1) m.g = m.g < 0 ? -0x1.fffffep-1f : 0x1.fffffep-1f; /* rounding to float */
+    if (d->type == TS_MEDIUM_GRID) TRY(medium_grid(b, d, &m, err));
+    size_t need = (size_t)b->n_media + 1;
+    if (!grow((void **)&b->media, &b->cap_media, need, sizeof *b->media) ||
+        !grow((void **)&b->medium_names, &b->cap_medium_names, need, sizeof *b->medium_names))
+        return nomem(err, "the media");
+    const char *copy = NULL;
+    if (name && !(copy = ts_arena_strdup(&b->s->arena, name))) return nomem(err, "the medium names");
+    b->media[b->n_media] = m;
+    b->medium_names[b->n_media] = copy;
+    if (id) *id = b->n_media;
+    b->n_media++;
+    return TS_OK;
+}
+
+ts_status ts_scene_builder_set_camera_medium(ts_scene_builder *b, uint32_t medium, ts_error *err)
+{
+    TRY(usable(b, err));
+    if (medium != TS_NONE && medium >= b->n_media)
+        return ts_error_set(err, TS_ERR_INVALID, "camera.medium: no medium of id %u (%u were added)", medium,
+                            b->n_media);
+    b->camera_medium = medium;
+    return TS_OK;
+}
+
+static ts_status check_shape_media(const ts_scene_builder *b, const ts_shape_desc *d, ts_error *err)
+{
+    if (d->material == TS_NONE && !ts_rgb_is_black(d->emission))
+        return ts_error_set(err, TS_ERR_INVALID, "emission: a shape without a surface (material none) cannot emit");
+    if (!d->medium_interface) return TS_OK;
+    const uint32_t ids[2] = {d->medium_inside, d->medium_outside};
+    for (int k = 0; k < 2; k++)
+        if (ids[k] != TS_NONE && ids[k] >= b->n_media)
+            return ts_error_set(err, TS_ERR_INVALID, "medium.%s: no medium of id %u (%u were added)",
+                                k ? "outside" : "inside", ids[k], b->n_media);
+    return TS_OK;
+}
+
+static void set_shape_media(const ts_shape_desc *d, ts_shape *sh)
+{
+    sh->medium_transition = d->medium_interface && d->medium_inside != d->medium_outside;
+    sh->medium_inside = sh->medium_transition ? d->medium_inside : TS_NONE;
+    sh->medium_outside = sh->medium_transition ? d->medium_outside : TS_NONE;
+}
+
+static ts_status lay_out_media(ts_scene_builder *b, ts_error *err)
+{
+    ts_scene *s = b->s;
+    s->media = ts_arena_calloc(&s->arena, (size_t)b->n_media + 1, sizeof *s->media);
+    if (!s->media) return nomem(err, "the media");
+    if (b->n_media) memcpy(s->media, b->media, b->n_media * sizeof *b->media);
+    s->n_media = b->n_media;
+    s->camera_medium = b->camera_medium;
     return TS_OK;
 }

@@ -119,7 +119,7 @@ ts_status ts_scene_builder_set_sampler(ts_scene_builder *b, const ts_sampler *sa
  * strategy "all" with MIS and one sample per light, ao_distance ∞. */
 ts_integrator_desc ts_integrator_desc_default(void);
 
-/* Ranges of the fields the type uses: path max_depth and rr_depth in [0, 65535]; direct
+/* Ranges of the fields the type uses: path and volpath max_depth and rr_depth in [0, 65535]; direct
  * max_depth in [0, 1000] and samples_per_light in [1, 4096]; ao_distance > 0 (∞: any). */
 ts_status ts_scene_builder_set_integrator(ts_scene_builder *b, const ts_integrator_desc *integrator,
                                           ts_error *err);
@@ -221,7 +221,13 @@ typedef struct ts_shape_cut {
 
 typedef struct ts_shape_desc {
     ts_shape_type type;
-    uint32_t material; /* an id from ts_scene_builder_add_material */
+    uint32_t material; /* an id from ts_scene_builder_add_material, or TS_NONE: no surface (pbrt-v3's
+                          Material "" / "none": the shape only bounds a medium; it cannot emit) */
+    /* pbrt-v3's MediumInterface: with medium_interface set, the media (ids from
+     * ts_scene_builder_add_medium, TS_NONE: vacuum) inside and outside (the front side's
+     * medium); where they differ the shape is a transition (geometry/shape.h). */
+    bool medium_interface;
+    uint32_t medium_inside, medium_outside;
     ts_xform to_world; /* object → world (shape.h's object spaces) */
     ts_rgb emission;   /* radiance, each channel ≥ 0; not black: a diffuse area light */
     bool two_sided;    /* an emitter emits on both sides */
@@ -267,6 +273,41 @@ typedef struct ts_shape_desc {
  * limits.max_shapes shapes and limits.max_triangles triangles. */
 ts_status ts_scene_builder_add_shape(ts_scene_builder *b, const ts_shape_desc *shape, uint32_t *id,
                                      ts_error *err);
+
+/* ---- participating media (media/medium.h; docs/design.md §4): pbrt-v3's
+ * MakeNamedMedium, checked here for both front ends. The scattering coefficients are
+ * pbrt-v3's: σa and σs each the one given (has_*), else the preset's (pbrt-v3's
+ * GetMediumScatteringProperties table; σs is its σ′s), else pbrt-v3's default (whole
+ * milk, σa (.0011, .0024, .014), σs (2.55, 3.21, 3.77)), times scale. Refused: an unknown
+ * preset ("preset: unknown medium preset \"x\""), σ not finite ≥ 0, scale not finite
+ * ≥ 0, g outside (−1, 1), and for a grid nx, ny, nz not ≥ 1, a density count other than
+ * nx·ny·nz ("density: 12 values, expected nx·ny·nz = 2·2·2 = 8"), a density not finite
+ * ≥ 0, p0 not below p1 on every axis, σt = σa + σs not the same in every channel (the
+ * trackers' majorant is grey, as pbrt-v3's) and a to_world that is not finite and
+ * invertible. At most 65536 media. */
+typedef struct ts_medium_desc {
+    ts_medium_type type;
+    const char *preset; /* NULL: none */
+    bool has_sigma_a, has_sigma_s;
+    ts_rgb sigma_a, sigma_s; /* per unit length */
+    double scale;            /* the front end passes 1 for none */
+    double g;
+    /* grid only */
+    uint32_t nx, ny, nz;
+    const float *density; /* n_density values (copied), x fastest: [(z·ny + y)·nx + x] */
+    uint64_t n_density;
+    ts_dvec3 p0, p1;      /* the grid's box in the medium's space */
+    ts_xform to_world;    /* medium space → world */
+} ts_medium_desc;
+
+/* Adds a medium under name (copied, unique; NULL: anonymous) and writes its id to *id. */
+ts_status ts_scene_builder_add_medium(ts_scene_builder *b, const char *name, const ts_medium_desc *m,
+                                      uint32_t *id, ts_error *err);
+/* The id of the medium added under name, or TS_NONE. */
+uint32_t ts_scene_builder_find_medium(const ts_scene_builder *b, const char *name);
+/* The medium camera rays start in (pbrt-v3's camera medium): an id, or TS_NONE (vacuum,
+ * the default). */
+ts_status ts_scene_builder_set_camera_medium(ts_scene_builder *b, uint32_t medium, ts_error *err);
 
 /* ---- object instancing (pbrt-v3's ObjectBegin/End, ObjectInstance; geometry/accel.h)
  *

@@ -72,7 +72,14 @@ typedef struct ts_mesh {
 
 typedef struct ts_shape {
     ts_shape_type type;
-    uint32_t material;    /* index into the scene's materials */
+    uint32_t material;    /* index into the scene's materials; TS_NONE: no surface (the shape only
+                             bounds a medium: rays pass through it, pbrt-v3's Material "none") */
+    /* pbrt-v3's MediumInterface where it is a transition (inside ≠ outside): a ray leaving
+     * the shape towards its front side (dot(w, n) > 0) is in medium_outside, else in
+     * medium_inside (indices into the scene's media, TS_NONE: vacuum). false (the zero
+     * value): crossing the shape keeps the ray's medium. */
+    bool medium_transition;
+    uint32_t medium_inside, medium_outside;
     bool emissive;        /* emission set and non-black: a diffuse area light */
     bool two_sided;       /* emits on both sides */
     ts_rgb emission;      /* radiance leaving the front side (both sides if two_sided) */

@@ -152,17 +152,22 @@ uint32_t ts_effects_analyse(const ts_scene *s)
     uint32_t last = TS_NONE;
     for (uint32_t i = 0; i < s->n_shapes; i++) {
         uint32_t m = s->shapes[i].material;
-        if (m == last) continue;
+        if (m == TS_NONE || s->shapes[i].medium_transition) fx |= TS_EFFECT_MEDIA;
+        if (m == last || m == TS_NONE) continue;
         last = m;
         fx |= material_effects(&s->materials[m]);
     }
     if (s->camera.lens_radius > 0) fx |= TS_EFFECT_DEPTH_OF_FIELD;
+    /* Media: a ray can be in one (the camera's, or behind a shape's medium interface), or
+     * a shape has no surface and rays pass through it. */
+    if (s->camera_medium != TS_NONE) fx |= TS_EFFECT_MEDIA;
     /* Light after more than one bounce needs light, something that scatters, and depth. */
     bool lit = (fx & TS_EFFECTS_LIGHTS) != 0;
     bool scatters = (fx & TS_EFFECTS_SCATTERING) != 0;
     if (lit && scatters) {
         const ts_integrator_desc *in = &s->integrator;
-        if (in->type == TS_INTEGRATOR_PATH && in->max_depth >= 2) fx |= TS_EFFECT_INDIRECT;
+        if ((in->type == TS_INTEGRATOR_PATH || in->type == TS_INTEGRATOR_VOLPATH) && in->max_depth >= 2)
+            fx |= TS_EFFECT_INDIRECT;
         if (in->type == TS_INTEGRATOR_DIRECT && in->max_depth >= 2 &&
             (fx & (TS_EFFECT_SPECULAR_REFLECTION | TS_EFFECT_SPECULAR_TRANSMISSION)))
             fx |= TS_EFFECT_INDIRECT;

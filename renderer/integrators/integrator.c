@@ -2,6 +2,7 @@
 #include "integrators/integrator.h"
 
 #include "integrators/effects.h"
+#include "integrators/volpath.h"
 #include "lights/light.h"
 #include "materials/bsdf.h"
 #include "materials/material.h"
@@ -15,6 +16,7 @@ const char *ts_integrator_name(ts_integrator_type type)
     case TS_INTEGRATOR_DIRECT: return "direct";
     case TS_INTEGRATOR_AO: return "ao";
     case TS_INTEGRATOR_NORMALS: return "normals";
+    case TS_INTEGRATOR_VOLPATH: return "volpath";
     }
     return "unknown";
 }
@@ -90,6 +92,9 @@ static inline void material_bsdf(const ts_scene *s, ts_interaction *si, const ts
 }
 
 static float power_heuristic(float f_pdf, float g_pdf) { return ts_power_heuristic(1, f_pdf, 1, g_pdf); }
+
+/* A shape that only bounds a medium (material none). */
+static bool no_surface(const ts_scene *s, const ts_interaction *si) { return s->shapes[si->shape].material == TS_NONE; }
 
 /* Whether the sample should end now (ts_counters.stop). */
 static bool stopped(const ts_counters *c) { return c->stop && atomic_load_explicit(c->stop, memory_order_relaxed); }
@@ -344,7 +349,7 @@ static ts_rgb li_path(const ts_scene *s, uint32_t fx, ts_ray ray, const ts_ray_d
      * nothing scatters → only emission seen directly; no indirect → direct light only. */
     if (!(fx & TS_EFFECTS_LIGHTS)) return L;
     int max_depth = s->integrator.max_depth;
-    if (!(fx & TS_EFFECTS_SCATTERING)) max_depth = 0;
+    if (!(fx & TS_EFFECTS_SCATTERING) && !(fx & TS_EFFECT_MEDIA)) max_depth = 0; /* rays pass shapes without a surface */
     else if (!(fx & TS_EFFECT_INDIRECT) && max_depth > 1) max_depth = 1;
     const bool emitters = (fx & (TS_EFFECT_AREA_LIGHTS | TS_EFFECT_ENVIRONMENT)) != 0;
     /* Under a film that clamps samples (max_sample_luminance) the image's expectation
@@ -356,6 +361,7 @@ static ts_rgb li_path(const ts_scene *s, uint32_t fx, ts_ray ray, const ts_ray_d
     const bool v3_direct = s->max_sample_luminance < INFINITY;
     ts_interaction prev = {0};
     float prev_pdf = 0;
+    uint32_t crossings = 0;
     for (int bounces = 0;; bounces++) {
         /* Emission found by this ray counts at the camera, after a specular bounce, and
          * (MIS-weighted, or in full for BSDF-only sampling) unless light sampling alone
@@ -372,6 +378,12 @@ static ts_rgb li_path(const ts_scene *s, uint32_t fx, ts_ray ray, const ts_ray_d
             L = ts_rgb_add(L, ts_rgb_mul(beta, path_emission(s, fx, &ray, found, &si, full, &prev, prev_pdf)));
         }
         if (!found || bounces >= max_depth) break;
+        if ((fx & TS_EFFECT_MEDIA) && no_surface(s, &si)) { /* pbrt-v3: on through it, no bounce */
+            if (++crossings > TS_VOLPATH_MAX_CROSSINGS) break;
+            ray = ts_spawn_ray(&si, s->shapes, ray.d);
+            bounces--;
+            continue;
+        }
         ts_bsdf bsdf;
         /* The camera ray's differentials only, as pbrt-v3's PathIntegrator (differential.h). */
         material_bsdf(s, &si, bounces == 0 ? rd : NULL, &bsdf);
@@ -426,8 +438,15 @@ static ts_rgb li_direct(const ts_scene *s, uint32_t fx, ts_ray ray, const ts_ray
     ts_interaction si;
     if (!(fx & TS_EFFECTS_LIGHTS) || stopped(c)) return ts_rgb_gray(0); /* nothing emits: nothing to see */
     if (depth > 0) c->other_rays++;
-    if (!ts_accel_intersect(s->accel, &ray, &si))
-        return (fx & TS_EFFECT_ENVIRONMENT) ? escaped(s, &ray) : ts_rgb_gray(0);
+    bool found = ts_accel_intersect(s->accel, &ray, &si);
+    /* pbrt-v3: a shape without a surface is passed through (media are not simulated here). */
+    for (uint32_t k = 0; found && (fx & TS_EFFECT_MEDIA) && no_surface(s, &si); k++) {
+        if (k >= TS_VOLPATH_MAX_CROSSINGS) return ts_rgb_gray(0);
+        ray = ts_spawn_ray(&si, s->shapes, ray.d);
+        found = ts_accel_intersect(s->accel, &ray, &si);
+        c->other_rays++;
+    }
+    if (!found) return (fx & TS_EFFECT_ENVIRONMENT) ? escaped(s, &ray) : ts_rgb_gray(0);
     ts_rgb L = (fx & TS_EFFECT_AREA_LIGHTS) ? emitted(s, &si, si.wo) : ts_rgb_gray(0);
     if (!(fx & TS_EFFECTS_SCATTERING)) return L;
     ts_bsdf bsdf;
@@ -471,11 +490,12 @@ double ts_integrator_rays_per_sample(const ts_scene *s, ts_integrator_type type,
     switch (type) {
     case TS_INTEGRATOR_AO: return 2;
     case TS_INTEGRATOR_NORMALS: return 1;
+    case TS_INTEGRATOR_VOLPATH: return ts_volpath_rays_per_sample(s, fx);
     case TS_INTEGRATOR_PATH: {
         /* The depth caps of li_path. */
         double depth = s->integrator.max_depth;
         if (!(fx & TS_EFFECTS_LIGHTS)) depth = 0;
-        else if (!(fx & TS_EFFECTS_SCATTERING)) depth = 0;
+        else if (!(fx & TS_EFFECTS_SCATTERING) && !(fx & TS_EFFECT_MEDIA)) depth = 0;
         else if (!(fx & TS_EFFECT_INDIRECT) && depth > 1) depth = 1;
         return 1 + 2 * depth;
     }
@@ -501,6 +521,7 @@ ts_rgb ts_integrator_li(const ts_scene *s, ts_integrator_type type, uint32_t fx,
     case TS_INTEGRATOR_NORMALS: return li_normals(s, ray);
     case TS_INTEGRATOR_PATH: return li_path(s, fx, *ray, rd, st, c);
     case TS_INTEGRATOR_DIRECT: return li_direct(s, fx, *ray, rd, st, c, 0);
+    case TS_INTEGRATOR_VOLPATH: return ts_volpath_li(s, fx, *ray, rd, st, c);
     }
     return ts_rgb_gray(0);
 }

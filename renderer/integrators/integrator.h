@@ -31,21 +31,13 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "integrators/counters.h"
 #include "integrators/differential.h"
 #include "sampling/sampler.h"
 #include "scene/scene.h"
 
-/* Per-worker state of the integrator: counters, summed by the renderer after a pass, and
- * an optional stop flag. */
-typedef struct ts_counters {
-    uint64_t camera_rays, other_rays;
-    uint64_t samples;
-    uint64_t nonfinite; /* samples dropped for NaN, ∞ or negative radiance */
-    /* Optional, only read (relaxed) here: once set, the integrator ends the sample at its
-     * next bounce or light, so no sample outlives a stop by more than one step; the value
-     * it returns then is meaningless and the caller discards the work (render.h). */
-    const atomic_bool *stop;
-} ts_counters;
+/* Per-worker state of the integrator: counters (summed by the renderer after a pass) and
+ * an optional stop flag, integrators/counters.h. */
 
 /* The scene-format name of an integrator type ("path", "direct", "ao", "normals"). */
 const char *ts_integrator_name(ts_integrator_type type);

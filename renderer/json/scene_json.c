@@ -53,6 +53,95 @@ static ts_status nomem(loader *ld, const char *what)
     return ts_error_set(ld->err, TS_ERR_NOMEM, "out of memory while loading %s", what);
 }
 
+static ts_status parse_transform(loader *ld, const cJSON *obj, const char *path, ts_xform *out);
+static ts_status float_array(loader *ld, const cJSON *obj, const char *path, const char *key, int stride, bool required,
+                             float **out, uint32_t *count);
+
+/* ---------------------------------------------------------------- media */
+
+/* "media": name → medium (docs/design.md §4): pbrt-v3's homogeneous and heterogeneous
+ * (here "grid") media, checked by the builder. */
+static ts_status parse_medium(loader *ld, const cJSON *m, const char *path)
+{
+    static const char *const types[] = {"homogeneous", "grid", NULL};
+    int type = 0;
+    TRY(ts_json_enum(m, path, "type", true, types, &type, ld->err));
+    static const char *const hkeys[] = {"type", "sigma_a", "sigma_s", "preset", "scale", "g", NULL};
+    static const char *const gkeys[] = {"type", "sigma_a", "sigma_s", "preset", "scale", "g", "nx", "ny", "nz",
+                                        "density", "p0", "p1", "transform", NULL};
+    TRY(ts_json_check_object(m, path, type ? gkeys : hkeys, ld->err));
+    ts_medium_desc d = {.type = type ? TS_MEDIUM_GRID : TS_MEDIUM_HOMOGENEOUS, .scale = 1};
+    TRY(ts_json_string(m, path, "preset", false, &d.preset, ld->err));
+    d.has_sigma_a = cJSON_GetObjectItemCaseSensitive(m, "sigma_a") != NULL;
+    d.has_sigma_s = cJSON_GetObjectItemCaseSensitive(m, "sigma_s") != NULL;
+    TRY(ts_json_rgb(m, path, "sigma_a", false, TS_J_ANY, &d.sigma_a, ld->err));
+    TRY(ts_json_rgb(m, path, "sigma_s", false, TS_J_ANY, &d.sigma_s, ld->err));
+    TRY(ts_json_number(m, path, "scale", false, TS_J_ANY, &d.scale, ld->err));
+    TRY(ts_json_number(m, path, "g", false, TS_J_ANY, &d.g, ld->err));
+    float *density = NULL;
+    if (type) {
+        int64_t n[3] = {1, 1, 1};
+        static const char *const nk[] = {"nx", "ny", "nz"};
+        for (int k = 0; k < 3; k++) TRY(ts_json_int(m, path, nk[k], true, 1, 1 << 20, &n[k], ld->err));
+        d.nx = (uint32_t)n[0], d.ny = (uint32_t)n[1], d.nz = (uint32_t)n[2];
+        ts_vec3 p0 = {0, 0, 0}, p1 = {1, 1, 1};
+        TRY(ts_json_vec3(m, path, "p0", false, false, &p0, ld->err));
+        TRY(ts_json_vec3(m, path, "p1", false, false, &p1, ld->err));
+        d.p0 = ts_dvec3_from(p0);
+        d.p1 = ts_dvec3_from(p1);
+        TRY(parse_transform(ld, m, path, &d.to_world));
+        uint32_t count = 0;
+        TRY(float_array(ld, m, path, "density", 1, true, &density, &count));
+        d.density = density;
+        d.n_density = count;
+    }
+    ts_status st = at(ts_scene_builder_add_medium(ld->b, path + strlen("media."), &d, NULL, ld->err), path, ld->err);
+    free(density);
+    return st;
+}
+
+static ts_status parse_media(loader *ld, const cJSON *doc)
+{
+    const cJSON *media;
+    TRY(ts_json_object(doc, "", "media", false, &media, ld->err));
+    for (const cJSON *m = media ? media->child : NULL; m; m = m->next) {
+        ts_jpath p = ts_jpath_key("media", m->string);
+        if (!cJSON_IsObject(m)) return ts_error_set(ld->err, TS_ERR_INVALID, "%s: expected an object", p.s);
+        TRY(parse_medium(ld, m, p.s));
+    }
+    return TS_OK;
+}
+
+/* obj[key]: a medium's name in "media" (*id), or null or absent (TS_NONE: vacuum). */
+static ts_status medium_ref(loader *ld, const cJSON *obj, const char *path, const char *key, uint32_t *id)
+{
+    *id = TS_NONE;
+    const cJSON *v = cJSON_GetObjectItemCaseSensitive(obj, key);
+    if (!v || cJSON_IsNull(v)) return TS_OK;
+    const char *name;
+    TRY(ts_json_string(obj, path, key, true, &name, ld->err));
+    *id = ts_scene_builder_find_medium(ld->b, name);
+    if (*id == TS_NONE) {
+        ts_jpath mp = ts_jpath_key(path, key);
+        return ts_error_set(ld->err, TS_ERR_INVALID, "%s: no medium named \"%s\" in 'media'", mp.s, name);
+    }
+    return TS_OK;
+}
+
+/* A shape's "medium": {"inside": name or null, "outside": name or null}. */
+static ts_status parse_shape_medium(loader *ld, const cJSON *sh, const char *path, ts_shape_desc *d)
+{
+    const cJSON *mi;
+    TRY(ts_json_object(sh, path, "medium", false, &mi, ld->err));
+    if (!mi) return TS_OK;
+    ts_jpath p = ts_jpath_key(path, "medium");
+    static const char *const keys[] = {"inside", "outside", NULL};
+    TRY(ts_json_check_object(mi, p.s, keys, ld->err));
+    d->medium_interface = true;
+    TRY(medium_ref(ld, mi, p.s, "inside", &d->medium_inside));
+    return medium_ref(ld, mi, p.s, "outside", &d->medium_outside);
+}
+
 /* ---------------------------------------------------------------- transforms */
 
 static ts_status parse_transform(loader *ld, const cJSON *obj, const char *path, ts_xform *out)
@@ -227,9 +316,9 @@ static ts_status parse_camera(loader *ld, const cJSON *doc)
     int type = 0;
     TRY(ts_json_enum(cam, "camera", "type", false, types, &type, ld->err));
     static const char *const pkeys[] = {"type", "from", "to", "up", "fov", "lens_radius", "focus_distance",
-                                        "mirror", "screen_window", NULL};
+                                        "mirror", "screen_window", "medium", NULL};
     static const char *const okeys[] = {"type", "from",         "to",     "up", "height", "lens_radius",
-                                        "focus_distance", "mirror", "screen_window", NULL};
+                                        "focus_distance", "mirror", "screen_window", "medium", NULL};
     TRY(ts_json_check_object(cam, "camera", type == 0 ? pkeys : okeys, ld->err));
     ts_camera_desc d = {0};
     d.type = (ts_camera_type)type;
@@ -269,7 +358,10 @@ static ts_status parse_camera(loader *ld, const cJSON *doc)
     d.focus_distance = (float)focus;
     d.ortho_height = (float)height;
     /* The builder runs ts_camera_init's checks ("camera.up: must not be parallel …"). */
-    return ts_scene_builder_set_camera(ld->b, &d, ld->err);
+    TRY(ts_scene_builder_set_camera(ld->b, &d, ld->err));
+    uint32_t medium = TS_NONE;
+    TRY(medium_ref(ld, cam, "camera", "medium", &medium));
+    return ts_scene_builder_set_camera_medium(ld->b, medium, ld->err);
 }
 
 static ts_status parse_sampler(loader *ld, const cJSON *doc)
@@ -299,7 +391,7 @@ static ts_status parse_integrator(loader *ld, const cJSON *doc)
     const cJSON *it;
     TRY(ts_json_object(doc, "", "integrator", false, &it, ld->err));
     if (!it) return ts_scene_builder_set_integrator(ld->b, in, ld->err);
-    static const char *const types[] = {"path", "direct", "ao", "normals", NULL};
+    static const char *const types[] = {"path", "direct", "ao", "normals", "volpath", NULL};
     int type = 0;
     TRY(ts_json_enum(it, "integrator", "type", true, types, &type, ld->err));
     in->type = (ts_integrator_type)type;
@@ -308,7 +400,8 @@ static ts_status parse_integrator(loader *ld, const cJSON *doc)
                                               "samples_per_light", "sampling", NULL};
     static const char *const ao_keys[] = {"type", "max_distance", NULL};
     static const char *const normals_keys[] = {"type", NULL};
-    const char *const *keys[] = {path_keys, direct_keys, ao_keys, normals_keys};
+    static const char *const volpath_keys[] = {"type", "max_depth", "rr_depth", "light_sampling", NULL};
+    const char *const *keys[] = {path_keys, direct_keys, ao_keys, normals_keys, volpath_keys};
     TRY(ts_json_check_object(it, "integrator", keys[type], ld->err));
     int64_t v;
     if (in->type == TS_INTEGRATOR_PATH || in->type == TS_INTEGRATOR_DIRECT) {
@@ -318,7 +411,8 @@ static ts_status parse_integrator(loader *ld, const cJSON *doc)
         in->sampling = (ts_direct_sampling)k;
     }
     switch (in->type) {
-    case TS_INTEGRATOR_PATH: {
+    case TS_INTEGRATOR_PATH:
+    case TS_INTEGRATOR_VOLPATH: {
         /* The path loop is iterative, so depth costs no stack; `direct` recurses on
          * specular chains and keeps a lower cap. */
         v = in->max_depth;
@@ -769,7 +863,7 @@ static ts_status parse_shape(loader *ld, const cJSON *sh, const char *path, ts_s
     if (!cJSON_IsObject(sh)) return ts_json_check_object(sh, path, types, ld->err);
     int type = 0;
     TRY(ts_json_enum(sh, path, "type", true, types, &type, ld->err));
-#define COMMON "type", "material", "transform", "emission", "two_sided", "light_samples", "reverse_orientation"
+#define COMMON "type", "material", "transform", "emission", "two_sided", "light_samples", "reverse_orientation", "medium"
     static const char *const k_sphere[] = {COMMON, "center", "radius", "z_min", "z_max", "phi_max", NULL};
     static const char *const k_disk[] = {COMMON, "center", "normal", "radius", "inner_radius", "phi_max", NULL};
     static const char *const k_cyl[] = {COMMON, "p0", "p1", "radius", "phi_max", NULL};
@@ -782,10 +876,12 @@ static ts_status parse_shape(loader *ld, const cJSON *sh, const char *path, ts_s
     *d = (ts_shape_desc){0};
     const bool subdiv = type == 4; /* a loopsubdiv control mesh: refined into a mesh here */
     d->type = subdiv ? TS_SHAPE_MESH : (ts_shape_type)type;
-    const char *mat;
-    TRY(ts_json_string(sh, path, "material", true, &mat, ld->err));
-    d->material = ts_scene_builder_find_material(ld->b, mat);
-    if (d->material == TS_NONE) {
+    const char *mat = NULL;
+    const cJSON *mv = cJSON_GetObjectItemCaseSensitive(sh, "material");
+    if (!cJSON_IsNull(mv)) TRY(ts_json_string(sh, path, "material", true, &mat, ld->err));
+    d->material = mat ? ts_scene_builder_find_material(ld->b, mat) : TS_NONE; /* null: no surface */
+    TRY(parse_shape_medium(ld, sh, path, d));
+    if (mat && d->material == TS_NONE) {
         ts_jpath mp = ts_jpath_key(path, "material");
         return ts_error_set(ld->err, TS_ERR_INVALID, "%s: no material named \"%s\" in 'materials'", mp.s, mat);
     }
@@ -1050,8 +1146,9 @@ static ts_status parse_lights(loader *ld, const cJSON *doc)
 
 static ts_status parse_document(loader *ld, const cJSON *doc)
 {
-    static const char *const keys[] = {"tessera",   "name",   "camera",  "film",      "sampler", "integrator", "textures",
-                                       "materials", "shapes", "objects", "instances", "lights",  "job",        NULL};
+    static const char *const keys[] = {"tessera", "name",   "camera",  "film",      "sampler", "integrator",
+                                       "textures", "materials", "media", "shapes", "objects", "instances",
+                                       "lights",  "job",     NULL};
     TRY(ts_json_check_object(doc, "", keys, ld->err));
     const cJSON *v = cJSON_GetObjectItemCaseSensitive(doc, "tessera");
     if (!v)
@@ -1069,6 +1166,7 @@ static ts_status parse_document(loader *ld, const cJSON *doc)
         ld->named = true;
     }
     TRY(parse_film(ld, doc));
+    TRY(parse_media(ld, doc));
     TRY(parse_camera(ld, doc));
     TRY(parse_sampler(ld, doc));
     TRY(parse_integrator(ld, doc));

@@ -132,6 +132,8 @@ static void *worker(void *arg)
     sc->other_rays += c.other_rays;
     sc->samples += c.samples;
     sc->nonfinite += c.nonfinite;
+    sc->medium_steps += c.medium_steps;
+    sc->walks_truncated += c.walks_truncated;
     pthread_mutex_unlock(&j->lock);
     return NULL;
 }

@@ -20,6 +20,7 @@
 #include "geometry/shape.h"
 #include "lights/light.h"
 #include "materials/material.h"
+#include "media/medium.h"
 #include "sampling/sampler.h"
 
 typedef enum ts_integrator_type {
@@ -27,6 +28,7 @@ typedef enum ts_integrator_type {
     TS_INTEGRATOR_DIRECT,
     TS_INTEGRATOR_AO,      /* debugging view: ambient occlusion, needs no lights */
     TS_INTEGRATOR_NORMALS, /* debugging view: shading normals as colour */
+    TS_INTEGRATOR_VOLPATH, /* pbrt-v3's VolPathIntegrator: path with participating media */
 } ts_integrator_type;
 
 typedef enum ts_light_strategy { TS_LIGHTS_ALL, TS_LIGHTS_ONE } ts_light_strategy;
@@ -43,8 +45,8 @@ typedef enum ts_direct_sampling { TS_SAMPLING_MIS, TS_SAMPLING_LIGHT, TS_SAMPLIN
 
 typedef struct ts_integrator_desc {
     ts_integrator_type type;
-    int max_depth, rr_depth;            /* path; direct: max_depth of specular recursion */
-    ts_light_selection light_sampling;  /* path; direct's strategy one (uniform, power or bvh) */
+    int max_depth, rr_depth;            /* path, volpath; direct: max_depth of specular recursion */
+    ts_light_selection light_sampling;  /* path, volpath; direct's strategy one (uniform, power or bvh) */
     ts_light_strategy strategy;         /* direct */
     ts_direct_sampling sampling;        /* path, direct */
     int samples_per_light;              /* direct, all */
@@ -117,6 +119,12 @@ typedef struct ts_scene {
     ts_light_distribution light_distribution;
     uint32_t *infinite_lights; /* indices of the infinite lights, added to escaping rays */
     uint32_t n_infinite_lights;
+
+    /* Participating media (media/medium.h; docs/design.md §4): shapes name theirs by index
+     * (ts_shape's medium interface), camera rays start in camera_medium (TS_NONE: vacuum). */
+    ts_medium *media;
+    uint32_t n_media;
+    uint32_t camera_medium;
 
     /* Owned resources released by ts_scene_destroy. */
     struct ts_fourier_table **fourier_tables;

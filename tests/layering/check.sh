@@ -28,7 +28,7 @@ declare -A FOLDER_RANK=(
   [spectrum]=1 [sampling]=1 [image]=1 [mesh]=1
   [textures]=2
   [geometry]=3
-  [camera]=4 [film]=4 [lights]=4 [materials]=4
+  [camera]=4 [film]=4 [lights]=4 [materials]=4 [media]=4
   [scene]=5
   [integrators]=6
   [render]=7 [build]=7
