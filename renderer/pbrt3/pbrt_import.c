@@ -22,6 +22,7 @@
 #include "json/json_write.h"
 #include "json/scene_json_texture_write.h"
 #include "pbrt3/texture_pbrt.h"
+#include "integrators/integrator.h"
 
 #define TRY(expr)                                                                                            \
     do {                                                                                                     \
@@ -48,7 +49,12 @@ typedef struct imp {
     ts_texture_pbrt tp; /* the scene's textures (pbrt3/texture_pbrt.h), when it has any */
     bool has_textures;
     ts_json_texture_writer jtex; /* the document's "textures", when converting */
+    uint32_t *medium_id; /* per MakeNamedMedium, the builder's medium */
+    cJSON *jmedia;       /* the document's "media", when converting and the scene has any */
 } imp;
+
+static ts_status map_media(imp *im);
+static ts_status shape_media(imp *im, const ts_pbrt_shape *sh, ts_shape_desc *d, cJSON *j);
 
 /* ---------------------------------------------------------------- messages */
 
@@ -598,14 +604,14 @@ static ts_status map_integrator(imp *im)
     ts_pbrt_params *ps = &o->params;
     ts_integrator_desc d = ts_integrator_desc_default();
     const char *t = o->type;
-    bool path_like = strcmp(t, "path") == 0;
-    if (!path_like && (strcmp(t, "bdpt") == 0 || strcmp(t, "mlt") == 0 || strcmp(t, "sppm") == 0 ||
-                       strcmp(t, "volpath") == 0)) {
+    bool path_like = strcmp(t, "path") == 0 || strcmp(t, "volpath") == 0;
+    if (strcmp(t, "volpath") == 0) d.type = TS_INTEGRATOR_VOLPATH;
+    if (!path_like && (strcmp(t, "bdpt") == 0 || strcmp(t, "mlt") == 0 || strcmp(t, "sppm") == 0)) {
         path_like = true;
         dwarn(im, ps, o->loc,
               "rendered with the path integrator: the estimator differs (the image converges to the same "
               "surface light transport%s)",
-              strcmp(t, "volpath") == 0 ? ", without media" : "");
+              ts_pbrt_media_used(im->s) ? ", without the scene's media: use volpath" : "");
         /* Their parameters are theirs; only the depth carries over. */
         for (size_t k = 0; k < ps->count; k++)
             if (strcmp(ps->items[k].name, "maxdepth") != 0) ps->items[k].used = true;
@@ -659,7 +665,7 @@ static ts_status map_integrator(imp *im)
     } else {
         return derr(
             im, ps, o->loc, TS_ERR_UNSUPPORTED,
-            "is not supported (path, directlighting and whitted are; bdpt, mlt, sppm and volpath render "
+            "is not supported (path, volpath, directlighting and whitted are; bdpt, mlt and sppm render "
             "with path)");
     }
     const int32_t *pb;
@@ -670,9 +676,8 @@ static ts_status map_integrator(imp *im)
     TRY(at(im, ts_scene_builder_set_integrator(im->b, &d, im->err), ps, o->loc));
     if (im->doc) {
         cJSON *j = cJSON_CreateObject();
-        bool ok = j && ts_jw_string(j, "type", d.type == TS_INTEGRATOR_PATH ? "path" : "direct") &&
-                  ts_jw_number(j, "max_depth", d.max_depth);
-        if (ok && d.type == TS_INTEGRATOR_PATH)
+        bool ok = j && ts_jw_string(j, "type", ts_integrator_name(d.type)) && ts_jw_number(j, "max_depth", d.max_depth);
+        if (ok && (d.type == TS_INTEGRATOR_PATH || d.type == TS_INTEGRATOR_VOLPATH))
             ok = ts_jw_number(j, "rr_depth", d.rr_depth) &&
                  ts_jw_string(j, "light_sampling",
                          d.light_sampling == TS_LIGHT_SELECT_UNIFORM   ? "uniform"
@@ -1296,9 +1301,7 @@ static ts_status map_shape(imp *im, size_t si)
         if (emits)
             return derr(im, ps, sh->loc, TS_ERR_UNSUPPORTED,
                         "an emitting shape with material \"none\" (no surface) is not supported");
-        dwarn(im, ps, sh->loc, "has material \"none\" (no surface): it is left out");
-        ps->count = 0; /* its parameters do not matter */
-        return TS_OK;
+        d.material = TS_NONE; /* rays pass through it; it may bound a medium */
     }
     /* pbrt-v3 reads alpha and shadowalpha on trianglemesh and plymesh only; on other shapes
      * they are unused parameters (warned below, as pbrt-v3 reports them). */
@@ -1440,6 +1443,7 @@ static ts_status map_shape(imp *im, size_t si)
     }
     if (!st && j && jok) st = jcutout(im, j, "alpha", &alpha);
     if (!st && j && jok) st = jcutout(im, j, "shadow_alpha", &salpha);
+    if (!st) st = shape_media(im, sh, &d, j);
     if (!st) {
         warn_unused(im, ps);
         st = at(im, ts_scene_builder_add_shape(im->b, &d, NULL, im->err), ps, sh->loc);
@@ -1456,7 +1460,8 @@ static ts_status map_shape(imp *im, size_t si)
         else
             snprintf(name, sizeof name, "default-matte");
         mname = name;
-        jok = jok && ts_jw_string(j, "material", mname) && ts_jw_add(j, "transform", ts_jw_transform(sh->object_to_world));
+        jok = jok && (no_surface ? cJSON_AddNullToObject(j, "material") != NULL : ts_jw_string(j, "material", mname)) &&
+              ts_jw_add(j, "transform", ts_jw_transform(sh->object_to_world));
         if (jok && emits)
             jok = ts_jw_rgb(j, "emission", d.emission) && (!d.two_sided || ts_jw_bool(j, "two_sided", true)) &&
                   (!d.light_samples || ts_jw_number(j, "light_samples", d.light_samples));
@@ -1661,6 +1666,176 @@ static ts_status map_objects(imp *im)
 }
 
 /* Options the scene did not give have empty parameter lists without a directive name. */
+/* ---------------------------------------------------------------- media */
+
+bool ts_pbrt_media_used(const ts_pbrt_scene *s)
+{
+    if (s->camera_medium && *s->camera_medium) return true;
+    for (size_t i = 0; i < s->shape_count; i++) {
+        const ts_pbrt_shape *sh = &s->shapes[i];
+        if ((sh->inside_medium && *sh->inside_medium) || (sh->outside_medium && *sh->outside_medium)) return true;
+    }
+    return false;
+}
+
+/* The document's name of medium k: its own, made unique by "#k". */
+static void medium_doc_name(const imp *im, size_t k, char *name, size_t n)
+{
+    snprintf(name, n, "%.200s#%zu", im->s->media[k].name, k);
+}
+
+/* The builder's medium named `name` (the last MakeNamedMedium of that name, as pbrt-v3's
+ * map keeps it): *id, TS_NONE for "" (vacuum); false if none defines it. *k its index. */
+static bool find_medium(const imp *im, const char *name, uint32_t *id, size_t *k)
+{
+    *id = TS_NONE;
+    if (!name || !*name) return true;
+    for (size_t i = im->s->medium_count; i-- > 0;)
+        if (strcmp(im->s->media[i].name, name) == 0) {
+            *id = im->medium_id[i];
+            if (k) *k = i;
+            return true;
+        }
+    return false;
+}
+
+/* pbrt-v3's MakeMedium (api.cpp): "homogeneous" and "heterogeneous" (GridDensityMedium),
+ * with its parameters and defaults; the builder checks the values. */
+static ts_status map_medium(imp *im, size_t k)
+{
+    ts_pbrt_medium *m = &im->s->media[k];
+    ts_pbrt_params *ps = &m->params;
+    bool grid = strcmp(m->type, "heterogeneous") == 0;
+    if (!grid && strcmp(m->type, "homogeneous") != 0)
+        return derr(im, ps, m->loc, TS_ERR_UNSUPPORTED,
+                    "has \"string type\" \"%s\", not a pbrt-v3 medium (homogeneous, heterogeneous)", m->type);
+    ts_medium_desc d = {.type = grid ? TS_MEDIUM_GRID : TS_MEDIUM_HOMOGENEOUS};
+    TRY(ts_pbrt_find_string(ps, "preset", NULL, &d.preset, im->err));
+    if (d.preset && !*d.preset) d.preset = NULL; /* pbrt-v3: "" is no preset */
+    d.has_sigma_a = ts_pbrt_params_get(ps, "sigma_a") != NULL;
+    d.has_sigma_s = ts_pbrt_params_get(ps, "sigma_s") != NULL;
+    TRY(get_rgb(im, ps, "sigma_a", ts_rgb_gray(0), &d.sigma_a));
+    TRY(get_rgb(im, ps, "sigma_s", ts_rgb_gray(0), &d.sigma_s));
+    float scale, g;
+    TRY(ts_pbrt_find_float(ps, "scale", 1, &scale, im->err));
+    TRY(ts_pbrt_find_float(ps, "g", 0, &g, im->err));
+    d.scale = scale;
+    d.g = g;
+    if (grid) {
+        int32_t n[3];
+        TRY(ts_pbrt_find_int(ps, "nx", 1, &n[0], im->err));
+        TRY(ts_pbrt_find_int(ps, "ny", 1, &n[1], im->err));
+        TRY(ts_pbrt_find_int(ps, "nz", 1, &n[2], im->err));
+        for (int a = 0; a < 3; a++)
+            if (n[a] < 1)
+                return derr(im, ps, m->loc, TS_ERR_INVALID, "\"integer n%c\" must be at least 1, got %d", "xyz"[a],
+                            n[a]);
+        d.nx = (uint32_t)n[0], d.ny = (uint32_t)n[1], d.nz = (uint32_t)n[2];
+        size_t count;
+        TRY(ts_pbrt_find_floats(ps, "density", &d.density, &count, im->err));
+        if (!d.density)
+            return derr(im, ps, m->loc, TS_ERR_INVALID, "has no \"float density\" values (pbrt-v3 refuses it too)");
+        d.n_density = count;
+        ts_vec3 p0, p1;
+        TRY(ts_pbrt_find_point3(ps, "p0", (ts_vec3){0, 0, 0}, &p0, im->err));
+        TRY(ts_pbrt_find_point3(ps, "p1", (ts_vec3){1, 1, 1}, &p1, im->err));
+        d.p0 = ts_dvec3_from(p0);
+        d.p1 = ts_dvec3_from(p1);
+        if (!user_xform(m->medium_to_world, &d.to_world))
+            return derr(im, ps, m->loc, TS_ERR_INVALID, "the transformation matrix is singular");
+    }
+    warn_unused(im, ps);
+    TRY(at(im, ts_scene_builder_add_medium(im->b, NULL, &d, &im->medium_id[k], im->err), ps, m->loc));
+    if (!im->jmedia) return TS_OK;
+    /* The document holds the medium's parameters as given (the JSON front end resolves the
+     * preset, the defaults and the scale as this one did). */
+    char name[260];
+    medium_doc_name(im, k, name, sizeof name);
+    cJSON *j = cJSON_CreateObject();
+    bool ok = j && ts_jw_string(j, "type", grid ? "grid" : "homogeneous") && ts_jw_rgb(j, "sigma_a", d.sigma_a) &&
+              ts_jw_rgb(j, "sigma_s", d.sigma_s) && ts_jw_number(j, "scale", d.scale) && ts_jw_number(j, "g", d.g) &&
+              (!d.preset || ts_jw_string(j, "preset", d.preset));
+    if (ok && !d.has_sigma_a) cJSON_DeleteItemFromObject(j, "sigma_a");
+    if (ok && !d.has_sigma_s) cJSON_DeleteItemFromObject(j, "sigma_s");
+    if (ok && grid) {
+        const ts_vec3 p0 = {(float)d.p0.x, (float)d.p0.y, (float)d.p0.z}, p1 = {(float)d.p1.x, (float)d.p1.y, (float)d.p1.z};
+        ok = ts_jw_number(j, "nx", d.nx) && ts_jw_number(j, "ny", d.ny) && ts_jw_number(j, "nz", d.nz) &&
+             ts_jw_add(j, "density", ts_jw_floats(d.density, d.n_density)) && ts_jw_vec3(j, "p0", p0) &&
+             ts_jw_vec3(j, "p1", p1) && ts_jw_add(j, "transform", ts_jw_transform(m->medium_to_world));
+    }
+    if (!ok || !ts_jw_add(im->jmedia, name, j)) {
+        if (!ok) cJSON_Delete(j);
+        return nomem(im);
+    }
+    return TS_OK;
+}
+
+/* Every MakeNamedMedium, then the camera's medium (pbrt-v3's: the outside medium in force
+ * at Camera). */
+static ts_status map_media(imp *im)
+{
+    const ts_pbrt_scene *s = im->s;
+    if (!s->medium_count) {
+        if (s->camera_medium && *s->camera_medium)
+            return derr(im, &s->camera.params, s->camera.loc, TS_ERR_INVALID,
+                        "is in medium \"%s\" (MediumInterface), which no MakeNamedMedium defines", s->camera_medium);
+        return TS_OK;
+    }
+    const char *integ = s->integrator.type;
+    if (ts_pbrt_media_used(s) && strcmp(integ, "volpath") != 0 && strcmp(integ, "bdpt") != 0 &&
+        strcmp(integ, "mlt") != 0 && strcmp(integ, "sppm") != 0)
+        dwarn(im, &s->integrator.params, s->integrator.loc,
+              "does not simulate the scene's participating media (as pbrt-v3 warns: rays pass through the "
+              "shapes that bound them, shadow rays are blocked by them); use volpath");
+    im->medium_id = calloc(s->medium_count, sizeof *im->medium_id);
+    if (!im->medium_id) return nomem(im);
+    if (im->doc && !ts_jw_add(im->doc, "media", im->jmedia = cJSON_CreateObject())) return nomem(im);
+    for (size_t k = 0; k < s->medium_count; k++) TRY(map_medium(im, k));
+    uint32_t id;
+    size_t mk = 0;
+    if (!find_medium(im, s->camera_medium, &id, &mk))
+        return derr(im, &s->camera.params, s->camera.loc, TS_ERR_INVALID,
+                    "is in medium \"%s\" (MediumInterface), which no MakeNamedMedium defines", s->camera_medium);
+    TRY(ts_scene_builder_set_camera_medium(im->b, id, im->err));
+    if (im->doc && id != TS_NONE) {
+        char name[260];
+        medium_doc_name(im, mk, name, sizeof name);
+        if (!ts_jw_string(cJSON_GetObjectItemCaseSensitive(im->doc, "camera"), "medium", name)) return nomem(im);
+    }
+    return TS_OK;
+}
+
+/* The shape's MediumInterface (pbrt-v3's, from the graphics state at Shape) into d, and
+ * into its document j; names no MakeNamedMedium defines are refused. */
+static ts_status shape_media(imp *im, const ts_pbrt_shape *sh, ts_shape_desc *d, cJSON *j)
+{
+    const char *names[2] = {sh->inside_medium, sh->outside_medium};
+    uint32_t ids[2];
+    size_t ks[2] = {0, 0};
+    for (int a = 0; a < 2; a++)
+        if (!find_medium(im, names[a], &ids[a], &ks[a]))
+            return derr(im, &sh->params, sh->loc, TS_ERR_INVALID,
+                        "is inside MediumInterface medium \"%s\", which no MakeNamedMedium defines", names[a]);
+    if (ids[0] == ids[1]) return TS_OK; /* no boundary: crossing it keeps a ray's medium (pbrt-v3) */
+    d->medium_interface = true;
+    d->medium_inside = ids[0];
+    d->medium_outside = ids[1];
+    if (!j) return TS_OK;
+    cJSON *mi = cJSON_CreateObject();
+    bool ok = mi != NULL;
+    static const char *const keys[2] = {"inside", "outside"};
+    for (int a = 0; a < 2 && ok; a++) {
+        char name[260];
+        medium_doc_name(im, ks[a], name, sizeof name);
+        ok = ids[a] == TS_NONE ? cJSON_AddNullToObject(mi, keys[a]) != NULL : ts_jw_string(mi, keys[a], name);
+    }
+    if (!ok || !ts_jw_add(j, "medium", mi)) {
+        if (!ok) cJSON_Delete(mi);
+        return nomem(im);
+    }
+    return TS_OK;
+}
+
 static void name_option(ts_pbrt_option *o, const char *directive)
 {
     if (!o->params.directive) o->params.directive = directive;
@@ -1688,6 +1863,7 @@ static ts_status run(imp *im)
     TRY(map_camera(im, w, h));
     TRY(map_sampler(im));
     TRY(map_integrator(im));
+    TRY(map_media(im));
     if (s->texture_count > 0) {
         /* Every Texture directive, as pbrt-v3 makes them all (pbrt3/texture_pbrt.h). */
         ts_texture_cache *cache;
@@ -1791,6 +1967,7 @@ ts_status ts_pbrt_import(ts_pbrt_scene *scene, ts_scene_builder *b, cJSON *doc, 
     free(im.seen);
     free(im.mat_id);
     free(im.mat_state);
+    free(im.medium_id);
     ts_json_texture_writer_fini(&im.jtex);
     return st;
 }

@@ -38,6 +38,10 @@ typedef void (*ts_warning_fn)(void *ctx, const char *message);
  * warnings are passed on first. On failure err holds the sentence; the builder is left for
  * the caller to destroy (nothing in it is half-added) and doc may hold a partial document
  * the caller discards. */
+/* Whether a shape or the camera is in a medium (a MediumInterface names one): pbrt-v3's
+ * haveScatteringMedia, for its warning to integrators that do not simulate them. */
+bool ts_pbrt_media_used(const ts_pbrt_scene *s);
+
 ts_status ts_pbrt_import(ts_pbrt_scene *scene, ts_scene_builder *b, struct cJSON *doc, ts_warning_fn warn,
                          void *warn_ctx, ts_error *err);
 

@@ -1305,7 +1305,7 @@ static ts_status directive(parser *p)
         *slot = sh;
         return TS_OK;
     }
-    /* --- media (recorded, dropped) --- */
+    /* --- media (mapped by the importer) --- */
     case DIR_MAKE_NAMED_MEDIUM: {
         ts_pbrt_medium m = {.loc = loc};
         if ((st = expect_string(p, name, "a medium name", &m.name, NULL))) return st;
@@ -1316,9 +1316,7 @@ static ts_status directive(parser *p)
         ts_pbrt_medium *slot = vec_push(p, &p->media, sizeof m);
         if (!slot || !m.medium_to_world) return nomem(p);
         *slot = m;
-        return warn(p, loc, "MakeNamedMedium \"%s\": participating media are not supported; the medium is recorded and "
-                            "not rendered",
-                    m.name);
+        return TS_OK;
     }
     case DIR_MEDIUM_INTERFACE: {
         const char *in = NULL, *out = NULL;
@@ -1327,10 +1325,6 @@ static ts_status directive(parser *p)
         if (p->tok.kind == TS_PBRT_TOKEN_STRING && (st = expect_string(p, name, "a medium name", &out, NULL))) return st;
         p->gs.inside_medium = in;
         p->gs.outside_medium = out;
-        if (*in || *out)
-            return warn(p, loc, "MediumInterface \"%s\" \"%s\": participating media are not supported; the interface "
-                                "is recorded and not rendered",
-                        in, out);
         return TS_OK;
     }
     case DIR_INCLUDE: {

@@ -39,8 +39,8 @@
  *    and the media directives are allowed anywhere. Nothing may follow `WorldEnd`.
  *  - Motion blur is dropped: after `ActiveTransform EndTime` transform directives are
  *    ignored, so every entity keeps its start-time transform (one warning per
- *    `ActiveTransform` other than All). Media are recorded and dropped (a warning per
- *    `MakeNamedMedium` / `MediumInterface`). An area light inside an object definition
+ *    `ActiveTransform` other than All). Media are recorded (MakeNamedMedium with its CTM,
+ *    the MediumInterface names in force at each shape, light and the camera). An area light inside an object definition
  *    is dropped with a warning, as pbrt-v3 does.
  *
  * Errors (TS_ERR_INVALID unless said; TS_ERR_IO for a file that cannot be read,
@@ -151,7 +151,7 @@ typedef struct ts_pbrt_medium {
 
 typedef struct ts_pbrt_warning {
     ts_pbrt_loc loc;
-    const char *message; /* "media are not supported: …" (no position in it) */
+    const char *message; /* "ActiveTransform EndTime: …" (no position in it) */
 } ts_pbrt_warning;
 
 typedef struct ts_pbrt_scene {
