@@ -153,16 +153,20 @@ static void test_hg_pdf_matches(void **state)
     "{\"tessera\":1,\"camera\":{\"from\":[0,0,5],\"to\":[0,0,0],\"fov\":30%s},\"film\":{\"width\":4,\"height\":4}," \
     "\"sampler\":{\"type\":\"independent\",\"seed\":%d},\"integrator\":{\"type\":\"%s\",\"max_depth\":%d},"
 
+/* A scene of only the media of `media` (the inside of "media": {…}), volpath. */
+static ts_scene *media_scene(const char *media)
+{
+    char doc[4096];
+    snprintf(doc, sizeof doc, HEAD "\"media\":{%s}}", "", 1, "volpath", 5, media);
+    return load(doc);
+}
+
 /* Beer–Lambert, exactly: ts_medium_tr of a homogeneous medium is exp(−σt·d) per channel,
  * 1 where σt is 0 whatever d (also ∞). */
 static void test_homogeneous_tr(void **state)
 {
     (void)state;
-    char doc[2048];
-    snprintf(doc, sizeof doc,
-             HEAD "\"media\":{\"m\":{\"type\":\"homogeneous\",\"sigma_a\":[0.5,0,2],\"sigma_s\":[0.25,0,1]}}}", "", 1,
-             "volpath", 5);
-    ts_scene *s = load(doc);
+    ts_scene *s = media_scene("\"m\":{\"type\":\"homogeneous\",\"sigma_a\":[0.5,0,2],\"sigma_s\":[0.25,0,1]}");
     assert_int_equal(s->n_media, 1);
     const ts_medium *m = &s->media[0];
     ts_medium_walk w;
@@ -185,13 +189,9 @@ static void test_homogeneous_tr(void **state)
 static void test_tracking(void **state)
 {
     (void)state;
-    char doc[4096];
-    snprintf(doc, sizeof doc,
-             HEAD "\"media\":{\"g\":{\"type\":\"grid\",\"sigma_a\":[1,1,1],\"sigma_s\":[2,2,2],\"nx\":4,\"ny\":1,"
-                  "\"nz\":1,\"density\":[0.5,2,0,1],\"p0\":[0,0,0],\"p1\":[4,1,1],"
-                  "\"transform\":[{\"rotate\":{\"angle\":30,\"axis\":[0,0,1]}},{\"translate\":[1,-2,0.5]}]}}}",
-             "", 1, "volpath", 5);
-    ts_scene *s = load(doc);
+    ts_scene *s = media_scene("\"g\":{\"type\":\"grid\",\"sigma_a\":[1,1,1],\"sigma_s\":[2,2,2],\"nx\":4,\"ny\":1,"
+                              "\"nz\":1,\"density\":[0.5,2,0,1],\"p0\":[0,0,0],\"p1\":[4,1,1],"
+                              "\"transform\":[{\"rotate\":{\"angle\":30,\"axis\":[0,0,1]}},{\"translate\":[1,-2,0.5]}]}");
     const ts_medium *m = &s->media[0];
     assert_int_equal(m->type, TS_MEDIUM_GRID);
     assert_float_equal(m->max_density, 2, 0);
@@ -249,12 +249,8 @@ static void test_tracking(void **state)
 static void test_walk_bounded(void **state)
 {
     (void)state;
-    char doc[2048];
-    snprintf(doc, sizeof doc,
-             HEAD "\"media\":{\"g\":{\"type\":\"grid\",\"sigma_a\":[1e9,1e9,1e9],\"sigma_s\":[0,0,0],\"nx\":2,"
-                  "\"ny\":1,\"nz\":1,\"density\":[1,3]}}}",
-             "", 1, "volpath", 5);
-    ts_scene *s = load(doc);
+    ts_scene *s = media_scene("\"g\":{\"type\":\"grid\",\"sigma_a\":[1e9,1e9,1e9],\"sigma_s\":[0,0,0],\"nx\":2,"
+                              "\"ny\":1,\"nz\":1,\"density\":[1,3]}");
     const ts_medium *m = &s->media[0];
     ts_medium_walk w;
     ts_medium_walk_init(&w, 1, 0, 0, 0, NULL);
@@ -433,13 +429,9 @@ static void test_furnace(void **state)
 static void test_presets(void **state)
 {
     (void)state;
-    char doc[2048];
-    snprintf(doc, sizeof doc,
-             HEAD "\"media\":{\"k\":{\"type\":\"homogeneous\",\"preset\":\"Ketchup\",\"scale\":2},"
-                  "\"d\":{\"type\":\"homogeneous\"},\"o\":{\"type\":\"homogeneous\",\"preset\":\"Skin1\","
-                  "\"sigma_s\":[1,2,3]}}}",
-             "", 1, "volpath", 5);
-    ts_scene *s = load(doc);
+    ts_scene *s = media_scene("\"k\":{\"type\":\"homogeneous\",\"preset\":\"Ketchup\",\"scale\":2},"
+                              "\"d\":{\"type\":\"homogeneous\"},\"o\":{\"type\":\"homogeneous\",\"preset\":\"Skin1\","
+                              "\"sigma_s\":[1,2,3]}");
     assert_float_equal(s->media[0].sigma_s.r, 0.36f, 1e-6); /* Ketchup σ′s 0.18 × 2 */
     assert_float_equal(s->media[0].sigma_a.b, 2.9f, 1e-6);  /* σa 1.45 × 2 */
     assert_float_equal(s->media[1].sigma_s.g, 3.21f, 1e-6); /* pbrt-v3's default: whole milk */

@@ -164,6 +164,8 @@ uint32_t ts_effects_analyse(const ts_scene *s)
     /* Light after more than one bounce needs light, something that scatters, and depth. */
     bool lit = (fx & TS_EFFECTS_LIGHTS) != 0;
     bool scatters = (fx & TS_EFFECTS_SCATTERING) != 0;
+    /* volpath scatters in media too (a medium no ray reaches is no effect). */
+    if (s->integrator.type == TS_INTEGRATOR_VOLPATH && (fx & TS_EFFECT_MEDIA)) scatters = true;
     if (lit && scatters) {
         const ts_integrator_desc *in = &s->integrator;
         if ((in->type == TS_INTEGRATOR_PATH || in->type == TS_INTEGRATOR_VOLPATH) && in->max_depth >= 2)

@@ -416,14 +416,7 @@ static ts_rgb li_path(const ts_scene *s, uint32_t fx, ts_ray ray, const ts_ray_d
             prev_pdf = bs.pdf;
         }
         ray = ts_spawn_ray(&si, s->shapes, bs.wi);
-        ts_rgb rr_beta = ts_rgb_scale(beta, eta_scale);
-        float m = ts_rgb_max(rr_beta);
-        if (m < 1 && bounces > rr_depth) {
-            float q = ts_maxf(0.05f, 1 - m);
-            if (u_rr < q) break;
-            beta = ts_rgb_scale(beta, 1.0f / (1 - q));
-        }
-        if (!ts_rgb_is_finite(beta)) break;
+        if (!ts_russian_roulette(&beta, eta_scale, bounces, rr_depth, u_rr) || !ts_rgb_is_finite(beta)) break;
     }
     return L;
 }

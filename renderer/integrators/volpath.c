@@ -168,7 +168,7 @@ static ts_rgb sample_one_light(vp *v, const vertex *x, ts_vec2 u_select, ts_vec2
                                ts_vec2 u_scatter)
 {
     float pmf;
-    uint32_t li = ts_light_distribution_sample(&v->s->light_distribution, x->it.p, u_select, &pmf);
+    uint32_t li = ts_light_distribution_sample_at(&v->s->light_distribution, x->it.p, x->it.ns, u_select, &pmf);
     if (li == TS_NONE || !(pmf > 0)) return ts_rgb_gray(0);
     return ts_rgb_scale(estimate_direct(v, x, li, u_light, u_lobe, u_scatter), 1 / pmf);
 }
@@ -212,7 +212,9 @@ ts_rgb ts_volpath_li(const ts_scene *s, uint32_t fx, ts_ray ray, const ts_ray_di
     const bool media = (fx & TS_EFFECT_MEDIA) != 0;
     if (media) ts_medium_walk_init(&v.walk, st->seed, st->px, st->py, st->index, c->stop);
     uint32_t medium = media ? s->camera_medium : TS_NONE;
-    const int max_depth = s->integrator.max_depth, rr_depth = s->integrator.rr_depth;
+    const int rr_depth = s->integrator.rr_depth;
+    int max_depth = s->integrator.max_depth;
+    if (!(fx & TS_EFFECT_INDIRECT) && max_depth > 1) max_depth = 1; /* job.effects.indirect off */
     bool specular = false, crossed = false;
     float eta_scale = 1;
     uint32_t crossings = 0;
@@ -281,14 +283,7 @@ ts_rgb ts_volpath_li(const ts_scene *s, uint32_t fx, ts_ray ray, const ts_ray_di
             if (media) medium = medium_towards(s, &x.it, bs.wi, medium);
             ray = ts_spawn_ray(&x.it, s->shapes, bs.wi);
         }
-        ts_rgb rr_beta = ts_rgb_scale(beta, eta_scale);
-        float m = ts_rgb_max(rr_beta);
-        if (m < 1 && bounces > rr_depth) {
-            float q = ts_maxf(0.05f, 1 - m);
-            if (u_rr < q) break;
-            beta = ts_rgb_scale(beta, 1.0f / (1 - q));
-        }
-        if (!ts_rgb_is_finite(beta)) break;
+        if (!ts_russian_roulette(&beta, eta_scale, bounces, rr_depth, u_rr) || !ts_rgb_is_finite(beta)) break;
     }
     c->medium_steps += v.walk.steps;
     c->walks_truncated += v.walk.truncated;
@@ -298,5 +293,7 @@ ts_rgb ts_volpath_li(const ts_scene *s, uint32_t fx, ts_ray ray, const ts_ray_di
 double ts_volpath_rays_per_sample(const ts_scene *s, uint32_t fx)
 {
     if (!(fx & TS_EFFECTS_LIGHTS)) return 1;
-    return 1 + 3.0 * s->integrator.max_depth;
+    double depth = s->integrator.max_depth;
+    if (!(fx & TS_EFFECT_INDIRECT) && depth > 1) depth = 1;
+    return 1 + 3.0 * depth;
 }

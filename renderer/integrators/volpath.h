@@ -14,6 +14,7 @@
  * ratio tracking. A ray's medium changes where it crosses a shape that is a medium
  * transition (geometry/shape.h); it starts in the scene's camera medium. Russian roulette
  * after rr_depth bounces on β·η-scale (pbrt-v3's: q = max(0.05, 1 − max β)). max_depth
+ * (capped at 1 when the job switches `indirect` off, as path's)
  * counts scattering events in media and at surfaces, as pbrt-v3; crossing a shape without
  * a surface is no event.
  *
@@ -41,12 +42,26 @@
 
 #define TS_VOLPATH_MAX_CROSSINGS 4096
 
+/* pbrt-v3's Russian roulette after rr_depth bounces (path and volpath): with β·η-scale's
+ * largest channel m below 1 the path ends with probability q = max(0.05, 1 − m) (u < q:
+ * false) and survives with β / (1 − q). */
+static inline bool ts_russian_roulette(ts_rgb *beta, float eta_scale, int bounces, int rr_depth, float u)
+{
+    float m = ts_rgb_max(ts_rgb_scale(*beta, eta_scale));
+    if (m < 1 && bounces > rr_depth) {
+        float q = ts_maxf(0.05f, 1 - m);
+        if (u < q) return false;
+        *beta = ts_rgb_scale(*beta, 1.0f / (1 - q));
+    }
+    return true;
+}
+
 /* Radiance along the camera ray, simulating the effects in fx (effects.h). */
 ts_rgb ts_volpath_li(const ts_scene *s, uint32_t fx, ts_ray ray, const ts_ray_differential *rd,
                      ts_sample_stream *st, ts_counters *c);
 
 /* Rays one camera sample traces at most, without boundary crossings and tracking steps:
- * 1 + 3·max_depth (0 without lights). */
+ * 1 + 3·max_depth (max_depth 1 with indirect switched off; 1 without lights). */
 double ts_volpath_rays_per_sample(const ts_scene *s, uint32_t fx);
 
 #endif

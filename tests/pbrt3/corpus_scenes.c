@@ -17,7 +17,7 @@ static const corpus_scene by_others[] = {
     {"spheres-texfilt", 32, NULL, 0, false},
 };
 
-/* ../shared/scenes/pbrt-v3-next (issue #28's scenes; cloud is #29's). An entry with
+/* ../shared/scenes/pbrt-v3-next (issue #28's scenes; cloud, #29's, passes since media landed). An entry with
  * `expected` is a feature not landed yet: the tests still load, render and compare it each
  * run and report XFAIL with its figures, and fail when it passes (remove it then). */
 static const corpus_scene next_steps[] = {
@@ -25,7 +25,7 @@ static const corpus_scene next_steps[] = {
     {"wrinkled-sphere", 16, "wrinkled keeps its detail over the whole sphere as pbrt-v3's does", 0, false},
     {"veach-mis-clamped", 32, NULL, 0, false},
     {"fourier-spheres", 16, NULL, 0, false},
-    {"cloud", 16, "participating media (issue #29)", 0, false},
+    {"cloud", 16, NULL, 0, false},
 };
 
 static const struct {
