@@ -644,7 +644,19 @@ static bool merge_and_publish(srv_farm *f, farm_job *fj, bool *complete, char *w
             ok = false;
             break;
         }
-        added++;
+        ts_shard_info fi;
+        if (!ts_merge_file_info(m, added++, &fi)) continue;
+        /* A task's file holds a beginning of its own share (all of it once it is the output). */
+        ts_sample_range want = ts_shard_range(i, fj->shards, fj->spp);
+        if (fi.n_ranges > 1 || (fi.n_ranges == 1 && (fi.ranges[0].begin != want.begin || fi.ranges[0].end > want.end)) ||
+            (output && (fi.n_ranges != 1 || fi.ranges[0].end != want.end))) {
+            char got[128];
+            ts_shard_format_ranges(fi.ranges, fi.n_ranges, got, sizeof got);
+            snprintf(why, n, "%s holds samples %s, not task %u's [%u,%u)", path, got, i, want.begin, want.end);
+            ok = false;
+            break;
+        }
+        spp[i] = ts_shard_range_samples(fi.ranges, fi.n_ranges);
     }
     ts_shard_info info;
     const ts_film *merged = ok && added ? ts_merge_result(m, &info, NULL) : NULL;
@@ -655,15 +667,6 @@ static bool merge_and_publish(srv_farm *f, farm_job *fj, bool *complete, char *w
         ok = false;
     }
     if (merged) {
-        /* What each task holds: the merged ranges within its own (the shards are disjoint). */
-        for (uint32_t i = 0; i < fj->shards; i++) {
-            ts_sample_range want = ts_shard_range(i, fj->shards, fj->spp);
-            for (int r = 0; r < info.n_ranges; r++) {
-                uint32_t lo = info.ranges[r].begin > want.begin ? info.ranges[r].begin : want.begin;
-                uint32_t hi = info.ranges[r].end < want.end ? info.ranges[r].end : want.end;
-                if (lo < hi) spp[i] += hi - lo;
-            }
-        }
         uint64_t samples = 0;
         for (size_t p = 0; p < (size_t)merged->width * (size_t)merged->height; p++) samples += merged->pixels[p].count;
         ts_film *copy = ts_film_create(merged->full_width, merged->full_height, merged->x0, merged->y0, merged->width,

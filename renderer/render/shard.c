@@ -449,6 +449,13 @@ fail:
     return st;
 }
 
+bool ts_merge_file_info(const ts_merge *m, int i, ts_shard_info *info)
+{
+    if (i < 0 || i >= m->n) return false;
+    *info = m->files[i].info;
+    return true;
+}
+
 /* The target window: the common window when all files share one, else the whole image. */
 static void target_window(const ts_merge *m, ts_shard_info *t)
 {

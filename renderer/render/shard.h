@@ -106,6 +106,10 @@ ts_status ts_merge_add_file(ts_merge *m, const char *path, ts_error *err);
  * the number of missing pieces. */
 int ts_merge_missing(const ts_merge *m, char *out, size_t len);
 
+/* The metadata of the i-th file added (0 ≤ i < the files added so far), as read: false
+ * beyond. */
+bool ts_merge_file_info(const ts_merge *m, int i, ts_shard_info *info);
+
 /* The merged film and its metadata (owned by m; valid until ts_merge_destroy). NULL film
  * before the first successful add. */
 const ts_film *ts_merge_result(ts_merge *m, ts_shard_info *info, int *n_files);

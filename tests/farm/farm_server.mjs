@@ -263,6 +263,71 @@ await check('kill -9 of the server mid-run, restart on the same --data: re-attac
   await sameImage(`${base}/api/v1/jobs/${id}/image.exr`, reference(1024), 'after-restart');
 });
 
+// ---------------------------------------------------------------- bundles
+// A tar of scene.json with the mesh files it names, and of a scene.pbrt (its spp from ?spp=):
+// the files reach the nodes through --farm-dir; each equals the CLI's render of the folder.
+await check('bundles with ?shards=2 (scene.json with mesh files; scene.pbrt with ?spp=8) equal the CLI\'s', async () => {
+  const dir = path.join(T, 'bundle'), pdir = path.join(T, 'bundle-pbrt');
+  fs.mkdirSync(path.join(dir, 'meshes'), { recursive: true });
+  fs.mkdirSync(path.join(pdir, 'meshes'), { recursive: true });
+  const tri = 'v -3 0 -3\nv 3 0 -3\nv 0 0 3\nf 1 3 2\n';
+  const quad = 'ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n' +
+    'element face 2\nproperty list uchar int vertex_indices\nend_header\n-1 0 -1\n1 0 -1\n1 2 -1\n-1 2 -1\n3 0 1 2\n3 0 2 3\n';
+  fs.writeFileSync(path.join(dir, 'meshes/tri.obj'), tri);
+  fs.writeFileSync(path.join(dir, 'meshes/quad.ply'), quad);
+  fs.writeFileSync(path.join(pdir, 'meshes/quad.ply'), quad);
+  fs.writeFileSync(path.join(dir, 'scene.json'), JSON.stringify({
+    tessera: 1, camera: { from: [0, 1.5, 5], to: [0, 0.6, 0], fov: 35 },
+    film: { width: 32, height: 24, filter: { type: 'box' } }, sampler: { spp: 16 },
+    integrator: { type: 'path', max_depth: 3 }, materials: { w: { type: 'diffuse' } },
+    shapes: [{ type: 'mesh', file: 'meshes/tri.obj', material: 'w' }, { type: 'mesh', file: 'meshes/quad.ply', material: 'w' }],
+    lights: [{ type: 'point', position: [0, 3, 2], intensity: [20, 20, 20] }] }));
+  fs.writeFileSync(path.join(pdir, 'scene.pbrt'), 'LookAt 0 1.5 5  0 0.6 0  0 1 0\nCamera "perspective" "float fov" [35]\n' +
+    'Film "image" "integer xresolution" [32] "integer yresolution" [24]\nSampler "sobol" "integer pixelsamples" [4]\n' +
+    'PixelFilter "box"\nWorldBegin\nLightSource "point" "point from" [0 3 2] "rgb I" [20 20 20]\nMaterial "matte"\n' +
+    'Shape "plymesh" "string filename" "meshes/quad.ply"\nWorldEnd\n');
+  for (const [d, file, query, cli] of [[dir, 'scene.json', '?shards=2', []], [pdir, 'scene.pbrt', '?shards=2&spp=8', ['--spp', '8']]]) {
+    const tar = path.join(T, path.basename(d) + '.tar');
+    const t = sh('tar', ['-C', d, '-cf', tar, file, 'meshes']);
+    assert(t.status === 0, 'tar: ' + t.err);
+    const r = await fetch(`${base}/api/v1/jobs${query}`, { method: 'POST', headers: { 'Content-Type': 'application/x-tar' }, body: fs.readFileSync(tar) });
+    const body = await r.json();
+    assert(r.status === 201, `POST ${file}${query}: ${r.status} ${JSON.stringify(body)}`);
+    const s = await until(`the ${file} bundle done`, async () => { const s = await status(base, body.id); return ended(s) && s; }, 60);
+    assert(s.state === 'done' && s.farm.shards === 2, `state ${s.state}: ${s.error}`);
+    const ref = path.join(T, path.basename(d) + '-cli.exr');
+    const c = sh(TS_BINARY, ['render', path.join(d, file), '--threads', '2', '--quiet', ...cli, '-o', ref]);
+    assert(c.status === 0, `tessera render ${file}: ${c.err}`);
+    await sameImage(`${base}/api/v1/jobs/${body.id}/image.exr`, ref, 'bundle-' + file);
+  }
+  const bad = await fetch(`${base}/api/v1/jobs?shards=01`, { method: 'POST', headers: { 'Content-Type': 'application/x-tar' }, body: fs.readFileSync(path.join(T, 'bundle.tar')) });
+  assert(bad.status === 400, `?shards=01: ${bad.status}`);
+  const json = await fetch(`${base}/api/v1/jobs?shards=2`, { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(scene(16)) });
+  assert(json.status === 400, `a JSON POST with ?shards: ${json.status}`);
+});
+
+// ---------------------------------------------------------------- out of retries
+await check('a task that keeps failing: the job fails naming it and its stderr, the array is cancelled', async () => {
+  const srv = serve(['--farm', 'slurm', '--farm-dir', path.join(T, 'farm-noretry'), '--farm-retries', '0',
+    '--farm-checkpoint-interval', '0.5']);
+  const b = await srv.url;
+  const r = await post(b, scene(4096, { shards: 4 }));
+  const s0 = await until('task 1 running with merged samples', async () => {
+    const s = await status(b, r.body.id);
+    return s.farm.slurm_job && s.farm.tasks[1].state === 'running' && s.farm.tasks[1].spp > 0 && s;
+  }, 60);
+  assert(sh('scancel', [`${s0.farm.slurm_job}_1`]).status === 0, 'scancel failed');
+  const s = await until('failed', async () => { const s = await status(b, r.body.id); return ended(s) && s; }, 60);
+  assert(s.state === 'failed', `state ${s.state}`);
+  assert(new RegExp(`^task 1 of 4 \\(Slurm job ${s0.farm.slurm_job}_1\\) failed after 0 requeues: CANCELLED.*stderr: .*Terminated: saved samples`).test(s.error),
+    `error: ${s.error}`);
+  assert(s.farm.tasks[1].state === 'failed' && s.spp_done >= 0 && s.samples > 0, `tasks ${JSON.stringify(s.farm.tasks)}`);
+  await until('squeue empty', () => sh('squeue', ['-h', '-j', s0.farm.slurm_job]).out.trim() === '', 30);
+  log('  ' + s.error.slice(0, 160) + '…');
+  srv.kill('SIGTERM');
+  await srv.exited;
+});
+
 // ---------------------------------------------------------------- the web UI's shard view
 await check('the web UI shows each shard\'s state and spp', async () => {
   const CHROMIUM = process.env.TS_CHROMIUM || '/usr/bin/chromium';
