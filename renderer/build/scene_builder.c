@@ -17,6 +17,7 @@
 #include "image/image.h"
 #include "integrators/effects.h"
 #include "lights/envmap.h"
+#include "core/name_map.h"
 #include "materials/bsdf.h"
 #include "materials/fourier_bsdf.h"
 #include "mesh/mesh_file.h"
@@ -33,6 +34,7 @@ struct ts_scene_builder {
     /* Growable lists (malloc), copied into the arena by finish. */
     ts_material *materials;
     const char **material_names; /* arena strings; NULL for anonymous materials */
+    ts_name_map material_index;  /* the named ones' ids: lookups in constant time */
     uint32_t n_materials;
     size_t cap_materials, cap_material_names;
     ts_shape *shapes;
@@ -46,6 +48,7 @@ struct ts_scene_builder {
      * object being defined (TS_NONE outside ObjectBegin/End). */
     ts_object *objects;
     const char **object_names;
+    ts_name_map object_index;
     uint32_t n_objects;
     size_t cap_objects, cap_object_names;
     ts_instance *instances;
@@ -182,6 +185,8 @@ void ts_scene_builder_destroy(ts_scene_builder *b)
     free(b->envmaps);
     free(b->materials);
     free(b->material_names);
+    ts_name_map_fini(&b->material_index);
+    ts_name_map_fini(&b->object_index);
     free(b->shapes);
     free(b->lights);
     free(b->objects);
@@ -655,10 +660,8 @@ static ts_status check_material(const ts_scene_builder *b, const ts_material *m,
 
 uint32_t ts_scene_builder_find_material(const ts_scene_builder *b, const char *name)
 {
-    if (!name) return TS_NONE;
-    for (uint32_t k = 0; k < b->n_materials; k++)
-        if (b->material_names[k] && strcmp(b->material_names[k], name) == 0) return k;
-    return TS_NONE;
+    uint32_t k = name ? ts_name_map_get(&b->material_index, name) : TS_NAME_MAP_NONE;
+    return k == TS_NAME_MAP_NONE ? TS_NONE : k;
 }
 
 ts_status ts_scene_builder_add_material(ts_scene_builder *b, const char *name, const ts_material *m,
@@ -675,7 +678,8 @@ ts_status ts_scene_builder_add_material(ts_scene_builder *b, const char *name, c
         !grow((void **)&b->material_names, &b->cap_material_names, need, sizeof *b->material_names))
         return nomem(err, "the materials");
     const char *copy = NULL;
-    if (name && !(copy = ts_arena_strdup(&b->s->arena, name))) return nomem(err, "the material names");
+    if (name && (!(copy = ts_arena_strdup(&b->s->arena, name)) || !ts_name_map_put(&b->material_index, copy, b->n_materials)))
+        return nomem(err, "the material names");
     b->materials[b->n_materials] = *m;
     ts_material *added = &b->materials[b->n_materials];
     added->textured = ts_material_uses_textures(m);
@@ -981,7 +985,7 @@ ts_status ts_scene_builder_begin_object(ts_scene_builder *b, const char *name, u
         !grow((void **)&b->object_names, &b->cap_object_names, (size_t)b->n_objects + 1, sizeof *b->object_names))
         return nomem(err, "the objects");
     const char *copy = ts_arena_strdup(&b->s->arena, name);
-    if (!copy) return nomem(err, "the objects");
+    if (!copy || !ts_name_map_put(&b->object_index, copy, b->n_objects)) return nomem(err, "the objects");
     b->objects[b->n_objects] = (ts_object){b->n_shapes, 0};
     b->object_names[b->n_objects] = copy;
     if (id) *id = b->n_objects;
@@ -999,9 +1003,8 @@ ts_status ts_scene_builder_end_object(ts_scene_builder *b, ts_error *err)
 
 uint32_t ts_scene_builder_find_object(const ts_scene_builder *b, const char *name)
 {
-    for (uint32_t i = 0; name && i < b->n_objects; i++)
-        if (strcmp(b->object_names[i], name) == 0) return i;
-    return TS_NONE;
+    uint32_t i = name ? ts_name_map_get(&b->object_index, name) : TS_NAME_MAP_NONE;
+    return i == TS_NAME_MAP_NONE ? TS_NONE : i;
 }
 
 ts_status ts_scene_builder_add_instance(ts_scene_builder *b, uint32_t object, const ts_xform *to_world, ts_error *err)

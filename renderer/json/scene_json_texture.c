@@ -23,14 +23,14 @@ void ts_json_textures_fini(ts_json_textures *t)
 {
     free(t->names);
     free(t->textures);
+    ts_name_map_fini(&t->index);
     *t = (ts_json_textures){0};
 }
 
 const ts_texture *ts_json_textures_find(const ts_json_textures *t, const char *name)
 {
-    for (uint32_t i = 0; i < t->n; i++)
-        if (strcmp(t->names[i], name) == 0) return t->textures[i];
-    return NULL;
+    uint32_t i = ts_name_map_get(&t->index, name);
+    return i == TS_NAME_MAP_NONE ? NULL : t->textures[i];
 }
 
 static ts_status add(ts_json_textures *t, const char *name, const ts_texture *tex, ts_error *err)
@@ -44,6 +44,8 @@ static ts_status add(ts_json_textures *t, const char *name, const ts_texture *te
         t->textures = x;
         t->cap = cap;
     }
+    if (!ts_name_map_put(&t->index, name, t->n))
+        return ts_error_set(err, TS_ERR_NOMEM, "out of memory while loading the textures");
     t->names[t->n] = name;
     t->textures[t->n] = tex;
     t->n++;

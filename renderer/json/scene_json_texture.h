@@ -20,6 +20,7 @@
 #include <cjson/cJSON.h>
 
 #include "core/error.h"
+#include "core/name_map.h"
 #include "core/transform.h"
 #include "materials/material.h"
 #include "json/json_check.h"
@@ -30,6 +31,7 @@ typedef struct ts_json_textures {
     const char **names; /* into the document */
     const ts_texture **textures;
     uint32_t n, cap;
+    ts_name_map index;  /* names → their indices (lookups in constant time) */
 } ts_json_textures;
 
 void ts_json_textures_init(ts_json_textures *t);
