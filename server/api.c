@@ -647,7 +647,10 @@ static void bundle_task(void *arg)
     snprintf(staging, sizeof staging, "%s/incoming/%02x%02x%02x%02x%02x%02x%02x%02x", root, rnd[0], rnd[1],
              rnd[2], rnd[3], rnd[4], rnd[5], rnd[6], rnd[7]);
     srv_bundle_info info;
-    if (srv_bundle_unpack(r->body, r->body_len, staging, a->bundle, &info, &status, &err)) {
+    srv_bundle_limits lim = *a->bundle;
+    lim.cancel = &t->load;
+    if (srv_bundle_unpack(r->body, r->body_len, staging, &lim, &info, &status, &err)) {
+        load_failed(r, t, status, &err);
         srv_http_set_error(r, (unsigned)status, "%s", err.message);
         staging[0] = '\0'; /* the unpacker removed it */
         goto done;

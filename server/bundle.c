@@ -23,6 +23,16 @@ void srv_bundle_limits_default(srv_bundle_limits *lim)
     lim->max_path = 1024;
     lim->max_entry_bytes = 256u << 20;
     lim->max_expanded = 1ull << 30;
+    lim->cancel = NULL;
+}
+
+/* True (st and *http_status set) when the bundle's load has to stop. */
+static bool stopped(const srv_bundle_limits *lim, int *http_status, ts_status *st, ts_error *err)
+{
+    if (!ts_cancel_requested(lim->cancel)) return false;
+    *http_status = atomic_load(&lim->cancel->timed_out) ? 422 : 503;
+    *st = ts_cancel_check(lim->cancel, err);
+    return true;
 }
 
 bool srv_bundle_media_type(const char *v)
@@ -287,6 +297,7 @@ ts_status srv_bundle_unpack(const void *buf, size_t len, const char *dir, const 
     }
     for (;;) {
         struct archive_entry *e;
+        if (stopped(lim, http_status, &st, err)) goto done;
         int r = archive_read_next_header(a, &e);
         if (r == ARCHIVE_EOF) break;
         if (r != ARCHIVE_OK && r != ARCHIVE_WARN) {
@@ -387,7 +398,8 @@ ts_status srv_bundle_unpack(const void *buf, size_t len, const char *dir, const 
             goto done;
         }
         uint64_t entry_bytes = 0;
-        for (;;) {
+        for (unsigned blocks = 1;; blocks++) {
+            if (blocks % 16 == 0 && stopped(lim, http_status, &st, err)) goto done;
             la_ssize_t n = archive_read_data(a, data, 1 << 16);
             if (n == 0) break;
             if (n < 0) {

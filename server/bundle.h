@@ -28,6 +28,9 @@ typedef struct srv_bundle_limits {
     uint32_t max_path;        /* bytes of an entry's path */
     uint64_t max_entry_bytes; /* one file's bytes */
     uint64_t max_expanded;    /* all files' bytes together */
+    ts_cancel *cancel;        /* a request's load bound (core/cancel.h), polled at each entry and
+                               * every MiB written: then TS_ERR_CANCELLED, 422 when timed out, else
+                               * 503; NULL (the default): never */
 } srv_bundle_limits;
 
 /* The defaults of `tessera serve` (docs/security.md). */
