@@ -757,6 +757,7 @@ static void follow(srv_farm *f, farm_job *fj)
             pthread_mutex_unlock(&f->mu);
             char msg[1200];
             snprintf(msg, sizeof msg, "%s; stderr: %s", how, tail[0] ? tail : "(empty)");
+            why[0] = '\0';
             if (tries < f->opt.retries && requeue(fj, i, why, sizeof why)) {
                 pthread_mutex_lock(&f->mu);
                 fj->tasks[i].retries++;
@@ -767,9 +768,11 @@ static void follow(srv_farm *f, farm_job *fj)
             } else {
                 s = TASK_FAILED;
                 if (!failure) {
+                    char refused[600] = "";
+                    if (why[0]) snprintf(refused, sizeof refused, " (scontrol requeue refused: %s)", why);
                     snprintf(failure_text, sizeof failure_text,
-                             "task %u of %u (Slurm job %s_%u) failed after %d requeue%s: %s", i, fj->shards,
-                             fj->slurm_id, i, tries, tries == 1 ? "" : "s", msg);
+                             "task %u of %u (Slurm job %s_%u) failed after %d requeue%s%s: %s", i, fj->shards,
+                             fj->slurm_id, i, tries, tries == 1 ? "" : "s", refused, msg);
                     failure = failure_text;
                 }
             }
