@@ -269,6 +269,36 @@ static void test_textured_values_clamped(void **state)
     ts_scene_destroy(s);
 }
 
+/* "texture_clamp": "nonnegative" (what a .pbrt file's materials get: pbrt-v3 clamps
+ * textured colours at 0 only) keeps a reflectance of 2; an
+ * uber opacity above 1 passes nothing through; the coupled plastic keeps [0, 1]. */
+static void test_texture_clamp_nonnegative(void **state)
+{
+    (void)state;
+    ts_scene *s = load(HEAD "\"textures\":{\"two\":{\"type\":\"scale\",\"tex1\":4,\"tex2\":[0.5,0.25,0]},"
+                            "\"op\":{\"type\":\"scale\",\"tex1\":2,\"tex2\":0.75}},"
+                            "\"materials\":{\"m\":{\"type\":\"diffuse\",\"texture_clamp\":\"nonnegative\","
+                            "\"reflectance\":\"two\"},"
+                            "\"u\":{\"type\":\"uber\",\"texture_clamp\":\"nonnegative\",\"diffuse\":0.5,"
+                            "\"specular\":0,\"reflectance\":0,\"transmittance\":0,\"opacity\":\"op\"},"
+                            "\"p\":{\"type\":\"plastic\",\"texture_clamp\":\"nonnegative\",\"diffuse\":\"two\","
+                            "\"specular\":0}}," PLANE,
+                       NULL);
+    near_rgb(lambert_at(material(s, "m"), 0.5f, 0.5f), (ts_rgb){2, 1, 0});
+    ts_texture_context c;
+    ts_interaction si = hit(0.5f, 0.5f, &c);
+    ts_bsdf b;
+    ts_material_bsdf(material(s, "u"), &si, &c, &b);
+    assert_int_equal(b.n_bxdfs, 1); /* no pass-through lobe for an opacity of 1.5 */
+    ts_material_bsdf(material(s, "p"), &si, &c, &b);
+    ts_vec3 n = {0, 0, 1};
+    ts_rgb f = ts_bsdf_f(&b, n, n);
+    assert_true(f.r <= 1.0f / (float)M_PI + 1e-6f && f.b == 0); /* clamped into [0, 1] */
+    ts_scene_destroy(s);
+    refused(HEAD "\"materials\":{\"m\":{\"type\":\"diffuse\",\"texture_clamp\":\"none\"}}," PLANE,
+            "materials.m.texture_clamp");
+}
+
 /* A textured roughness may be smooth somewhere and rough elsewhere: the effects analysis
  * counts both lobes; a textured reflectance counts its lobe even where the constant would
  * be black. */
@@ -448,6 +478,7 @@ int main(void)
         cmocka_unit_test(test_bump_linear),
         cmocka_unit_test(test_constant_material_ignores_context),
         cmocka_unit_test(test_textured_values_clamped),
+        cmocka_unit_test(test_texture_clamp_nonnegative),
         cmocka_unit_test(test_effects_of_textured_materials),
         cmocka_unit_test(test_json_imagemap),
         cmocka_unit_test(test_builder_textures),

@@ -520,26 +520,30 @@ static ts_status parse_material(loader *ld, const cJSON *m, const char *path, ts
         return ts_error_set(ld->err, TS_ERR_UNSUPPORTED, "%s: material 'disney' is not supported", p.s);
     }
     TRY(ts_json_enum(m, path, "type", true, types, &type, ld->err));
-    static const char *const k_diffuse[] = {"type", "bumpmap", "reflectance", "sigma", NULL};
-    static const char *const k_mirror[] = {"type", "bumpmap", "reflectance", NULL};
-    static const char *const k_dielectric[] = {"type", "bumpmap",       "eta",        "reflectance",     "transmittance",
+    static const char *const k_diffuse[] = {"type", "bumpmap", "texture_clamp", "reflectance", "sigma", NULL};
+    static const char *const k_mirror[] = {"type", "bumpmap", "texture_clamp", "reflectance", NULL};
+    static const char *const k_dielectric[] = {"type", "bumpmap", "texture_clamp",       "eta",        "reflectance",     "transmittance",
                                                "roughness",  "uroughness", "vroughness",      "remap_roughness", NULL};
-    static const char *const k_conductor[] = {"type", "bumpmap",       "eta",        "k",               "roughness", "distribution",
+    static const char *const k_conductor[] = {"type", "bumpmap", "texture_clamp",       "eta",        "k",               "roughness", "distribution",
                                               "uroughness", "vroughness", "remap_roughness", NULL};
-    static const char *const k_plastic[] = {"type", "bumpmap", "diffuse", "specular", "roughness", "remap_roughness", NULL};
-    static const char *const k_substrate[] = {"type",       "bumpmap",    "diffuse",         "specular", "roughness",
+    static const char *const k_plastic[] = {"type", "bumpmap", "texture_clamp", "diffuse", "specular", "roughness", "remap_roughness", NULL};
+    static const char *const k_substrate[] = {"type",       "bumpmap",    "texture_clamp", "diffuse",         "specular", "roughness",
                                               "uroughness", "vroughness", "remap_roughness", NULL};
-    static const char *const k_fourier[] = {"type", "bumpmap", "file", NULL};
-    static const char *const k_uber[] = {"type", "bumpmap",      "diffuse",    "specular",   "reflectance", "transmittance", "eta",
+    static const char *const k_fourier[] = {"type", "bumpmap", "texture_clamp", "file", NULL};
+    static const char *const k_uber[] = {"type", "bumpmap", "texture_clamp",      "diffuse",    "specular",   "reflectance", "transmittance", "eta",
                                          "roughness", "uroughness", "vroughness", "opacity",     "remap_roughness", NULL};
-    static const char *const k_translucent[] = {"type", "bumpmap",          "diffuse",   "specular",        "reflectance",
+    static const char *const k_translucent[] = {"type", "bumpmap", "texture_clamp",          "diffuse",   "specular",        "reflectance",
                                                 "transmittance", "roughness", "remap_roughness", NULL};
-    static const char *const k_mix[] = {"type", "bumpmap", "materials", "amount", NULL};
+    static const char *const k_mix[] = {"type", "bumpmap", "texture_clamp", "materials", "amount", NULL};
     const char *const *keys[] = {k_diffuse, k_mirror,  k_dielectric, k_conductor,   k_plastic, k_substrate,
                                  k_fourier, k_plastic, k_uber,       k_translucent, k_mix};
     TRY(ts_json_check_object(m, path, keys[type], ld->err));
 
     *out = (ts_material){0};
+    static const char *const clamps[] = {"unit", "nonnegative", NULL};
+    int clamp = 0;
+    TRY(ts_json_enum(m, path, "texture_clamp", false, clamps, &clamp, ld->err));
+    out->texture_clamp_nonneg = clamp == 1;
     out->type = (ts_material_type)type;
     out->reflectance = ts_material_rgb_gray(type == TS_MATERIAL_DIFFUSE ? 0.5f : 1.0f);
     out->transmittance = ts_material_rgb_gray(1);

@@ -235,7 +235,8 @@ static void mix_bsdf(const ts_material *m, const ts_interaction *si, const ts_te
  * one, whose reads the compiler reduces to the plain values: ts_material_bsdf calls it
  * with the constant true or false, so a constant-only material runs the code it ran
  * before parameters could be textured (docs/design.md §4d measures it). */
-#define RGB(p) (textured ? ts_material_eval_unit_rgb(&(p), tc) : (p).value)
+#define RGB(p) (textured ? (nonneg ? ts_material_eval_nonneg_rgb(&(p), tc) : ts_material_eval_unit_rgb(&(p), tc)) \
+                         : (p).value)
 #define NONNEG_RGB(p) (textured ? ts_material_eval_nonneg_rgb(&(p), tc) : (p).value)
 #define FLOAT(p, lo, hi) (textured ? ts_material_eval_float(&(p), tc, lo, hi) : (p).value)
 /* The dielectric's η, evaluated once when textured; a constant one read again, as the
@@ -244,6 +245,8 @@ static void mix_bsdf(const ts_material *m, const ts_interaction *si, const ts_te
 static inline __attribute__((always_inline)) void bsdf(const ts_material *m, const ts_interaction *si,
                                                        const ts_texture_context *tc, ts_bsdf *out, bool textured)
 {
+    /* Colours clamped at 0 only (pbrt-v3's), but for the coupled plastic (material.h). */
+    const bool nonneg = textured && m->texture_clamp_nonneg && m->type != TS_MATERIAL_PLASTIC;
     float eta = 1;
     if (m->type == TS_MATERIAL_DIELECTRIC) eta = FLOAT(m->eta, TS_MATERIAL_ETA_MIN, FLT_MAX);
     if (m->type == TS_MATERIAL_FOURIER && m->fourier) eta = m->fourier->eta;
@@ -323,7 +326,7 @@ static inline __attribute__((always_inline)) void bsdf(const ts_material *m, con
     }
     case TS_MATERIAL_UBER: {
         float e = FLOAT(m->eta, TS_MATERIAL_ETA_MIN, FLT_MAX);
-        ts_rgb op = RGB(m->opacity), pass = {1 - op.r, 1 - op.g, 1 - op.b};
+        ts_rgb op = RGB(m->opacity), pass = {ts_maxf(0, 1 - op.r), ts_maxf(0, 1 - op.g), ts_maxf(0, 1 - op.b)};
         out->eta = e;
         if (nonblack(pass)) {
             ts_bsdf_add(out, ts_bxdf_specular_transmission(pass, 1, 1));

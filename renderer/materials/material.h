@@ -100,6 +100,10 @@ typedef struct ts_material {
      * normal (NULL: none; ts_material_bump). */
     const struct ts_texture *bump;
     bool textured; /* a parameter or the bump map has a texture: set by the builder (ts_material_uses_textures) */
+    /* Textured colours clamped at 0 only, as pbrt-v3's Spectrum::Clamp(), not into [0, 1]
+     * (the Decision above): set for every material of a .pbrt file, JSON "texture_clamp":
+     * "nonnegative". The coupled `plastic`, whose 1 − ks·F needs ks ≤ 1, keeps [0, 1]. */
+    bool texture_clamp_nonneg;
     /* Set by the builder, from the materials a mix names (so counting is linear in the
      * scene): the lobes of its flattened BSDF at most (ts_material_max_lobes; a mix the sum
      * of its two, at most TS_BSDF_MAX_BXDFS), and the textures one shading of it evaluates

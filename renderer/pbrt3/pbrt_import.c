@@ -761,6 +761,7 @@ static ts_status make_material(imp *im, int32_t mi, ts_material *m, bool *no_sur
     ts_pbrt_loc loc = mi >= 0 ? im->s->materials[mi].loc : (ts_pbrt_loc){0};
     const char *type = mi >= 0 ? im->s->materials[mi].type : "matte";
     *m = (ts_material){0};
+    m->texture_clamp_nonneg = true; /* pbrt-v3's textured colours: clamped at 0 only (material.h) */
     *no_surface = false;
     if (type[0] == 0 || strcmp(type, "none") == 0) {
         *no_surface = true;
@@ -934,6 +935,8 @@ static ts_status json_material_fill(imp *im, cJSON *j, int32_t mi, const char *n
                                     const ts_material *m)
 {
     if (!ts_jw_string(j, "type", type)) return nomem(im);
+    if (m->texture_clamp_nonneg && ts_material_uses_textures(m) && !ts_jw_string(j, "texture_clamp", "nonnegative"))
+        return nomem(im);
     if (m->bump) TRY(jparam(im, j, name, "bumpmap", m->bump, NULL));
     switch (m->type) {
     case TS_MATERIAL_DIFFUSE:
