@@ -329,6 +329,40 @@ static void test_deterministic(void **state)
     ts_scene_destroy(b);
 }
 
+/* JSON path's default selection: bvh for two or more lights, power for one; a named one stays. */
+static void test_default(void **state)
+{
+    (void)state;
+    const char *fmt =
+        "{\"tessera\":1,\"camera\":{\"type\":\"perspective\",\"from\":[0,0,-5],\"to\":[0,0,0],\"fov\":40},"
+        "\"film\":{\"width\":4,\"height\":4}%s,\"materials\":{\"m\":{\"type\":\"diffuse\"}},"
+        "\"shapes\":[{\"type\":\"sphere\",\"radius\":1,\"material\":\"m\"}],\"lights\":[%s]}";
+    const char *one = "{\"type\":\"point\",\"position\":[0,3,0],\"intensity\":1}";
+    const char *two = "{\"type\":\"point\",\"position\":[0,3,0],\"intensity\":1},"
+                      "{\"type\":\"point\",\"position\":[3,0,0],\"intensity\":2}";
+    struct {
+        const char *integrator, *lights;
+        ts_light_selection want;
+    } cases[] = {
+        {"", two, TS_LIGHT_SELECT_BVH},
+        {"", one, TS_LIGHT_SELECT_POWER},
+        {",\"integrator\":{\"type\":\"path\"}", two, TS_LIGHT_SELECT_BVH},
+        {",\"integrator\":{\"type\":\"path\",\"max_depth\":3}", one, TS_LIGHT_SELECT_POWER},
+        {",\"integrator\":{\"type\":\"path\",\"light_sampling\":\"power\"}", two, TS_LIGHT_SELECT_POWER},
+        {",\"integrator\":{\"type\":\"path\",\"light_sampling\":\"spatial\"}", two, TS_LIGHT_SELECT_SPATIAL},
+        {",\"integrator\":{\"type\":\"direct\",\"strategy\":\"one\"}", two, TS_LIGHT_SELECT_POWER},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof *cases; k++) {
+        char doc[2048];
+        snprintf(doc, sizeof doc, fmt, cases[k].integrator, cases[k].lights);
+        ts_scene *s = load(doc);
+        if (s->integrator.light_sampling != cases[k].want)
+            fail_msg("case %zu: selection %d, want %d", k, (int)s->integrator.light_sampling, (int)cases[k].want);
+        assert_int_equal(s->light_distribution.bvh, cases[k].want == TS_LIGHT_SELECT_BVH);
+        ts_scene_destroy(s);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -336,6 +370,7 @@ int main(void)
         cmocka_unit_test(test_bounded_only),
         cmocka_unit_test(test_small),
         cmocka_unit_test(test_deterministic),
+        cmocka_unit_test(test_default),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -323,7 +323,7 @@ static void test_settings_refused(void **state)
         .type = TS_INTEGRATOR_PATH, .max_depth = -1, .light_sampling = TS_LIGHT_SELECT_POWER};
     refused(ts_scene_builder_set_integrator(b, &path, &err), &err,
             (expect){TS_ERR_INVALID, "integrator.max_depth: expected an integer in [0, 65535], got -1"});
-    path.max_depth = 3, path.light_sampling = (ts_light_selection)(TS_LIGHT_SELECT_BVH + 1);
+    path.max_depth = 3, path.light_sampling = (ts_light_selection)(TS_LIGHT_SELECT_AUTO + 1);
     refused(ts_scene_builder_set_integrator(b, &path, &err), &err,
             (expect){TS_ERR_INVALID, "integrator.light_sampling"});
     ts_integrator_desc direct = {.type = TS_INTEGRATOR_DIRECT, .max_depth = 1001, .samples_per_light = 1};

@@ -390,7 +390,10 @@ static ts_status parse_integrator(loader *ld, const cJSON *doc)
     ts_integrator_desc *in = &desc;
     const cJSON *it;
     TRY(ts_json_object(doc, "", "integrator", false, &it, ld->err));
-    if (!it) return ts_scene_builder_set_integrator(ld->b, in, ld->err);
+    if (!it) {
+        in->light_sampling = TS_LIGHT_SELECT_AUTO; /* path's default (scene.h) */
+        return ts_scene_builder_set_integrator(ld->b, in, ld->err);
+    }
     static const char *const types[] = {"path", "direct", "ao", "normals", "volpath", NULL};
     int type = 0;
     TRY(ts_json_enum(it, "integrator", "type", true, types, &type, ld->err));
@@ -424,7 +427,8 @@ static ts_status parse_integrator(loader *ld, const cJSON *doc)
         static const char *const sel[] = {"uniform", "power", "spatial", "bvh", NULL};
         int k = 1;
         TRY(ts_json_enum(it, "integrator", "light_sampling", false, sel, &k, ld->err));
-        in->light_sampling = (ts_light_selection)k;
+        in->light_sampling = cJSON_GetObjectItemCaseSensitive(it, "light_sampling") ? (ts_light_selection)k
+                                                                                     : TS_LIGHT_SELECT_AUTO;
         break;
     }
     case TS_INTEGRATOR_DIRECT: {

@@ -37,6 +37,9 @@ typedef enum ts_light_selection {
     TS_LIGHT_SELECT_POWER,
     TS_LIGHT_SELECT_SPATIAL, /* pbrt-v3's per-voxel distributions (lights/light.h) */
     TS_LIGHT_SELECT_BVH,     /* pbrt-v4's light hierarchy (lights/light_bvh.h) */
+    TS_LIGHT_SELECT_AUTO,    /* path, unnamed in JSON: the builder picks bvh for two or more
+                                lights, power for one (docs/design.md §4); the built scene holds
+                                the one it picked */
 } ts_light_selection;
 /* How direct light is estimated at a vertex: both strategies combined by the power
  * heuristic, light sampling only, or BSDF sampling only (delta lights are always light
