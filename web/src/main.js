@@ -41,8 +41,12 @@ let selectedId = null;       // the job in the preview
 let compareId = '';          // the job overlaid on the plots
 let streams = new Map();     // id -> EventSource (selected and compared jobs)
 
+// Jobs whose whole series came from the server after they finished: nothing is added to it
+// (a status poll's elapsed time can lie a little past the history's end point).
+const complete = new Set();
+
 function addPoint(id, t, err, spp) {
-  if (!(t > 0)) return;
+  if (!(t > 0) || complete.has(id)) return;
   let h = history.get(id);
   if (!h) history.set(id, (h = []));
   const last = h[h.length - 1];
@@ -737,7 +741,14 @@ async function loadHistory(id) {
   const pts = r.body.points.filter((p) => p.elapsed_s > 0).map((p) => ({ t: p.elapsed_s,
     err: p.error_estimate == null || !(p.error_estimate > 0) ? null : p.error_estimate, spp: p.spp > 0 ? p.spp : null }));
   const last = pts.length ? pts[pts.length - 1].t : 0;
-  history.set(id, [...pts, ...(history.get(id) || []).filter((p) => p.t > last)]);
+  const j = jobs.get(id);
+  if (j && finished(j.state)) {
+    // A finished job's history is whole: it is the series, with nothing seen here after it.
+    complete.add(id);
+    history.set(id, pts);
+  } else {
+    history.set(id, [...pts, ...(history.get(id) || []).filter((p) => p.t > last)]);
+  }
   saveHistory();
   updatePlots(true);
 }
