@@ -6,6 +6,7 @@
 /* cmocka.h needs the three headers above first. */
 #include <cmocka.h>
 
+#include <float.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -470,6 +471,11 @@ static void test_film_scale_and_clamp(void **state)
     float rgb[8 * 8 * 3];
     ts_film_resolve(b, rgb);
     assert_true(rgb[(4 * 8 + 3) * 3 + 1] == ms.g);
+    b->scale = FLT_MAX; /* values beyond float range give the largest float, not ∞ */
+    ts_rgb big = ts_film_pixel_rgb(b, 3, 4);
+    assert_true(isfinite(big.r) && isfinite(big.g) && isfinite(big.b) && (big.g == FLT_MAX || big.b == FLT_MAX));
+    assert_true(ts_film_pixel_variance(b, 3, 4).g == FLT_MAX);
+    b->scale = 1.5f;
     ts_film_merge(b, a); /* adds a's sums; b keeps its scale */
     assert_true(b->scale == 1.5f);
     assert_close(ts_film_pixel_rgb(b, 3, 4).g, ms.g, 1e-6 * ms.g);

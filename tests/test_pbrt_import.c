@@ -197,6 +197,8 @@ static void dots_swap_warned(void **state)
     assert_string_equal(w.last, "t.pbrt:2:1: Texture \"d\": paints its dots with \"outside\" and the rest with "
                                 "\"inside\", as pbrt-v3 renders it (pbrt-v3's textures/dots.cpp passes the two "
                                 "swapped); its JSON conversion names them by what they paint");
+    /* pbrt-v3 clamps textured colours at 0 only (docs/design.md's clamping Decision). */
+    assert_true(s->materials[s->shapes[0].material].texture_clamp_nonneg);
     ts_scene_destroy(s);
     /* marble keeps the book's spline (docs/design.md's Decision) and says so. */
     w.n = 0;

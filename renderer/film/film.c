@@ -51,11 +51,15 @@ void ts_film_destroy(ts_film *f)
     free(f);
 }
 
+/* v as a float, held to ±FLT_MAX: a large film scale (or a tiny filter weight sum) cannot
+ * make a pixel value infinite; values in range are converted as they are. */
+static float finite_float(double v) { return (float)(v > FLT_MAX ? FLT_MAX : (v < -FLT_MAX ? -FLT_MAX : v)); }
+
 static ts_rgb pixel_mean(const ts_film_pixel *p, float scale)
 {
     if (p->weight == 0) return (ts_rgb){0, 0, 0};
     double inv = scale / p->weight;
-    return (ts_rgb){(float)(p->sum[0] * inv), (float)(p->sum[1] * inv), (float)(p->sum[2] * inv)};
+    return (ts_rgb){finite_float(p->sum[0] * inv), finite_float(p->sum[1] * inv), finite_float(p->sum[2] * inv)};
 }
 
 ts_rgb ts_film_pixel_rgb(const ts_film *f, int x, int y)
