@@ -464,6 +464,8 @@ static void test_bad_input(void **state)
          "media.s: sigma_a, sigma_s: a grid's σa + σs must be the same in every channel"},
         {"\"s\":{\"type\":\"grid\",\"nx\":1,\"ny\":1,\"nz\":1,\"density\":[1],\"p0\":[0,0,1],\"p1\":[1,1,1]}", "", "",
          "media.s: p0, p1:"},
+        {"\"s\":{\"type\":\"grid\",\"sigma_a\":[1e30,1e30,1e30],\"sigma_s\":[0,0,0],\"nx\":1,\"ny\":1,\"nz\":1,"
+         "\"density\":[1e30]}", "", "", "media.s: density: σa + σs (1e+30) times the largest density (1e+30) is beyond"},
         {"\"f\":{\"type\":\"homogeneous\"}", ",\"medium\":\"fog\"", "", "camera.medium: no medium named \"fog\""},
         {"\"f\":{\"type\":\"homogeneous\"}", "",
          "{\"type\":\"sphere\",\"radius\":1,\"material\":null,\"medium\":{\"inside\":\"smoke\"}}",

@@ -896,6 +896,11 @@ static void media_mapped(void **state)
     expect_error("WorldBegin\nMakeNamedMedium \"a\" \"string type\" \"heterogeneous\" \"integer nx\" 2 "
                  "\"float density\" [1 2 3] \"rgb sigma_a\" [1 1 1] \"rgb sigma_s\" [1 1 1]\nWorldEnd\n",
                  "t.pbrt:2:1: MakeNamedMedium \"a\": density: 3 values, expected nx·ny·nz = 2·1·1 = 2");
+    /* A product beyond 2^64 must not wrap round to the count given. */
+    expect_error("WorldBegin\nMakeNamedMedium \"a\" \"string type\" \"heterogeneous\" \"integer nx\" 2147483647 "
+                 "\"integer ny\" 2147483647 \"integer nz\" 2147483647 \"float density\" [1] \"rgb sigma_a\" [1 1 1] "
+                 "\"rgb sigma_s\" [1 1 1]\nWorldEnd\n",
+                 "t.pbrt:2:1: MakeNamedMedium \"a\": density: 1 values, expected nx·ny·nz = 2147483647·2147483647·2147483647");
     expect_error("WorldBegin\nMakeNamedMedium \"a\" \"string type\" \"homogeneous\" \"string preset\" \"Jam\"\nWorldEnd\n",
                  "t.pbrt:2:1: MakeNamedMedium \"a\": preset: unknown medium preset \"Jam\" (pbrt-v3's names, e.g. "
                  "\"Wholemilk\", \"Ketchup\", \"Espresso\")");

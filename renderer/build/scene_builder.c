@@ -1326,7 +1326,11 @@ static ts_status medium_grid(ts_scene_builder *b, const ts_medium_desc *d, ts_me
     if (d->nx < 1 || d->ny < 1 || d->nz < 1)
         return ts_error_set(err, TS_ERR_INVALID, "nx, ny, nz: expected integers ≥ 1, got %u, %u, %u", d->nx, d->ny,
                             d->nz);
-    uint64_t n = (uint64_t)d->nx * d->ny * d->nz;
+    uint64_t nxy = (uint64_t)d->nx * d->ny; /* < 2^64: each count is below 2^32 */
+    if (nxy > UINT64_MAX / d->nz) /* no array holds that many (and the product must not wrap) */
+        return ts_error_set(err, TS_ERR_INVALID, "density: %llu values, expected nx·ny·nz = %u·%u·%u",
+                            (unsigned long long)d->n_density, d->nx, d->ny, d->nz);
+    uint64_t n = nxy * d->nz;
     if (d->n_density != n)
         return ts_error_set(err, TS_ERR_INVALID, "density: %llu values, expected nx·ny·nz = %u·%u·%u = %llu",
                             (unsigned long long)d->n_density, d->nx, d->ny, d->nz, (unsigned long long)n);
@@ -1355,6 +1359,10 @@ static ts_status medium_grid(ts_scene_builder *b, const ts_medium_desc *d, ts_me
         den[i] = v;
         if (v > mx) mx = v;
     }
+    if (!isfinite(m->sigma_t.r * mx))
+        return ts_error_set(err, TS_ERR_INVALID,
+                            "density: σa + σs (%g) times the largest density (%g) is beyond the float range",
+                            m->sigma_t.r, mx);
     for (int i = 0; i < 4; i++)
         for (int j = 0; j < 4; j++)
             if (!isfinite(d->to_world.m.m[i][j]) || !isfinite(d->to_world.m_inv.m[i][j]))

@@ -152,13 +152,13 @@ static ts_rgb grid_sample(const ts_medium *m, const ts_ray *ray, float tmax, ts_
     float t0, t1, len;
     float majorant = m->sigma_t.r * m->max_density;
     if (!(majorant > 0) || !grid_segment(m, ray, tmax, &o, &dd, &t0, &t1, &len)) return ts_rgb_gray(1);
-    float inv_majorant = 1 / majorant, inv_max = 1 / m->max_density, t = t0;
+    float inv_majorant = 1 / majorant, max = m->max_density, t = t0;
     for (uint32_t n = 0;;) {
         t += exp_step(w, inv_majorant);
         if (!(t < t1)) return ts_rgb_gray(1);
         if (!walk_step(w, &n)) return ts_rgb_gray(0);
         float d = grid_density(m, ts_vec3_add(o, ts_vec3_scale(dd, t)));
-        if (d * inv_max > ts_pcg32_float(&w->rng)) {
+        if (d / max > ts_pcg32_float(&w->rng)) { /* a division: a denormal max has no finite inverse */
             *scattered = true;
             *t_out = t / len;
             return ts_rgb_scale(m->sigma_s, 1 / m->sigma_t.r);
@@ -173,13 +173,13 @@ static ts_rgb grid_tr(const ts_medium *m, const ts_ray *ray, float tmax, ts_medi
     float t0, t1, len;
     float majorant = m->sigma_t.r * m->max_density;
     if (!(majorant > 0) || !grid_segment(m, ray, tmax, &o, &dd, &t0, &t1, &len)) return ts_rgb_gray(1);
-    float inv_majorant = 1 / majorant, inv_max = 1 / m->max_density, t = t0, tr = 1;
+    float inv_majorant = 1 / majorant, max = m->max_density, t = t0, tr = 1;
     for (uint32_t n = 0;;) {
         t += exp_step(w, inv_majorant);
         if (!(t < t1)) return ts_rgb_gray(tr);
         if (!walk_step(w, &n)) return ts_rgb_gray(0);
         float d = grid_density(m, ts_vec3_add(o, ts_vec3_scale(dd, t)));
-        tr *= 1 - ts_maxf(0, d * inv_max);
+        tr *= 1 - ts_maxf(0, d / max);
         if (!(tr > 0)) return ts_rgb_gray(0);
     }
 }
