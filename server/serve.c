@@ -8,7 +8,7 @@
 #include "serve.h"
 
 #include <errno.h>
-#include <getopt.h>
+#include <stddef.h>
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>
@@ -18,6 +18,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "options.h"
 #include "persist.h"
 #include "usage.h"
 #include "tessera.h"
@@ -27,61 +28,176 @@
 #define SRV_ENCODER_THREADS 2
 #define SRV_LOADER_THREADS 2
 
+/* ---------------------------------------------------------------- options */
+
+/* What the command line fills: the configuration, and two values read after parsing. */
+typedef struct serve_args {
+    srv_config cfg;
+    const char *token_file, *assets;
+} serve_args;
+
+#define F(f) offsetof(serve_args, f), sizeof(((serve_args *)0)->f)
+
+static bool parse_display(void *opts, const char *name, const char *arg, char *why, size_t n)
+{
+    (void)name;
+    ts_error derr = {0};
+    if (srv_display_parse_address(arg, NULL, NULL, &derr)) {
+        snprintf(why, n, "%s", derr.message);
+        return false;
+    }
+    ((serve_args *)opts)->cfg.display_server = arg;
+    return true;
+}
+
+static bool parse_log_format(void *opts, const char *name, const char *arg, char *why, size_t n)
+{
+    (void)name;
+    if (srv_log_parse_format(arg, &((serve_args *)opts)->cfg.log_format)) return true;
+    snprintf(why, n, "expected text or json, got '%s'", arg);
+    return false;
+}
+
+static bool parse_log_level(void *opts, const char *name, const char *arg, char *why, size_t n)
+{
+    (void)name;
+    if (srv_log_parse_level(arg, &((serve_args *)opts)->cfg.log_level)) return true;
+    snprintf(why, n, "expected error, warn, info or debug, got '%s'", arg);
+    return false;
+}
+
+/* The farm's options are the farm's (farm.h): its sentence names the option already. */
+static bool parse_farm(void *opts, const char *name, const char *arg, char *why, size_t n)
+{
+    char msg[400];
+    if (srv_farm_option(&((serve_args *)opts)->cfg.farm, name, arg, msg, sizeof msg) >= 0) return true;
+    const char *own = msg;
+    size_t k = strlen(name);
+    if (!strncmp(own, "--", 2) && !strncmp(own + 2, name, k) && own[2 + k] == ':') own += 3 + k + (own[3 + k] == ' ');
+    snprintf(why, n, "%s", own);
+    return false;
+}
+
+#define U(name, meta, lo, hi, unit, fld, help) {name, 0, meta, SRV_OPT_UINT, lo, hi, false, false, unit, F(fld), help, NULL, NULL, NULL}
+#define D(name, meta, lo, excl, hi, unit, fld, help, dflt) \
+    {name, 0, meta, SRV_OPT_NUMBER, lo, hi, excl, false, unit, F(fld), help, dflt, NULL, NULL}
+#define S(name, meta, fld, help) {name, 0, meta, SRV_OPT_STRING, 0, 0, false, false, NULL, F(fld), help, NULL, NULL, NULL}
+#define B(name, fld, help) {name, 0, NULL, SRV_OPT_FLAG, 0, 0, false, false, NULL, F(fld), help, "", NULL, NULL}
+#define C(name, meta, fn, help, dflt, heading) {name, 0, meta, SRV_OPT_CUSTOM, 0, 0, false, false, NULL, 0, 0, help, dflt, fn, heading}
+
+/* Every option of `tessera serve`: --help, the parser and the errors are made from this. */
+static const srv_option serve_options[] = {
+    S("bind", "ADDRESS", cfg.bind, "numeric IPv4/IPv6 address to listen on"),
+    U("port", "N", 0, 65535, NULL, cfg.port, "TCP port, 0 for any free one"),
+    {"threads", 0, "N", SRV_OPT_UINT, 1, 1024, false, false, NULL, F(cfg.threads), "render threads", "one per core", NULL, NULL},
+    U("max-running", "N", 1, 1024, NULL, cfg.max_running, "jobs rendering at once"),
+    U("http-threads", "N", 1, 64, NULL, cfg.http_threads, "HTTP threads"),
+    S("data", "DIR", cfg.data_dir, "checkpoint jobs to DIR and resume them after a restart"),
+    D("checkpoint-interval", "S", 0, true, INFINITY, "seconds", cfg.checkpoint_interval_s,
+      "seconds between checkpoints with --data", NULL),
+    {"token", 0, "TOKEN", SRV_OPT_STRING, 0, 0, false, true, "token", F(cfg.token),
+     "require 'Authorization: Bearer TOKEN'", "no token", NULL, NULL},
+    {"token-file", 0, "FILE", SRV_OPT_STRING, 0, 0, false, false, NULL, F(token_file),
+     "the same, the token read from FILE's first line (kept out of ps)", "", NULL, NULL},
+    S("cors-origin", "ORIGIN", cfg.cors_origin, "answer CORS requests from ORIGIN"),
+    {"allowed-hosts", 0, "H1,H2", SRV_OPT_STRING, 0, 0, false, false, NULL, F(cfg.allowed_hosts),
+     "Host names to answer besides the bind address (and localhost on loopback)", "", NULL, NULL},
+    S("assets", "DIR", assets, "the only folder posted scenes may read files from"),
+    U("max-asset-bytes", "BYTES", 1, 1099511627776.0, "bytes", cfg.limits.max_file_bytes,
+      "largest file a scene may read under --assets"),
+    U("max-jobs", "N", 1, 1000000, NULL, cfg.max_jobs, "jobs held at once, any state; a POST beyond gets 503"),
+    U("max-body", "BYTES", 64, 4294967296.0, "bytes", cfg.max_body, "largest request body"),
+    U("max-resolution", "N", 1, 16384, NULL, cfg.limits.max_width, "largest film width or height in pixels"),
+    U("max-pixels", "N", 1, 268435456, NULL, cfg.limits.max_pixels, "largest film area in pixels"),
+    U("max-spp", "N", 1, 16777216, NULL, cfg.limits.max_spp, "most samples per pixel a job may ask"),
+    U("max-triangles", "N", 1, 4294967296.0, NULL, cfg.limits.max_triangles, "most triangles in a posted scene"),
+    U("max-shapes", "N", 1, 16777216, NULL, cfg.limits.max_shapes, "most shapes in a posted scene"),
+    U("client-timeout", "S", 1, 86400, "seconds", cfg.client_timeout_s, "close a connection idle this many seconds"),
+    U("request-timeout", "S", 1, 86400, "seconds", cfg.request_timeout_s,
+      "close a connection whose request (headers and body) has not arrived\nthis many seconds after it opened or "
+      "after its previous answer"),
+    U("max-client-connections", "N", 1, 4000, NULL, cfg.max_client_conns, "connections one address may hold"),
+    U("max-subscribers", "N", 1, 4000, NULL, cfg.max_subscribers, "event streams open at once, all jobs"),
+    U("max-job-subscribers", "N", 1, 4000, NULL, cfg.max_job_subscribers, "event streams of one job at once"),
+    D("max-work", "RAYS", 1, false, INFINITY, NULL, cfg.max_work,
+      "most rays one job may ask for: rays a sample x spp x pixels", "1e13"),
+    D("max-load-seconds", "S", 0.1, false, 3600, "seconds", cfg.max_load_s,
+      "time a posted scene may take to load, from its arrival; beyond, 422\n(or 503 if it waited that long for a "
+      "loader)", NULL),
+    {"max-bundle-bytes", 0, "BYTES", SRV_OPT_UINT, 64, 4294967296.0, false, false, "bytes", F(cfg.bundle.max_bytes),
+     "largest bundle as posted", NULL, NULL,
+     "A job may be posted as a tar (optionally gzip) of scene.json or scene.pbrt and its files:"},
+    U("max-bundle-entries", "N", 1, 1000000, NULL, cfg.bundle.max_entries, "most entries in a bundle, folders included"),
+    U("max-bundle-expanded", "BYTES", 1, 1099511627776.0, "bytes", cfg.bundle.max_expanded,
+      "most bytes of all a bundle's files together"),
+    U("max-bundle-entry-bytes", "BYTES", 1, 1099511627776.0, "bytes", cfg.bundle.max_entry_bytes,
+      "largest file in a bundle"),
+    U("max-bundle-path", "BYTES", 16, 4000, "bytes", cfg.bundle.max_path, "longest path of a bundle's entry"),
+    C("log-format", "text|json", parse_log_format, "job events as text lines or JSON lines on stderr", "text", NULL),
+    C("log-level", "LEVEL", parse_log_level, "error, warn, info (job events) or debug (and every request)", "info",
+      NULL),
+    B("queue-builtin", cfg.queue_builtin, "queue the built-in Cornell box as the first job (make run)"),
+    C("display-server", "HOST:PORT", parse_display, "stream every job to a tev viewer there, as tiles finish", "none",
+      NULL),
+    B("allow-job-display-server", cfg.allow_job_display_server,
+      "let a job's job.display_server name any address (default: only the\n--display-server one; others get 403)"),
+    C("farm", "slurm", parse_farm, "send farm jobs to Slurm (sbatch, squeue, scontrol, scancel on PATH)", "",
+      "Farm jobs (\"job\": {\"farm\": {\"shards\": N}}, or a bundle's ?shards=N) run as one Slurm job array:"),
+    C("farm-dir", "DIR", parse_farm, "where their scenes, task scripts and shards go: storage every node sees", "", NULL),
+    C("farm-sbatch-arg", "ARG", parse_farm,
+      "one more sbatch option for every array, repeatable (e.g. --partition=render)", "", NULL),
+    C("farm-retries", "N", parse_farm, "requeues of a failed task before its job fails", "2", NULL),
+    C("farm-checkpoint-interval", "S", parse_farm, "the tasks' --checkpoint-interval: how often the image grows", "10",
+      NULL),
+    C("farm-tessera", "PATH", parse_farm, "the tessera the tasks run", "this program", NULL),
+    C("max-shards", "N", parse_farm, "most tasks a farm job may ask for", "1000", NULL),
+    {"help", 0, NULL, SRV_OPT_HELP, 0, 0, false, false, NULL, 0, 0, "this text", "", NULL, NULL},
+};
+#define N_SERVE_OPTIONS (sizeof serve_options / sizeof *serve_options)
+
+/* The defaults of every option (before the command line). */
+static void serve_defaults(serve_args *a)
+{
+    memset(a, 0, sizeof *a);
+    srv_config *cfg = &a->cfg;
+    cfg->bind = "127.0.0.1";
+    cfg->port = 8080;
+    long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
+    cfg->threads = ncpu > 0 ? (int)ncpu : 1;
+    cfg->max_running = 4;
+    cfg->http_threads = 4;
+    cfg->client_timeout_s = 60;
+    cfg->request_timeout_s = 60;
+    cfg->max_client_conns = 1024;
+    cfg->max_body = 16u << 20;
+    cfg->checkpoint_interval_s = 30;
+    cfg->log_format = SRV_LOG_TEXT;
+    cfg->log_level = SRV_LOG_INFO;
+    ts_scene_limits_default(&cfg->limits);
+    cfg->limits.max_width = cfg->limits.max_height = 8192;
+    cfg->limits.max_pixels = 4096ull * 4096;
+    cfg->limits.max_spp = 1u << 16;
+    cfg->limits.max_triangles = 5ull << 20;
+    cfg->limits.max_shapes = 1u << 16;
+    cfg->limits.max_file_bytes = 256ull << 20; /* each asset file (only read with --assets) */
+    cfg->max_jobs = 1000;
+    cfg->max_work = 1e13;
+    cfg->max_load_s = 30;
+    cfg->max_subscribers = 2048;
+    cfg->max_job_subscribers = 1024;
+    cfg->limits.max_memory = 2ull << 30;
+    srv_bundle_limits_default(&cfg->bundle);
+    srv_farm_options_default(&cfg->farm);
+}
+
 static void usage(FILE *f)
 {
-    fprintf(f,
-            "usage: tessera serve [OPTIONS]\n"
-            "The render server: HTTP API v1 (proto/openapi.yaml) and the web UI at /. Runs until SIGINT/SIGTERM.\n"
-            "  --bind ADDRESS              numeric IPv4/IPv6 address to listen on (default 127.0.0.1)\n"
-            "  --port N                    TCP port, 0 for any free one (default 8080)\n"
-            "  --threads N                 render threads, 1 to 1024 (default: one per core)\n"
-            "  --max-running N             jobs rendering at once, 1 to 1024 (default 4)\n"
-            "  --http-threads N            HTTP threads, 1 to 64 (default 4)\n"
-            "  --data DIR                  checkpoint jobs to DIR and resume them after a restart (default: none)\n"
-            "  --checkpoint-interval S     seconds between checkpoints with --data (default 30)\n"
-            "  --token TOKEN               require 'Authorization: Bearer TOKEN' (default: no token)\n"
-            "  --token-file FILE           the same, the token read from FILE's first line (kept out of ps)\n"
-            "  --cors-origin ORIGIN        answer CORS requests from ORIGIN (default: none)\n"
-            "  --allowed-hosts H1,H2       Host names to answer besides the bind address (and localhost on loopback)\n"
-            "  --assets DIR                the only folder posted scenes may read files from (default: none)\n"
-            "  --max-asset-bytes BYTES     largest file a scene may read under --assets (default 268435456)\n"
-            "  --max-jobs N                jobs held at once, any state; a POST beyond gets 503 (default 1000)\n"
-            "  --max-body BYTES            largest request body, 64 to 4294967296 (default 16777216)\n"
-            "  --max-resolution N          largest film width or height in pixels, to 16384 (default 8192)\n"
-            "  --max-pixels N              largest film area in pixels (default 16777216)\n"
-            "  --max-spp N                 most samples per pixel a job may ask (default 65536)\n"
-            "  --max-triangles N           most triangles in a posted scene (default 5242880)\n"
-            "  --max-shapes N              most shapes in a posted scene (default 65536)\n"
-            "  --client-timeout S          close a connection idle this many seconds (default 60)\n"
-            "  --request-timeout S         close a connection whose request (headers and body) has not arrived\n"
-            "                              this many seconds after it opened or after its previous answer (default 60)\n"
-            "  --max-client-connections N  connections one address may hold, to 4000 (default 1024)\n"
-            "  --max-subscribers N         event streams open at once, all jobs, to 4000 (default 2048)\n"
-            "  --max-job-subscribers N     event streams of one job at once, to 4000 (default 1024)\n"
-            "  --max-work RAYS             most rays one job may ask for: rays a sample x spp x pixels (default 1e13)\n"
-            "  --max-load-seconds S        time a posted scene may take to load, from its arrival; beyond, 422\n"
-            "                              (or 503 if it waited that long for a loader), 0.1 to 3600 (default 30)\n"
-            "A job may be posted as a tar (optionally gzip) of scene.json or scene.pbrt and its files:\n"
-            "  --max-bundle-bytes BYTES    largest bundle as posted (default 268435456)\n"
-            "  --max-bundle-entries N      most entries in a bundle, folders included (default 10000)\n"
-            "  --max-bundle-expanded BYTES most bytes of all a bundle's files together (default 1073741824)\n"
-            "  --max-bundle-entry-bytes BYTES  largest file in a bundle (default 268435456)\n"
-            "  --max-bundle-path BYTES     longest path of a bundle's entry (default 1024)\n"
-            "  --log-format text|json      job events as text lines or JSON lines on stderr (default text)\n"
-            "  --log-level LEVEL           error, warn, info (job events; default) or debug (and every request)\n"
-            "  --queue-builtin             queue the built-in Cornell box as the first job (make run)\n"
-            "  --display-server HOST:PORT  stream every job to a tev viewer there, as tiles finish (default: none)\n"
-            "  --allow-job-display-server  let a job's job.display_server name any address (default: only the\n"
-            "                              --display-server one; others get 403)\n"
-            "Farm jobs (\"job\": {\"farm\": {\"shards\": N}}, or a bundle's ?shards=N) run as one Slurm job array:\n"
-            "  --farm slurm                send farm jobs to Slurm (sbatch, squeue, scontrol, scancel on PATH)\n"
-            "  --farm-dir DIR              where their scenes, task scripts and shards go: storage every node sees\n"
-            "  --farm-sbatch-arg ARG       one more sbatch option for every array, repeatable (e.g. --partition=render)\n"
-            "  --farm-retries N            requeues of a failed task before its job fails (default 2)\n"
-            "  --farm-checkpoint-interval S  the tasks' --checkpoint-interval: how often the image grows (default 10)\n"
-            "  --farm-tessera PATH         the tessera the tasks run (default: this program)\n"
-            "  --max-shards N              most tasks a farm job may ask for (default 1000)\n"
-            "docs/security.md has the threat model and every limit.\n");
+    serve_args defaults;
+    serve_defaults(&defaults);
+    fprintf(f, "usage: tessera serve [OPTIONS]\n"
+               "The render server: HTTP API v1 (proto/openapi.yaml) and the web UI at /. Runs until SIGINT/SIGTERM.\n");
+    srv_options_help(f, serve_options, N_SERVE_OPTIONS, &defaults);
+    fprintf(f, "docs/security.md has the threat model and every limit.\n");
 }
 
 #define usage_error(...) (srv_usage_error("tessera serve", usage, __VA_ARGS__), SRV_USAGE_EXIT)
@@ -106,17 +222,6 @@ static char *read_token_file(const char *path, char *msg, size_t msg_len)
     if (!token) snprintf(msg, msg_len, n ? "out of memory" : "the first line holds no token");
     explicit_bzero(line, sizeof line);
     return token;
-}
-
-static bool parse_u64(const char *s, unsigned long long lo, unsigned long long hi, unsigned long long *out)
-{
-    char *end;
-    if (!s[0] || s[0] == '-') return false;
-    errno = 0;
-    unsigned long long v = strtoull(s, &end, 10);
-    if (*end || errno || v < lo || v > hi) return false;
-    *out = v;
-    return true;
 }
 
 static void srv_server_kick(srv_server *srv)
@@ -345,245 +450,21 @@ void srv_server_stop(srv_server *srv, bool checkpoint)
  * --token-file, the resolved --assets folder): free both after the server stops. */
 static int parse_serve_options(int argc, char **argv, srv_config *cfg, char *owned[2])
 {
-    enum {
-        OPT_BIND = 256, OPT_PORT, OPT_THREADS, OPT_DATA, OPT_TOKEN, OPT_MAX_RUNNING, OPT_HTTP_THREADS, OPT_MAX_BODY,
-        OPT_MAX_PIXELS, OPT_MAX_RES, OPT_MAX_SPP, OPT_MAX_TRIS, OPT_MAX_SHAPES, OPT_CKPT, OPT_CORS, OPT_BUILTIN, OPT_HELP,
-        OPT_TOKEN_FILE, OPT_ASSETS, OPT_MAX_ASSET_BYTES, OPT_MAX_JOBS, OPT_CLIENT_TIMEOUT, OPT_REQUEST_TIMEOUT, OPT_MAX_CLIENT_CONNS,
-        OPT_LOG_FORMAT, OPT_LOG_LEVEL, OPT_MAX_WORK, OPT_MAX_SUBS, OPT_MAX_JOB_SUBS, OPT_ALLOWED_HOSTS, OPT_DISPLAY, OPT_ALLOW_JOB_DISPLAY,
-        OPT_BUNDLE_BYTES, OPT_BUNDLE_ENTRIES, OPT_BUNDLE_EXPANDED, OPT_BUNDLE_ENTRY_BYTES, OPT_BUNDLE_PATH, OPT_MAX_LOAD, OPT_FARM
-    };
-    static const struct option opts[] = {
-        {"bind", required_argument, NULL, OPT_BIND},
-        {"port", required_argument, NULL, OPT_PORT},
-        {"threads", required_argument, NULL, OPT_THREADS},
-        {"data", required_argument, NULL, OPT_DATA},
-        {"token", required_argument, NULL, OPT_TOKEN},
-        {"token-file", required_argument, NULL, OPT_TOKEN_FILE},
-        {"assets", required_argument, NULL, OPT_ASSETS},
-        {"max-asset-bytes", required_argument, NULL, OPT_MAX_ASSET_BYTES},
-        {"max-jobs", required_argument, NULL, OPT_MAX_JOBS},
-        {"max-work", required_argument, NULL, OPT_MAX_WORK},
-        {"max-load-seconds", required_argument, NULL, OPT_MAX_LOAD},
-        {"allowed-hosts", required_argument, NULL, OPT_ALLOWED_HOSTS},
-        {"max-subscribers", required_argument, NULL, OPT_MAX_SUBS},
-        {"max-job-subscribers", required_argument, NULL, OPT_MAX_JOB_SUBS},
-        {"client-timeout", required_argument, NULL, OPT_CLIENT_TIMEOUT},
-        {"request-timeout", required_argument, NULL, OPT_REQUEST_TIMEOUT},
-        {"max-client-connections", required_argument, NULL, OPT_MAX_CLIENT_CONNS},
-        {"max-running", required_argument, NULL, OPT_MAX_RUNNING},
-        {"http-threads", required_argument, NULL, OPT_HTTP_THREADS},
-        {"max-body", required_argument, NULL, OPT_MAX_BODY},
-        {"max-pixels", required_argument, NULL, OPT_MAX_PIXELS},
-        {"max-resolution", required_argument, NULL, OPT_MAX_RES},
-        {"max-spp", required_argument, NULL, OPT_MAX_SPP},
-        {"max-triangles", required_argument, NULL, OPT_MAX_TRIS},
-        {"max-shapes", required_argument, NULL, OPT_MAX_SHAPES},
-        {"checkpoint-interval", required_argument, NULL, OPT_CKPT},
-        {"cors-origin", required_argument, NULL, OPT_CORS},
-        {"queue-builtin", no_argument, NULL, OPT_BUILTIN},
-        {"display-server", required_argument, NULL, OPT_DISPLAY},
-        {"allow-job-display-server", no_argument, NULL, OPT_ALLOW_JOB_DISPLAY},
-        {"log-format", required_argument, NULL, OPT_LOG_FORMAT},
-        {"log-level", required_argument, NULL, OPT_LOG_LEVEL},
-        {"max-bundle-bytes", required_argument, NULL, OPT_BUNDLE_BYTES},
-        {"max-bundle-entries", required_argument, NULL, OPT_BUNDLE_ENTRIES},
-        {"max-bundle-expanded", required_argument, NULL, OPT_BUNDLE_EXPANDED},
-        {"max-bundle-entry-bytes", required_argument, NULL, OPT_BUNDLE_ENTRY_BYTES},
-        {"max-bundle-path", required_argument, NULL, OPT_BUNDLE_PATH},
-        {"farm", required_argument, NULL, OPT_FARM},
-        {"farm-dir", required_argument, NULL, OPT_FARM},
-        {"farm-sbatch-arg", required_argument, NULL, OPT_FARM},
-        {"farm-retries", required_argument, NULL, OPT_FARM},
-        {"farm-checkpoint-interval", required_argument, NULL, OPT_FARM},
-        {"farm-tessera", required_argument, NULL, OPT_FARM},
-        {"max-shards", required_argument, NULL, OPT_FARM},
-        {"help", no_argument, NULL, OPT_HELP},
-        {NULL, 0, NULL, 0}};
-    memset(cfg, 0, sizeof *cfg);
-    cfg->bind = "127.0.0.1";
-    cfg->port = 8080;
-    long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
-    cfg->threads = ncpu > 0 ? (int)ncpu : 1;
-    cfg->max_running = 4;
-    cfg->http_threads = 4;
-    cfg->client_timeout_s = 60;
-    cfg->request_timeout_s = 60;
-    cfg->max_client_conns = 1024;
-    cfg->max_body = 16u << 20;
-    cfg->checkpoint_interval_s = 30;
-    cfg->log_format = SRV_LOG_TEXT;
-    cfg->log_level = SRV_LOG_INFO;
-    ts_scene_limits_default(&cfg->limits);
-    cfg->limits.max_width = cfg->limits.max_height = 8192;
-    cfg->limits.max_pixels = 4096ull * 4096;
-    cfg->limits.max_spp = 1u << 16;
-    cfg->limits.max_triangles = 5ull << 20;
-    cfg->limits.max_shapes = 1u << 16;
-    cfg->limits.max_file_bytes = 256ull << 20; /* each asset file (only read with --assets) */
-    cfg->max_jobs = 1000;
-    cfg->max_work = 1e13;
-    cfg->max_load_s = 30;
-    cfg->max_subscribers = 2048;
-    cfg->max_job_subscribers = 1024;
-    const char *token_file = NULL, *assets = NULL;
-    cfg->limits.max_memory = 2ull << 30;
-    srv_bundle_limits_default(&cfg->bundle);
-    srv_farm_options_default(&cfg->farm);
-    unsigned long long v;
-    int opt_index = 0;
+    serve_args a;
+    serve_defaults(&a);
+    char why[600];
+    int first = 1;
+    int rc = srv_options_parse(serve_options, N_SERVE_OPTIONS, argc, argv, &a, &first, why, sizeof why);
+    *cfg = a.cfg;
+    const char *token_file = a.token_file, *assets = a.assets;
     char farm_msg[512];
-    optind = 1;
-    opterr = 0;
-    int c;
-    while ((c = getopt_long(argc, argv, ":", opts, &opt_index)) != -1) {
-        switch (c) {
-        case OPT_BIND: cfg->bind = optarg; break;
-        case OPT_PORT:
-            if (!parse_u64(optarg, 0, 65535, &v)) return usage_error("--port: expected 0 to 65535, got '%s'", optarg);
-            cfg->port = (int)v;
-            break;
-        case OPT_THREADS:
-            if (!parse_u64(optarg, 1, 1024, &v)) return usage_error("--threads: expected 1 to 1024, got '%s'", optarg);
-            cfg->threads = (int)v;
-            break;
-        case OPT_MAX_RUNNING:
-            if (!parse_u64(optarg, 1, 1024, &v)) return usage_error("--max-running: expected 1 to 1024, got '%s'", optarg);
-            cfg->max_running = (int)v;
-            break;
-        case OPT_HTTP_THREADS:
-            if (!parse_u64(optarg, 1, 64, &v)) return usage_error("--http-threads: expected 1 to 64, got '%s'", optarg);
-            cfg->http_threads = (int)v;
-            break;
-        case OPT_DATA: cfg->data_dir = optarg; break;
-        case OPT_TOKEN:
-            if (!optarg[0]) return usage_error("--token: expected a non-empty token");
-            cfg->token = optarg;
-            break;
-        case OPT_TOKEN_FILE: token_file = optarg; break;
-        case OPT_ASSETS: assets = optarg; break;
-        case OPT_MAX_ASSET_BYTES:
-            if (!parse_u64(optarg, 1, 1ull << 40, &v)) return usage_error("--max-asset-bytes: expected 1 to 1099511627776 bytes, got '%s'", optarg);
-            cfg->limits.max_file_bytes = v;
-            break;
-        case OPT_MAX_JOBS:
-            if (!parse_u64(optarg, 1, 1000000, &v)) return usage_error("--max-jobs: expected 1 to 1000000, got '%s'", optarg);
-            cfg->max_jobs = (int)v;
-            break;
-        case OPT_CLIENT_TIMEOUT:
-            if (!parse_u64(optarg, 1, 86400, &v)) return usage_error("--client-timeout: expected 1 to 86400 seconds, got '%s'", optarg);
-            cfg->client_timeout_s = (unsigned)v;
-            break;
-        case OPT_REQUEST_TIMEOUT:
-            if (!parse_u64(optarg, 1, 86400, &v)) return usage_error("--request-timeout: expected 1 to 86400 seconds, got '%s'", optarg);
-            cfg->request_timeout_s = (unsigned)v;
-            break;
-        case OPT_MAX_CLIENT_CONNS:
-            if (!parse_u64(optarg, 1, 4000, &v)) return usage_error("--max-client-connections: expected 1 to 4000, got '%s'", optarg);
-            cfg->max_client_conns = (unsigned)v;
-            break;
-        case OPT_CORS: cfg->cors_origin = optarg; break;
-        case OPT_ALLOWED_HOSTS: cfg->allowed_hosts = optarg; break;
-        case OPT_MAX_BODY:
-            if (!parse_u64(optarg, 64, 1ull << 32, &v)) return usage_error("--max-body: expected 64 to 4294967296 bytes, got '%s'", optarg);
-            cfg->max_body = (size_t)v;
-            break;
-        case OPT_MAX_PIXELS:
-            if (!parse_u64(optarg, 1, 1ull << 28, &v)) return usage_error("--max-pixels: expected 1 to 268435456, got '%s'", optarg);
-            cfg->limits.max_pixels = v;
-            break;
-        case OPT_MAX_RES:
-            if (!parse_u64(optarg, 1, 16384, &v)) return usage_error("--max-resolution: expected 1 to 16384, got '%s'", optarg);
-            cfg->limits.max_width = cfg->limits.max_height = (uint32_t)v;
-            break;
-        case OPT_MAX_SPP:
-            if (!parse_u64(optarg, 1, 1u << 24, &v)) return usage_error("--max-spp: expected 1 to 16777216, got '%s'", optarg);
-            cfg->limits.max_spp = (uint32_t)v;
-            break;
-        case OPT_MAX_TRIS:
-            if (!parse_u64(optarg, 1, 1ull << 32, &v)) return usage_error("--max-triangles: expected a positive count, got '%s'", optarg);
-            cfg->limits.max_triangles = v;
-            break;
-        case OPT_MAX_SHAPES:
-            if (!parse_u64(optarg, 1, 1u << 24, &v)) return usage_error("--max-shapes: expected a positive count, got '%s'", optarg);
-            cfg->limits.max_shapes = (uint32_t)v;
-            break;
-        case OPT_MAX_SUBS:
-            if (!parse_u64(optarg, 1, 4000, &v)) return usage_error("--max-subscribers: expected 1 to 4000, got '%s'", optarg);
-            cfg->max_subscribers = (int)v;
-            break;
-        case OPT_MAX_JOB_SUBS:
-            if (!parse_u64(optarg, 1, 4000, &v)) return usage_error("--max-job-subscribers: expected 1 to 4000, got '%s'", optarg);
-            cfg->max_job_subscribers = (int)v;
-            break;
-        case OPT_MAX_WORK: {
-            char *end;
-            double w = strtod(optarg, &end);
-            if (end == optarg || *end || !(w >= 1) || !isfinite(w))
-                return usage_error("--max-work: expected a number of rays (at least 1, e.g. 1e12), got '%s'", optarg);
-            cfg->max_work = w;
-            break;
-        }
-        case OPT_MAX_LOAD: {
-            char *end;
-            double sec = strtod(optarg, &end);
-            if (end == optarg || *end || !(sec >= 0.1 && sec <= 3600))
-                return usage_error("--max-load-seconds: expected 0.1 to 3600 seconds, got '%s'", optarg);
-            cfg->max_load_s = sec;
-            break;
-        }
-        case OPT_CKPT: {
-            char *end;
-            double s = strtod(optarg, &end);
-            if (*end || !(s > 0) || !isfinite(s)) return usage_error("--checkpoint-interval: expected positive seconds, got '%s'", optarg);
-            cfg->checkpoint_interval_s = s;
-            break;
-        }
-        case OPT_BUNDLE_BYTES:
-            if (!parse_u64(optarg, 64, 1ull << 32, &v)) return usage_error("--max-bundle-bytes: expected 64 to 4294967296 bytes, got '%s'", optarg);
-            cfg->bundle.max_bytes = v;
-            break;
-        case OPT_BUNDLE_ENTRIES:
-            if (!parse_u64(optarg, 1, 1000000, &v)) return usage_error("--max-bundle-entries: expected 1 to 1000000, got '%s'", optarg);
-            cfg->bundle.max_entries = (uint32_t)v;
-            break;
-        case OPT_BUNDLE_EXPANDED:
-            if (!parse_u64(optarg, 1, 1ull << 40, &v)) return usage_error("--max-bundle-expanded: expected 1 to 1099511627776 bytes, got '%s'", optarg);
-            cfg->bundle.max_expanded = v;
-            break;
-        case OPT_BUNDLE_ENTRY_BYTES:
-            if (!parse_u64(optarg, 1, 1ull << 40, &v)) return usage_error("--max-bundle-entry-bytes: expected 1 to 1099511627776 bytes, got '%s'", optarg);
-            cfg->bundle.max_entry_bytes = v;
-            break;
-        case OPT_BUNDLE_PATH:
-            if (!parse_u64(optarg, 16, 4000, &v)) return usage_error("--max-bundle-path: expected 16 to 4000 bytes, got '%s'", optarg);
-            cfg->bundle.max_path = (uint32_t)v;
-            break;
-        case OPT_BUILTIN: cfg->queue_builtin = true; break;
-        case OPT_DISPLAY: {
-            ts_error derr = {0};
-            if (srv_display_parse_address(optarg, NULL, NULL, &derr)) return usage_error("--display-server: %s", derr.message);
-            cfg->display_server = optarg;
-            break;
-        }
-        case OPT_ALLOW_JOB_DISPLAY: cfg->allow_job_display_server = true; break;
-        case OPT_LOG_FORMAT:
-            if (!srv_log_parse_format(optarg, &cfg->log_format))
-                return usage_error("--log-format: expected text or json, got '%s'", optarg);
-            break;
-        case OPT_LOG_LEVEL:
-            if (!srv_log_parse_level(optarg, &cfg->log_level))
-                return usage_error("--log-level: expected error, warn, info or debug, got '%s'", optarg);
-            break;
-        case OPT_FARM:
-            if (srv_farm_option(&cfg->farm, opts[opt_index].name, optarg, farm_msg, sizeof farm_msg) < 0)
-                return usage_error("%s", farm_msg);
-            break;
-        case OPT_HELP: usage(stdout); return 0;
-        case ':': return usage_error("option '%s' needs a value", argv[optind - 1]);
-        default: return usage_error("unknown option '%s'", argv[optind - 1]);
-        }
+    if (rc == SRV_OPTIONS_HELP) {
+        usage(stdout);
+        return 0;
     }
-    if (optind < argc) return usage_error("unexpected argument '%s'", argv[optind]);
+    if (rc == SRV_OPTIONS_BAD) return usage_error("%s", why);
+    cfg->limits.max_height = cfg->limits.max_width; /* --max-resolution bounds both */
+    if (first < argc) return usage_error("unexpected argument '%s'", argv[first]);
     if (token_file && cfg->token) return usage_error("--token and --token-file: give one of them");
     if (!srv_farm_options_check(&cfg->farm, farm_msg, sizeof farm_msg)) return usage_error("%s", farm_msg);
     owned[0] = owned[1] = NULL;
