@@ -982,6 +982,28 @@ static void convert_round_trip(void **state)
     ts_scene_destroy(b);
 }
 
+/* A .pbrt name of bytes that are not UTF-8 loads (pbrt-v3 takes any bytes), and `convert`
+ * refuses it with a sentence, not a document JSON cannot parse (found by fuzz_pbrt_import). */
+static void convert_refuses_non_utf8(void **state)
+{
+    (void)state;
+    const char *doc = "LookAt 0 3 4  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\n"
+                      "LightSource \"distant\" \"rgb L\" [1 1 1]\n"
+                      "Texture \"bump\\t\xff\xfe\" \"float\" \"fbm\"\n"
+                      "Material \"matte\" \"texture sigma\" \"bump\\t\xff\xfe\"\nShape \"sphere\"\nWorldEnd\n";
+    char path[512];
+    write_file("latin.pbrt", doc, path, sizeof path);
+    ts_scene *a = NULL;
+    ts_error err = {0};
+    if (ts_scene_load_path(path, NULL, NULL, NULL, &a, &err)) fail_msg("%s", err.message);
+    ts_scene_destroy(a);
+    char *json = NULL;
+    size_t len = 0;
+    assert_int_equal(ts_scene_convert_pbrt_path(path, NULL, NULL, NULL, &json, &len, &err), TS_ERR_UNSUPPORTED);
+    assert_null(json);
+    if (!strstr(err.message, "not UTF-8 text")) fail_msg("%s", err.message);
+}
+
 /* The same through the command line: render .pbrt and render of its conversion write the
  * same EXR pixels. */
 static void cli_convert_and_render(void **state)
@@ -1186,6 +1208,7 @@ int main(void)
         cmocka_unit_test(instances_placed),
         cmocka_unit_test(unused_parameters_warned),
         cmocka_unit_test(convert_round_trip),
+        cmocka_unit_test(convert_refuses_non_utf8),
         cmocka_unit_test(cli_convert_and_render),
         cmocka_unit_test(convert_textures_round_trip),
         cmocka_unit_test(digest_of_bytes),

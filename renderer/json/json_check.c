@@ -326,18 +326,23 @@ static void line_col(const char *text, size_t off, int *line, int *col)
     }
 }
 
+ts_status ts_json_check_utf8(const char *text, size_t len, ts_error *err)
+{
+    size_t bad = utf8_invalid_at((const unsigned char *)text, len);
+    if (bad == len) return TS_OK;
+    int line, col;
+    line_col(text, bad, &line, &col);
+    return ts_error_set(err, TS_ERR_INVALID, "the document is not valid UTF-8 at line %d, column %d (byte %zu)", line,
+                        col, bad);
+}
+
 ts_status ts_json_parse(const char *text, size_t len, cJSON **out, ts_error *err)
 {
     *out = NULL;
     /* JSON text is UTF-8 (RFC 8259); cJSON would pass other bytes through into names and
      * messages that the server then echoes. */
-    size_t bad = utf8_invalid_at((const unsigned char *)text, len);
-    if (bad < len) {
-        int line, col;
-        line_col(text, bad, &line, &col);
-        return ts_error_set(err, TS_ERR_INVALID, "the document is not valid UTF-8 at line %d, column %d (byte %zu)",
-                            line, col, bad);
-    }
+    ts_status ust = ts_json_check_utf8(text, len, err);
+    if (ust) return ust;
     const char *end = NULL;
     /* cJSON records the position of a syntax error in a static variable; parses are
      * serialised so concurrent loads (server threads) do not race on it. */

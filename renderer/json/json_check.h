@@ -80,5 +80,8 @@ ts_status ts_json_check_strings(const cJSON *doc, ts_error *err);
 /* Parses text (length len, need not be NUL-terminated) into *out; on a syntax error the
  * sentence gives line and column. The caller frees *out with cJSON_Delete. */
 ts_status ts_json_parse(const char *text, size_t len, cJSON **out, ts_error *err);
+/* TS_OK when text[0..len) is valid UTF-8 (shortest forms, no surrogates), else TS_ERR_INVALID
+ * naming the line, column and byte of the first bad one. */
+ts_status ts_json_check_utf8(const char *text, size_t len, ts_error *err);
 
 #endif

@@ -10,6 +10,7 @@
 #include <cjson/cJSON.h>
 
 #include "pbrt3/pbrt_parser.h"
+#include "json/json_check.h"
 #include "json/scene_json.h"
 #include "core/scene_path.h"
 
@@ -139,6 +140,17 @@ ts_status ts_scene_convert_pbrt_path(const char *path, const ts_scene_limits *li
         } else {
             *len = strlen(text);
             *json = text;
+            /* A .pbrt name or string may hold any bytes; JSON holds UTF-8 text only. */
+            ts_error u = {0};
+            if (ts_json_check_utf8(text, *len, &u)) {
+                st = ts_error_set(err, TS_ERR_UNSUPPORTED,
+                                  "the scene holds a name or string that is not UTF-8 text, which JSON cannot hold "
+                                  "(%s of the converted document): rename it in the .pbrt file",
+                                  u.message + strlen("the document is not valid UTF-8 at "));
+                free(text);
+                *json = NULL;
+                *len = 0;
+            }
         }
     }
     cJSON_Delete(doc);
