@@ -369,6 +369,9 @@ static ts_status write_outputs(const render_run *r, const ts_film *film, const c
     if (st) return st;
     ts_render_info info = {ts_job_name(r->scene), r->integrator, r->final.spp_done, true, r->scene->sampler.seed,
                            r->final.elapsed_s, error,        (double)r->final.nonfinite, NULL, film->scale};
+    info.media = (r->scene->effects & TS_EFFECT_MEDIA) != 0;
+    info.medium_steps = (double)r->final.medium_steps;
+    info.walks_truncated = (double)r->final.walks_truncated;
     st = ts_image_set_render_info(&img, &info, err);
     if (!st) st = cli_outputs_write_image(outputs, &img, err);
     ts_image_fini(&img);
@@ -622,6 +625,10 @@ static int cmd_render(int argc, char **argv)
                 "error estimate %s, %llu non-finite samples dropped\n",
                 ts_job_name(r.scene), film->width, film->height, done, ts_halt_reason_phrase(r.final.halt), r.integrator,
                 n_threads, n_threads == 1 ? "" : "s", seconds, msps, error_text, (unsigned long long)r.final.nonfinite);
+        if (r.scene->effects & TS_EFFECT_MEDIA)
+            fprintf(stderr, "tessera: %s: media: %llu tracking steps, %llu walks cut short (a step or crossing bound)\n",
+                    ts_job_name(r.scene), (unsigned long long)r.final.medium_steps,
+                    (unsigned long long)r.final.walks_truncated);
         for (int i = 0; i < o.outputs.n; i++) fprintf(stderr, "tessera: wrote %s\n", o.outputs.path[i]);
     }
     rc = 0;

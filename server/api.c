@@ -323,6 +323,9 @@ static void encode_task(void *arg)
         ts_render_info info = {j->name ? j->name : sc ? sc->name : NULL, j->integrator, p.spp_done, sc != NULL, sc ? sc->sampler.seed : 0,
                                p.elapsed_s, t->tile ? -1 : ts_film_relative_error(film), (double)p.nonfinite,
                                t->tile ? NULL : j->id, film->scale};
+        info.media = (sc && (sc->effects & TS_EFFECT_MEDIA)) || p.medium_steps > 0 || p.walks_truncated > 0;
+        info.medium_steps = (double)p.medium_steps;
+        info.walks_truncated = (double)p.walks_truncated;
         st = ts_image_set_render_info(&img, &info, &err);
         if (!st) st = t->png ? ts_png_encode(&img, 0.0f, &buf, &len, &err) : ts_exr_write_memory(&img, &buf, &len, &err);
     }

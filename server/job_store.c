@@ -232,7 +232,8 @@ static void log_progress(srv_job *j, const char *event, const ts_job_progress *p
                          SRV_LOG_NUM_OR_NULL("error_estimate", p->error_estimate),
                          SRV_LOG_NUM("samples_per_s", p->samples_per_s),
                          SRV_LOG_NUM_OR_NULL("eta_s", p->eta_s),
-                         SRV_LOG_NUM("nonfinite_samples", (double)p->nonfinite)};
+                         SRV_LOG_NUM("nonfinite_samples", (double)p->nonfinite),
+                         SRV_LOG_NUM("walks_truncated", (double)p->walks_truncated)};
     srv_log_event(l, SRV_LOG_INFO, event, f, sizeof f / sizeof *f);
 }
 
@@ -757,6 +758,8 @@ srv_job *srv_store_restore(srv_store *st, const srv_restore *r, ts_error *err)
     d.elapsed_s = r->elapsed_s;
     d.samples = samples;
     d.nonfinite = r->nonfinite;
+    d.medium_steps = r->medium_steps;
+    d.walks_truncated = r->walks_truncated;
     d.external = r->external;
     d.finished = r->failure ? TS_JOB_FAILED : ts_job_state_finished(r->state) ? r->state : TS_JOB_QUEUED;
     if (r->film) {
@@ -860,6 +863,8 @@ cJSON *srv_job_status_json(srv_job *j)
     cJSON_AddNumberToObject(o, "nonfinite_samples", (double)p.nonfinite);
     cJSON_AddNumberToObject(o, "camera_rays", (double)p.camera_rays);
     cJSON_AddNumberToObject(o, "other_rays", (double)p.other_rays);
+    cJSON_AddNumberToObject(o, "medium_steps", (double)p.medium_steps);
+    cJSON_AddNumberToObject(o, "walks_truncated", (double)p.walks_truncated);
     cJSON_AddStringToObject(o, "halt_reason", ts_halt_reason_name(p.halt));
     add_number_or_null(o, "time_limit_s", j->settings.time_limit_s, j->settings.time_limit_s > 0);
     add_number_or_null(o, "target_error", j->settings.target_error, j->settings.target_error > 0);

@@ -158,7 +158,7 @@ typedef struct srv_restore {
     const char *id, *name, *scene_text;
     size_t scene_len;
     double created_unix, elapsed_s;
-    uint64_t nonfinite;
+    uint64_t nonfinite, medium_steps, walks_truncated;
     ts_job_state state;          /* QUEUED/RUNNING: resume; else finished */
     ts_scene *scene;
     ts_film *film;               /* may be NULL: start from scratch */

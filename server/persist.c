@@ -449,6 +449,8 @@ static void restore_one(const char *dir, const char *id, srv_store *st, const ts
     r.created_unix = num(meta, "created_at", 0);
     r.elapsed_s = num(meta, "elapsed_s", 0);
     r.nonfinite = (uint64_t)num(meta, "nonfinite_samples", 0);
+    r.medium_steps = (uint64_t)num(meta, "medium_steps", 0);
+    r.walks_truncated = (uint64_t)num(meta, "walks_truncated", 0);
     r.history = cJSON_GetObjectItemCaseSensitive(meta, "history");
     if (!cJSON_IsArray(r.history)) r.history = NULL;
     r.settings.integrator = TS_INTEGRATOR_AO; /* the scene's, once it loads */
@@ -487,7 +489,7 @@ static void restore_one(const char *dir, const char *id, srv_store *st, const ts
         free(tile_spp);
         film = NULL, tile_spp = NULL;
         r.state = TS_JOB_QUEUED;
-        r.elapsed_s = 0, r.nonfinite = 0, r.history = NULL;
+        r.elapsed_s = 0, r.nonfinite = 0, r.medium_steps = 0, r.walks_truncated = 0, r.history = NULL;
         if (stats) atomic_fetch_add(&stats->damaged, 1);
     }
 add:

@@ -790,6 +790,107 @@ static void test_cli_server_identity(void **state)
     free(doc);
 }
 
+/* A media scene whose every camera ray's walk is cut at the step bound (media/medium.h):
+ * the camera sits in a grid medium whose density is 0 over the half x < 0.5 of its unit
+ * box and 1 beyond, majorant σt·1 = 1e7 per unit, and looks along −z through the empty
+ * half (a 1° field of view around x = 0.25): delta tracking rejects every tentative
+ * collision, and crossing the box takes about 1e7 of them, past the bound of 2^20. So each
+ * of the 4 × 4 × 1 samples ends in exactly one cut walk of exactly 2^20 steps. */
+static const char walk_cut_scene[] =
+    "{\"tessera\":1,\"name\":\"walk-cut\",\"camera\":{\"from\":[0.25,0.5,3],\"to\":[0.25,0.5,0],\"fov\":1,"
+    "\"medium\":\"g\"},\"film\":{\"width\":4,\"height\":4,\"filter\":{\"type\":\"box\"}},"
+    "\"sampler\":{\"type\":\"independent\",\"spp\":1,\"seed\":3},\"integrator\":{\"type\":\"volpath\",\"max_depth\":5},"
+    "\"media\":{\"g\":{\"type\":\"grid\",\"sigma_a\":[1e7,1e7,1e7],\"sigma_s\":[0,0,0],\"nx\":4,\"ny\":1,\"nz\":1,"
+    "\"density\":[0,0,0,1]}},\"lights\":[{\"type\":\"infinite\",\"radiance\":1}]}";
+
+/* An EXR attribute's number (double attributes), failing when it is absent. */
+static double exr_number(const ts_image *img, const char *name)
+{
+    const ts_image_attr *a = ts_image_attr_find(img, name);
+    if (!a) fail_msg("the EXR lacks attribute %s", name);
+    return a->type == TS_ATTR_INT ? a->i : a->d;
+}
+
+/* The walk-cut counters (integrators/counters.h) are reported like the other counters: in
+ * the job's status (medium_steps, walks_truncated), its EXR's attributes, and `tessera
+ * render`'s summary and EXR, the same figures; a scene without media writes no such
+ * attribute. */
+static void test_media_walk_counters(void **state)
+{
+    (void)state;
+    const double walks = 16, steps = 16.0 * (1u << 20);
+    char id[32], path[160];
+    ts_submit(&srv, walk_cut_scene, id, sizeof id);
+    cJSON *o = ts_wait_done(&srv, id, 60);
+    assert_string_equal(ts_json_str(o, "state"), "done");
+    assert_true(ts_json_num(o, "walks_truncated") == walks);
+    assert_true(ts_json_num(o, "medium_steps") == steps);
+    assert_int_equal((int)ts_json_num(o, "nonfinite_samples"), 0);
+    cJSON_Delete(o);
+    http_resp r;
+    get_path(path, sizeof path, id, "/image.exr");
+    ts_http(&srv, "GET", path, NULL, 0, NULL, &r);
+    ts_image a;
+    decode_exr(&r, &a);
+    ts_http_free(&r);
+    assert_true(exr_number(&a, "tessera_walks_truncated") == walks);
+    assert_true(exr_number(&a, "tessera_medium_steps") == steps);
+    ts_image_fini(&a);
+
+    char dir[] = "/tmp/tessera-walks-XXXXXX";
+    assert_non_null(mkdtemp(dir));
+    char scene_path[256], out[256], log[256];
+    snprintf(scene_path, sizeof scene_path, "%s/scene.json", dir);
+    snprintf(out, sizeof out, "%s/cli.exr", dir);
+    snprintf(log, sizeof log, "%s/stderr.txt", dir);
+    FILE *f = fopen(scene_path, "w");
+    fputs(walk_cut_scene, f);
+    fclose(f);
+    pid_t pid = fork();
+    if (pid == 0) {
+        int fd = open(log, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        dup2(fd, 2);
+        execl(getenv("TS_BINARY"), getenv("TS_BINARY"), "render", scene_path, "-o", out, "--threads", "2",
+              (char *)NULL);
+        _exit(127);
+    }
+    int status;
+    waitpid(pid, &status, 0);
+    assert_int_equal(WEXITSTATUS(status), 0);
+    char text[4096] = "";
+    f = fopen(log, "r");
+    size_t n = fread(text, 1, sizeof text - 1, f);
+    text[n] = 0;
+    fclose(f);
+    if (!strstr(text, "media: 16777216 tracking steps, 16 walks cut short"))
+        fail_msg("the summary does not report the cut walks:\n%s", text);
+    ts_image b;
+    ts_error err = {0};
+    if (ts_exr_read(out, &b, &err)) fail_msg("%s", err.message);
+    assert_true(exr_number(&b, "tessera_walks_truncated") == walks);
+    assert_true(exr_number(&b, "tessera_medium_steps") == steps);
+    ts_image_fini(&b);
+    unlink(out);
+    unlink(log);
+    unlink(scene_path);
+    rmdir(dir);
+
+    /* Without media: neither attribute, and zero in the status. */
+    char *doc = scene(16, 16, 1, NULL);
+    ts_submit(&srv, doc, id, sizeof id);
+    o = ts_wait_done(&srv, id, 30);
+    assert_true(ts_json_num(o, "walks_truncated") == 0);
+    cJSON_Delete(o);
+    get_path(path, sizeof path, id, "/image.exr");
+    ts_http(&srv, "GET", path, NULL, 0, NULL, &r);
+    decode_exr(&r, &a);
+    ts_http_free(&r);
+    assert_null(ts_image_attr_find(&a, "tessera_walks_truncated"));
+    assert_null(ts_image_attr_find(&a, "tessera_medium_steps"));
+    ts_image_fini(&a);
+    free(doc);
+}
+
 /* GET /api/v1/jobs in pages: 105 jobs, a default page of 100 with a `next` cursor; pages
  * of 7 followed to the end give every job once, newest first, the last page's `next` null;
  * a cursor still places its page after its job was deleted; bad limits and cursors are 400.
@@ -932,6 +1033,7 @@ int main(void)
         cmocka_unit_test(test_auth),
         cmocka_unit_test(test_200_concurrent_clients),
         cmocka_unit_test(test_cli_server_identity),
+        cmocka_unit_test(test_media_walk_counters),
         cmocka_unit_test(test_list_pages),
     };
     return cmocka_run_group_tests(tests, setup, teardown);

@@ -152,5 +152,7 @@ ts_status ts_image_set_render_info(ts_image *img, const ts_render_info *info, ts
     if (!st) st = ts_image_set_double(img, "tessera_nonfinite_samples", info->nonfinite_samples, err);
     if (!st && info->job) st = ts_image_set_string(img, "tessera_job", info->job, err);
     if (!st && info->film_scale > 0) st = ts_image_set_double(img, "tessera_film_scale", info->film_scale, err);
+    if (!st && info->media) st = ts_image_set_double(img, "tessera_medium_steps", info->medium_steps, err);
+    if (!st && info->media) st = ts_image_set_double(img, "tessera_walks_truncated", info->walks_truncated, err);
     return st;
 }

@@ -70,11 +70,16 @@ typedef struct ts_render_info {
     double nonfinite_samples;   /* samples dropped for NaN/∞/negative radiance */
     const char *job;            /* job id, or NULL */
     double film_scale;          /* the output factor the pixels carry (film.h); 0: not written */
+    /* A scene with media (the media effect): volpath's tracking steps and walks cut short
+     * (integrators/counters.h); not written when false. */
+    bool media;
+    double medium_steps, walks_truncated;
 } ts_render_info;
 
 /* Sets software ("tessera VERSION"), tessera_scene, tessera_integrator, tessera_spp,
  * tessera_seed, tessera_render_time_s, tessera_error_estimate, tessera_nonfinite_samples,
- * tessera_job and tessera_film_scale on img. */
+ * tessera_job, tessera_film_scale and, for media, tessera_medium_steps and
+ * tessera_walks_truncated on img. */
 ts_status ts_image_set_render_info(ts_image *img, const ts_render_info *info, ts_error *err);
 
 #endif

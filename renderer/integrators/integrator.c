@@ -379,7 +379,10 @@ static ts_rgb li_path(const ts_scene *s, uint32_t fx, ts_ray ray, const ts_ray_d
         }
         if (!found || bounces >= max_depth) break;
         if ((fx & TS_EFFECT_MEDIA) && no_surface(s, &si)) { /* pbrt-v3: on through it, no bounce */
-            if (++crossings > TS_VOLPATH_MAX_CROSSINGS) break;
+            if (++crossings > TS_VOLPATH_MAX_CROSSINGS) {
+                c->walks_truncated++;
+                break;
+            }
             ray = ts_spawn_ray(&si, s->shapes, ray.d);
             bounces--;
             continue;
@@ -434,7 +437,10 @@ static ts_rgb li_direct(const ts_scene *s, uint32_t fx, ts_ray ray, const ts_ray
     bool found = ts_accel_intersect(s->accel, &ray, &si);
     /* pbrt-v3: a shape without a surface is passed through (media are not simulated here). */
     for (uint32_t k = 0; found && (fx & TS_EFFECT_MEDIA) && no_surface(s, &si); k++) {
-        if (k >= TS_VOLPATH_MAX_CROSSINGS) return ts_rgb_gray(0);
+        if (k >= TS_VOLPATH_MAX_CROSSINGS) {
+            c->walks_truncated++;
+            return ts_rgb_gray(0);
+        }
         ray = ts_spawn_ray(&si, s->shapes, ray.d);
         found = ts_accel_intersect(s->accel, &ray, &si);
         c->other_rays++;

@@ -62,6 +62,7 @@ struct ts_sched_job {
     uint64_t last_dispatch;
     double t_start, t_end, elapsed_before;
     uint64_t samples, nonfinite, camera_rays, other_rays;
+    uint64_t medium_steps, walks_truncated; /* volpath's (counters.h) */
     double error;               /* the last error estimate, at error_spp; < 0 unknown */
     uint32_t error_spp;
     double prev_error;          /* the one before, at prev_error_spp (the convergence slope) */
@@ -170,6 +171,8 @@ static void fill_progress(const ts_sched_job *j, ts_job_progress *p)
     p->nonfinite = j->nonfinite;
     p->camera_rays = j->camera_rays;
     p->other_rays = j->other_rays;
+    p->medium_steps = j->medium_steps;
+    p->walks_truncated = j->walks_truncated;
     p->samples_per_s = p->elapsed_s > 0 ? (double)j->samples / p->elapsed_s : 0;
     p->error_estimate = j->error;
     uint64_t px_samples = 0;
@@ -400,6 +403,8 @@ static void *worker_main(void *arg)
         j->nonfinite += c.nonfinite;
         j->camera_rays += c.camera_rays;
         j->other_rays += c.other_rays;
+        j->medium_steps += c.medium_steps;
+        j->walks_truncated += c.walks_truncated;
         s->samples_total += c.samples;
         pthread_mutex_unlock(&s->mu);
         ts_tile_snapshot_release(old);
@@ -609,6 +614,8 @@ ts_sched_job *ts_scheduler_submit(ts_scheduler *s, const ts_sched_job_desc *d, t
     j->elapsed_before = d->elapsed_s;
     j->samples = d->samples;
     j->nonfinite = d->nonfinite;
+    j->medium_steps = d->medium_steps;
+    j->walks_truncated = d->walks_truncated;
     j->t_submit = ts_now_seconds();
     j->cursor = j->n_tiles; /* pass_end 0: the first close starts pass 1 */
     j->done_before = job_spp_done(j);

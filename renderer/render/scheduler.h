@@ -98,6 +98,9 @@ typedef struct ts_job_progress {
     uint64_t samples;       /* camera samples taken (this process + before a restore) */
     uint64_t nonfinite;     /* of them, dropped for NaN/∞/negative radiance */
     uint64_t camera_rays, other_rays;
+    /* volpath in media (counters.h): tracking steps taken and walks cut short (a step or
+     * crossing bound), including those before a restore */
+    uint64_t medium_steps, walks_truncated;
     double samples_per_s;   /* samples / elapsed_s */
     double error_estimate;  /* at the last pass end; < 0 when not yet known (fewer than 2 spp) */
     double spp_fraction;    /* pixel-samples held ÷ pixels: grows as tiles finish, within a pass */
@@ -122,12 +125,12 @@ typedef struct ts_sched_job_desc {
     ts_job_callbacks callbacks;
     /* Resuming (all optional): a film of the scene's crop window with samples already in it
      * (ownership passes to the job on success) and, per tile (row-major over the grid),
-     * the samples per pixel it holds. `elapsed_s`, `samples`, `nonfinite` carry the
-     * counters of the earlier run. */
+     * the samples per pixel it holds. `elapsed_s`, `samples`, `nonfinite`,
+     * `medium_steps`, `walks_truncated` carry the counters of the earlier run. */
     ts_film *film;
     const uint32_t *tile_spp;
     double elapsed_s;
-    uint64_t samples, nonfinite;
+    uint64_t samples, nonfinite, medium_steps, walks_truncated;
     /* Restoring a finished job: it is registered in this state (TS_JOB_DONE, _CANCELLED or
      * _FAILED) and never rendered; `film` is required then, with width/height below. */
     ts_job_state finished;      /* 0 (TS_JOB_QUEUED) = render it */
