@@ -23,6 +23,7 @@
 #include "materials/bsdf.h"
 #include "materials/fresnel.h"
 #include "materials/material.h"
+#include "materials/material_desc.h"
 #include "materials/microfacet.h"
 #include "sampling/sampling.h"
 #include "scene/scene.h"

@@ -20,6 +20,7 @@
 #include "core/name_map.h"
 #include "materials/bsdf.h"
 #include "materials/fourier_bsdf.h"
+#include "materials/material_desc.h"
 #include "mesh/mesh_file.h"
 #include "mesh/mesh_subdiv.h"
 #include "core/scene_path.h"
@@ -140,7 +141,6 @@ static void set_shape_media(const ts_shape_desc *d, ts_shape *sh);
 static ts_status lay_out_media(ts_scene_builder *b, ts_error *err);
 
 static bool rgb_nonneg(ts_rgb c) { return c.r >= 0 && c.g >= 0 && c.b >= 0; } /* false for NaN */
-static bool rgb_unit(ts_rgb c) { return rgb_nonneg(c) && c.r <= 1 && c.g <= 1 && c.b <= 1; }
 static bool rgb_finite_nonneg(ts_rgb c)
 {
     return rgb_nonneg(c) && isfinite(c.r) && isfinite(c.g) && isfinite(c.b);
@@ -522,15 +522,6 @@ static ts_status bad_rgb(ts_error *err, const char *what, const char *expected, 
                         c.b);
 }
 
-/* A colour parameter: a texture (either kind), or a constant passing ok. */
-static ts_status check_rgb_param(const ts_material_rgb *p, const char *what, bool (*ok)(ts_rgb),
-                                 const char *expected, ts_error *err)
-{
-    if (p->tex) return TS_OK;
-    if (!ok(p->value)) return bad_rgb(err, what, expected, p->value);
-    return TS_OK;
-}
-
 /* A float parameter: a float texture, or a constant (its range checked by the caller). */
 static ts_status check_float_texture(const ts_material_float *p, const char *what, ts_error *err)
 {
@@ -552,94 +543,74 @@ static void material_counts(const ts_scene_builder *b, const ts_material *m, uin
     *cost += (uint64_t)a->cost + c->cost;
 }
 
+/* A parameter of m's type against its row (materials/material_desc.h): a texture of the
+ * right kind, or a constant in the row's range. */
+static ts_status check_material_param(const ts_material *m, const ts_material_param *p, ts_error *err)
+{
+    switch (p->kind) {
+    case TS_MPARAM_RGB: {
+        const ts_material_rgb *v = ts_mparam_crgb(m, p);
+        if (v->tex) return TS_OK;
+        if (!ts_mrange_ok(p->range, v->value.r) || !ts_mrange_ok(p->range, v->value.g) ||
+            !ts_mrange_ok(p->range, v->value.b))
+            return bad_rgb(err, p->key, ts_mrange_words(p->range, true), v->value);
+        return TS_OK;
+    }
+    case TS_MPARAM_FLOAT: {
+        const ts_material_float *v = ts_mparam_cfloat(m, p);
+        TRY(check_float_texture(v, p->key, err));
+        if (!v->tex && !ts_mrange_ok(p->range, v->value))
+            return ts_error_set(err, TS_ERR_INVALID, "%s: expected %s, got %g", p->key,
+                                ts_mrange_words(p->range, false), v->value);
+        return TS_OK;
+    }
+    case TS_MPARAM_ENUM: {
+        int v = *(const int *)(const void *)((const char *)m + p->offset), count = 0;
+        while (p->names[count])
+            count++;
+        if (v < 0 || v >= count)
+            return ts_error_set(err, TS_ERR_INVALID, "%s: unknown value %d (%d are known)", p->key, v, count);
+        return TS_OK;
+    }
+    }
+    return TS_OK;
+}
+
+static ts_status check_roughness(const ts_material_float *r, const char *what, ts_error *err)
+{
+    TRY(check_float_texture(r, what, err));
+    if (!r->tex && !ts_mrange_ok(TS_MRANGE_NONNEG, r->value))
+        return ts_error_set(err, TS_ERR_INVALID, "%s: expected a finite number ≥ 0, got %g", what, r->value);
+    return TS_OK;
+}
+
+/* Every range and kind from m's type's description; what no row says (a mix's materials,
+ * a Fourier table, the lobe and texture counts) after. */
 static ts_status check_material(const ts_scene_builder *b, const ts_material *m, ts_error *err)
 {
-    static const char unit[] = "RGB in [0, 1]", finite[] = "finite RGB ≥ 0";
-    bool rough = false;
+    const ts_material_desc *d = ts_material_desc_of(m->type);
+    if (!d) return ts_error_set(err, TS_ERR_INVALID, "type: unknown material type %d", (int)m->type);
     if (m->bump && m->bump->is_rgb)
         return ts_error_set(err, TS_ERR_INVALID, "bumpmap: expected a float texture, got an RGB one");
-    switch (m->type) {
-    case TS_MATERIAL_DIFFUSE:
-        TRY(check_rgb_param(&m->reflectance, "reflectance", rgb_unit, unit, err));
-        TRY(check_float_texture(&m->sigma_deg, "sigma", err));
-        if (!m->sigma_deg.tex && !(m->sigma_deg.value >= 0 && m->sigma_deg.value <= 90))
-            return ts_error_set(err, TS_ERR_INVALID, "sigma: expected an angle in [0, 90] degrees, got %g",
-                                m->sigma_deg.value);
-        break;
-    case TS_MATERIAL_MIRROR:
-        TRY(check_rgb_param(&m->reflectance, "reflectance", rgb_unit, unit, err));
-        break;
-    case TS_MATERIAL_DIELECTRIC:
-        TRY(check_float_texture(&m->eta, "eta", err));
-        if (!m->eta.tex && !(m->eta.value > 0 && isfinite(m->eta.value)))
-            return ts_error_set(err, TS_ERR_INVALID, "eta: expected a finite number > 0, got %g", m->eta.value);
-        TRY(check_rgb_param(&m->reflectance, "reflectance", rgb_unit, unit, err));
-        TRY(check_rgb_param(&m->transmittance, "transmittance", rgb_unit, unit, err));
-        rough = true;
-        break;
-    case TS_MATERIAL_CONDUCTOR:
-        TRY(check_rgb_param(&m->conductor_eta, "eta", rgb_finite_nonneg, finite, err));
-        TRY(check_rgb_param(&m->conductor_k, "k", rgb_finite_nonneg, finite, err));
-        if (m->distribution != TS_MICROFACET_GGX && m->distribution != TS_MICROFACET_BECKMANN)
-            return ts_error_set(err, TS_ERR_INVALID, "distribution: unknown microfacet distribution %d",
-                                (int)m->distribution);
-        rough = true;
-        break;
-    case TS_MATERIAL_PLASTIC:
-    case TS_MATERIAL_SUBSTRATE:
-        TRY(check_rgb_param(&m->diffuse, "diffuse", rgb_unit, unit, err));
-        TRY(check_rgb_param(&m->specular, "specular", rgb_unit, unit, err));
-        rough = true;
-        break;
-    case TS_MATERIAL_PLASTIC_PBRT3:
-    case TS_MATERIAL_TRANSLUCENT:
-    case TS_MATERIAL_UBER:
-        TRY(check_rgb_param(&m->diffuse, "diffuse", rgb_unit, unit, err));
-        TRY(check_rgb_param(&m->specular, "specular", rgb_unit, unit, err));
-        if (m->type != TS_MATERIAL_PLASTIC_PBRT3) {
-            TRY(check_rgb_param(&m->reflectance, "reflectance", rgb_unit, unit, err));
-            TRY(check_rgb_param(&m->transmittance, "transmittance", rgb_unit, unit, err));
-        }
-        if (m->type == TS_MATERIAL_UBER) {
-            TRY(check_rgb_param(&m->opacity, "opacity", rgb_unit, unit, err));
-            TRY(check_float_texture(&m->eta, "eta", err));
-            if (!m->eta.tex && !(m->eta.value > 0 && isfinite(m->eta.value)))
-                return ts_error_set(err, TS_ERR_INVALID, "eta: expected a finite number > 0, got %g", m->eta.value);
-        }
-        rough = true;
-        break;
-    case TS_MATERIAL_MIX:
-        TRY(check_rgb_param(&m->amount, "amount", rgb_unit, unit, err));
+    for (int i = 0; i < d->n_params; i++)
+        TRY(check_material_param(m, &d->params[i], err));
+    if (d->flags & TS_MDESC_MIX)
         for (int k = 0; k < 2; k++)
             if (m->mix_id[k] >= b->n_materials)
                 return ts_error_set(err, TS_ERR_INVALID, "materials[%d]: no material of id %u (%u were added)", k,
                                     m->mix_id[k], b->n_materials);
-        break;
-    case TS_MATERIAL_FOURIER: {
+    if (d->flags & TS_MDESC_FILE) {
         uint32_t i = 0;
         while (i < b->n_fourier_tables && b->fourier_tables[i] != m->fourier)
             i++;
         if (!m->fourier || i == b->n_fourier_tables)
-            return ts_error_set(err, TS_ERR_INVALID,
-                                "file: the Fourier table was not loaded by this scene builder");
-        break;
+            return ts_error_set(err, TS_ERR_INVALID, "file: the Fourier table was not loaded by this scene builder");
     }
-    default:
-        return ts_error_set(err, TS_ERR_INVALID, "type: unknown material type %d", (int)m->type);
-    }
-    if (rough) TRY(check_float_texture(&m->roughness, "roughness", err));
-    if (rough && !m->roughness.tex && !(m->roughness.value >= 0 && isfinite(m->roughness.value)))
-        return ts_error_set(err, TS_ERR_INVALID, "roughness: expected a finite number ≥ 0, got %g",
-                            m->roughness.value);
-    bool aniso = m->type == TS_MATERIAL_CONDUCTOR || m->type == TS_MATERIAL_DIELECTRIC ||
-                 m->type == TS_MATERIAL_SUBSTRATE || m->type == TS_MATERIAL_UBER;
-    if (m->has_vroughness && !aniso)
+    if (d->flags & TS_MDESC_ROUGH) TRY(check_roughness(&m->roughness, "roughness", err));
+    if (m->has_vroughness && !(d->flags & TS_MDESC_ANISO))
         return ts_error_set(err, TS_ERR_INVALID,
                             "vroughness: only conductor, dielectric, substrate and uber materials are anisotropic");
-    if (m->has_vroughness) TRY(check_float_texture(&m->vroughness, "vroughness", err));
-    if (m->has_vroughness && !m->vroughness.tex && !(m->vroughness.value >= 0 && isfinite(m->vroughness.value)))
-        return ts_error_set(err, TS_ERR_INVALID, "vroughness: expected a finite number ≥ 0, got %g",
-                            m->vroughness.value);
+    if (m->has_vroughness) TRY(check_roughness(&m->vroughness, "vroughness", err));
     /* The flattened BSDF's lobes and one shading's texture evaluations, from the counts of
      * the materials a mix names (set when they were added): linear in the scene, however
      * often a material is mixed in. pbrt-v3's BSDF holds 8 lobes and aborts beyond; refuse

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "materials/bsdf.h"
+#include "materials/material_desc.h"
 #include "scene/scene.h"
 
 static const struct { uint32_t bit; const char *key, *text; } table[] = {
@@ -105,28 +106,28 @@ static uint32_t constant_material_effects(const ts_material *m)
 
 /* A textured parameter may take any value of its range at some point, so a textured
  * material is classified as the union over stand-in constants that between them raise
- * every lobe the range allows: colours white (a black texel only removes lobes), and a
- * textured roughness both 0 (specular lobes) and 1 (glossy ones). σ and η change no
- * lobe's kind; a bump map only turns the shading normal (no lobe of its own). Never
- * fewer effects than some point of the surface shows. */
+ * every lobe the range allows: each row's stand-in (materials/material_desc.c: colours
+ * white — a black texel only removes lobes —, uber's opacity ½, σ 0, η 1.5), and a
+ * textured roughness both 0 (specular lobes) and 1 (glossy ones). A bump map only turns
+ * the shading normal (no lobe of its own). Never fewer effects than some point of the
+ * surface shows. */
 static uint32_t material_effects(const ts_material *m)
 {
     if (!m->textured || m->type == TS_MATERIAL_MIX) return constant_material_effects(m);
+    const ts_material_desc *d = ts_material_desc_of(m->type);
     ts_material c = *m;
     c.textured = false;
-    ts_material_rgb *colours[] = {&c.reflectance, &c.transmittance, &c.conductor_eta, &c.conductor_k, &c.diffuse,
-                                  &c.specular};
-    for (size_t i = 0; i < sizeof colours / sizeof *colours; i++)
-        if (colours[i]->tex) *colours[i] = ts_material_rgb_gray(1);
-    /* Uber's opacity: half raises the pass-through lobe and keeps every other. */
-    if (c.opacity.tex) c.opacity = ts_material_rgb_gray(0.5f);
+    for (int i = 0; d && i < d->n_params; i++) {
+        const ts_material_param *p = &d->params[i];
+        if (p->kind == TS_MPARAM_RGB && ts_mparam_rgb(&c, p)->tex)
+            *ts_mparam_rgb(&c, p) = ts_material_rgb_gray(p->standin);
+        if (p->kind == TS_MPARAM_FLOAT && ts_mparam_float(&c, p)->tex)
+            *ts_mparam_float(&c, p) = ts_material_float_const(p->standin);
+    }
     if (c.has_vroughness && c.vroughness.tex) { /* the roughness stand-ins below, on both axes */
         c.has_vroughness = false;
         if (!c.roughness.tex) c.roughness.tex = c.vroughness.tex;
     }
-    ts_material_float *floats[] = {&c.sigma_deg, &c.eta};
-    for (size_t i = 0; i < sizeof floats / sizeof *floats; i++)
-        if (floats[i]->tex) *floats[i] = ts_material_float_const(floats[i] == &c.eta ? 1.5f : 0);
     if (!c.roughness.tex) return constant_material_effects(&c);
     c.roughness = ts_material_float_const(0);
     uint32_t fx = constant_material_effects(&c);

@@ -22,6 +22,7 @@
 #include "mesh/mesh_subdiv.h"
 #include "json/scene_digest.h"
 #include "json/scene_json_texture.h"
+#include "materials/material_desc.h"
 #include "core/scene_path.h"
 
 extern const char ts_builtin_cornell_box[];
@@ -511,11 +512,81 @@ static ts_status parse_job(loader *ld, const cJSON *doc)
 
 /* ---------------------------------------------------------------- materials */
 
+/* The range of a material parameter as the JSON checks name it (material_desc.h): the
+ * angle's upper bound is checked after. */
+static ts_jrange jrange_of(ts_mparam_range r)
+{
+    switch (r) {
+    case TS_MRANGE_UNIT: return TS_J_UNIT;
+    case TS_MRANGE_POSITIVE: return TS_J_POSITIVE;
+    case TS_MRANGE_NONNEG:
+    case TS_MRANGE_ANGLE: return TS_J_NONNEG;
+    }
+    return TS_J_ANY;
+}
+
+/* One parameter of the type's table (material_desc.h): its kind, range and default there. */
+static ts_status parse_material_param(loader *ld, const cJSON *m, const char *path, const ts_material_param *p,
+                                      ts_material *out)
+{
+    const ts_json_textures *tx = &ld->textures;
+    ts_jrange range = jrange_of(p->range);
+    switch (p->kind) {
+    case TS_MPARAM_RGB: {
+        ts_material_rgb *dst = ts_mparam_rgb(out, p);
+        /* A required one absent gets ts_json_rgb's "required but missing". */
+        if ((p->flags & TS_MPARAM_REQUIRED) && !cJSON_GetObjectItemCaseSensitive(m, p->key))
+            TRY(ts_json_rgb(m, path, p->key, true, range, &dst->value, ld->err));
+        return ts_json_material_rgb(tx, m, path, p->key, range, dst, ld->err);
+    }
+    case TS_MPARAM_FLOAT: {
+        ts_material_float *dst = ts_mparam_float(out, p);
+        TRY(ts_json_material_float(tx, m, path, p->key, range, dst, ld->err));
+        if (p->range == TS_MRANGE_ANGLE && !dst->tex && dst->value > 90) {
+            ts_jpath kp = ts_jpath_key(path, p->key);
+            return ts_error_set(ld->err, TS_ERR_INVALID, "%s: expected %s, got %g", kp.s, ts_mrange_words(p->range, false),
+                                cJSON_GetObjectItemCaseSensitive(m, p->key)->valuedouble);
+        }
+        return TS_OK;
+    }
+    case TS_MPARAM_ENUM: return ts_json_enum(m, path, p->key, false, p->names, ts_mparam_enum(out, p), ld->err);
+    }
+    return TS_OK;
+}
+
+/* A mix's "materials": the names of two materials defined before it. */
+static ts_status parse_mix_names(loader *ld, const cJSON *m, const char *path, ts_material *out)
+{
+    const cJSON *list;
+    TRY(ts_json_array(m, path, "materials", true, &list, ld->err));
+    ts_jpath lp = ts_jpath_key(path, "materials");
+    if (cJSON_GetArraySize(list) != 2)
+        return ts_error_set(ld->err, TS_ERR_INVALID, "%s: expected the names of two materials, got %d values", lp.s,
+                            cJSON_GetArraySize(list));
+    for (int k = 0; k < 2; k++) {
+        const cJSON *e = cJSON_GetArrayItem(list, k);
+        ts_jpath ep = ts_jpath_index(lp.s, k);
+        if (!cJSON_IsString(e)) {
+            char d[64];
+            ts_json_describe(e, d, sizeof d);
+            return ts_error_set(ld->err, TS_ERR_INVALID, "%s: expected a material name, got %s", ep.s, d);
+        }
+        out->mix_id[k] = ts_scene_builder_find_material(ld->b, e->valuestring);
+        if (out->mix_id[k] == TS_NONE)
+            return ts_error_set(ld->err, TS_ERR_INVALID, "%s: no material named \"%s\" before this one in 'materials'",
+                                ep.s, e->valuestring);
+    }
+    return TS_OK;
+}
+
+/* A material: its type's description (materials/material_desc.h) says which keys it takes,
+ * their kinds, ranges and defaults; the flags of the type the families a row cannot. */
 static ts_status parse_material(loader *ld, const cJSON *m, const char *path, ts_material *out)
 {
-    /* In ts_material_type's order. */
-    static const char *const types[] = {"diffuse", "mirror",        "dielectric", "conductor", "plastic", "substrate",
-                                        "fourier", "plastic_pbrt3", "uber",       "translucent", "mix",   NULL};
+    const char *types[TS_MATERIAL_TYPE_COUNT + 1];
+    for (int i = 0; i < TS_MATERIAL_TYPE_COUNT; i++)
+        types[i] = ts_material_descs[i].name;
+    types[TS_MATERIAL_TYPE_COUNT] = NULL;
     int type = 0;
     if (!cJSON_IsObject(m)) return ts_json_check_object(m, path, types, ld->err);
     const cJSON *tv = cJSON_GetObjectItemCaseSensitive(m, "type");
@@ -524,159 +595,69 @@ static ts_status parse_material(loader *ld, const cJSON *m, const char *path, ts
         return ts_error_set(ld->err, TS_ERR_UNSUPPORTED, "%s: material 'disney' is not supported", p.s);
     }
     TRY(ts_json_enum(m, path, "type", true, types, &type, ld->err));
-    static const char *const k_diffuse[] = {"type", "bumpmap", "texture_clamp", "reflectance", "sigma", NULL};
-    static const char *const k_mirror[] = {"type", "bumpmap", "texture_clamp", "reflectance", NULL};
-    static const char *const k_dielectric[] = {"type", "bumpmap", "texture_clamp",       "eta",        "reflectance",     "transmittance",
-                                               "roughness",  "uroughness", "vroughness",      "remap_roughness", NULL};
-    static const char *const k_conductor[] = {"type", "bumpmap", "texture_clamp",       "eta",        "k",               "roughness", "distribution",
-                                              "uroughness", "vroughness", "remap_roughness", NULL};
-    static const char *const k_plastic[] = {"type", "bumpmap", "texture_clamp", "diffuse", "specular", "roughness", "remap_roughness", NULL};
-    static const char *const k_substrate[] = {"type",       "bumpmap",    "texture_clamp", "diffuse",         "specular", "roughness",
-                                              "uroughness", "vroughness", "remap_roughness", NULL};
-    static const char *const k_fourier[] = {"type", "bumpmap", "texture_clamp", "file", NULL};
-    static const char *const k_uber[] = {"type", "bumpmap", "texture_clamp",      "diffuse",    "specular",   "reflectance", "transmittance", "eta",
-                                         "roughness", "uroughness", "vroughness", "opacity",     "remap_roughness", NULL};
-    static const char *const k_translucent[] = {"type", "bumpmap", "texture_clamp",          "diffuse",   "specular",        "reflectance",
-                                                "transmittance", "roughness", "remap_roughness", NULL};
-    static const char *const k_mix[] = {"type", "bumpmap", "texture_clamp", "materials", "amount", NULL};
-    const char *const *keys[] = {k_diffuse, k_mirror,  k_dielectric, k_conductor,   k_plastic, k_substrate,
-                                 k_fourier, k_plastic, k_uber,       k_translucent, k_mix};
-    TRY(ts_json_check_object(m, path, keys[type], ld->err));
+    const ts_material_desc *d = &ts_material_descs[type];
+
+    /* The keys of this type: every type's three, its rows', its families'. */
+    const char *keys[32];
+    int n = 0;
+    keys[n++] = "type";
+    keys[n++] = "bumpmap";
+    keys[n++] = "texture_clamp";
+    for (int i = 0; i < d->n_params && n < 24; i++)
+        keys[n++] = d->params[i].key;
+    if (d->flags & TS_MDESC_ROUGH) {
+        keys[n++] = "roughness";
+        keys[n++] = "remap_roughness";
+    }
+    if (d->flags & TS_MDESC_ANISO) {
+        keys[n++] = "uroughness";
+        keys[n++] = "vroughness";
+    }
+    if (d->flags & TS_MDESC_FILE) keys[n++] = "file";
+    if (d->flags & TS_MDESC_MIX) keys[n++] = "materials";
+    keys[n] = NULL;
+    TRY(ts_json_check_object(m, path, keys, ld->err));
 
     *out = (ts_material){0};
+    out->type = d->type;
+    ts_material_desc_defaults(out);
     static const char *const clamps[] = {"unit", "nonnegative", NULL};
     int clamp = 0;
     TRY(ts_json_enum(m, path, "texture_clamp", false, clamps, &clamp, ld->err));
     out->texture_clamp_nonneg = clamp == 1;
-    out->type = (ts_material_type)type;
-    out->reflectance = ts_material_rgb_gray(type == TS_MATERIAL_DIFFUSE ? 0.5f : 1.0f);
-    out->transmittance = ts_material_rgb_gray(1);
-    out->eta = ts_material_float_const(1.5f);
-    const ts_json_textures *tx = &ld->textures;
     /* Every type: pbrt-v3's bump map, the name of a float texture (docs/design.md §4d). */
     ts_material_float bump = {0, NULL};
     const cJSON *bv = cJSON_GetObjectItemCaseSensitive(m, "bumpmap");
     if (bv && !cJSON_IsString(bv)) {
-        char d[64];
-        ts_json_describe(bv, d, sizeof d);
+        char desc[64];
+        ts_json_describe(bv, desc, sizeof desc);
         ts_jpath bp = ts_jpath_key(path, "bumpmap");
-        return ts_error_set(ld->err, TS_ERR_INVALID, "%s: expected the name of a float texture, got %s", bp.s, d);
+        return ts_error_set(ld->err, TS_ERR_INVALID, "%s: expected the name of a float texture, got %s", bp.s, desc);
     }
-    TRY(ts_json_material_float(tx, m, path, "bumpmap", TS_J_ANY, &bump, ld->err));
+    TRY(ts_json_material_float(&ld->textures, m, path, "bumpmap", TS_J_ANY, &bump, ld->err));
     out->bump = bump.tex;
-    switch (out->type) {
-    case TS_MATERIAL_DIFFUSE: {
-        TRY(ts_json_material_rgb(tx, m, path, "reflectance", TS_J_UNIT, &out->reflectance, ld->err));
-        TRY(ts_json_material_float(tx, m, path, "sigma", TS_J_NONNEG, &out->sigma_deg, ld->err));
-        if (!out->sigma_deg.tex && out->sigma_deg.value > 90) {
-            ts_jpath p = ts_jpath_key(path, "sigma");
-            return ts_error_set(ld->err, TS_ERR_INVALID, "%s: expected an angle in [0, 90] degrees, got %g", p.s,
-                                cJSON_GetObjectItemCaseSensitive(m, "sigma")->valuedouble);
-        }
-        break;
-    }
-    case TS_MATERIAL_MIRROR:
-        TRY(ts_json_material_rgb(tx, m, path, "reflectance", TS_J_UNIT, &out->reflectance, ld->err));
-        break;
-    case TS_MATERIAL_DIELECTRIC: {
-        TRY(ts_json_material_float(tx, m, path, "eta", TS_J_POSITIVE, &out->eta, ld->err));
-        TRY(ts_json_material_rgb(tx, m, path, "reflectance", TS_J_UNIT, &out->reflectance, ld->err));
-        TRY(ts_json_material_rgb(tx, m, path, "transmittance", TS_J_UNIT, &out->transmittance, ld->err));
-        break;
-    }
-    case TS_MATERIAL_CONDUCTOR: {
-        /* Both required: an absent one gets ts_json_rgb's "required but missing". */
-        const char *const eta_k[] = {"eta", "k"};
-        ts_material_rgb *dst[] = {&out->conductor_eta, &out->conductor_k};
-        for (int i = 0; i < 2; i++) {
-            if (!cJSON_GetObjectItemCaseSensitive(m, eta_k[i]))
-                TRY(ts_json_rgb(m, path, eta_k[i], true, TS_J_NONNEG, &dst[i]->value, ld->err));
-            TRY(ts_json_material_rgb(tx, m, path, eta_k[i], TS_J_NONNEG, dst[i], ld->err));
-        }
-        static const char *const dist[] = {"ggx", "beckmann", NULL};
-        int d = 0;
-        TRY(ts_json_enum(m, path, "distribution", false, dist, &d, ld->err));
-        out->distribution = (ts_microfacet_type)d;
-        break;
-    }
-    case TS_MATERIAL_PLASTIC:
-    case TS_MATERIAL_SUBSTRATE: {
-        float kd = type == TS_MATERIAL_PLASTIC ? 0.25f : 0.5f;
-        out->diffuse = ts_material_rgb_gray(kd);
-        out->specular = ts_material_rgb_gray(kd);
-        TRY(ts_json_material_rgb(tx, m, path, "diffuse", TS_J_UNIT, &out->diffuse, ld->err));
-        TRY(ts_json_material_rgb(tx, m, path, "specular", TS_J_UNIT, &out->specular, ld->err));
-        break;
-    }
-    case TS_MATERIAL_FOURIER: {
+    if (d->flags & TS_MDESC_MIX) TRY(parse_mix_names(ld, m, path, out));
+    for (int i = 0; i < d->n_params; i++)
+        TRY(parse_material_param(ld, m, path, &d->params[i], out));
+    if (d->flags & TS_MDESC_FILE) {
         const char *file;
         TRY(ts_json_string(m, path, "file", true, &file, ld->err));
         ts_jpath fp = ts_jpath_key(path, "file");
         TRY(at(ts_scene_builder_load_fourier(ld->b, file, &out->fourier, ld->err), fp.s, ld->err));
-        break;
     }
-    case TS_MATERIAL_PLASTIC_PBRT3:
-    case TS_MATERIAL_UBER:
-    case TS_MATERIAL_TRANSLUCENT:
-        /* pbrt-v3's defaults (material.h), but for remap_roughness (false: §4). */
-        out->diffuse = ts_material_rgb_gray(0.25f);
-        out->specular = ts_material_rgb_gray(0.25f);
-        out->reflectance = ts_material_rgb_gray(type == TS_MATERIAL_UBER ? 0.0f : 0.5f);
-        out->transmittance = ts_material_rgb_gray(type == TS_MATERIAL_UBER ? 0.0f : 0.5f);
-        out->opacity = ts_material_rgb_gray(1);
-        TRY(ts_json_material_rgb(tx, m, path, "diffuse", TS_J_UNIT, &out->diffuse, ld->err));
-        TRY(ts_json_material_rgb(tx, m, path, "specular", TS_J_UNIT, &out->specular, ld->err));
-        if (type == TS_MATERIAL_PLASTIC_PBRT3) break;
-        TRY(ts_json_material_rgb(tx, m, path, "reflectance", TS_J_UNIT, &out->reflectance, ld->err));
-        TRY(ts_json_material_rgb(tx, m, path, "transmittance", TS_J_UNIT, &out->transmittance, ld->err));
-        if (type == TS_MATERIAL_TRANSLUCENT) break;
-        TRY(ts_json_material_rgb(tx, m, path, "opacity", TS_J_UNIT, &out->opacity, ld->err));
-        TRY(ts_json_material_float(tx, m, path, "eta", TS_J_POSITIVE, &out->eta, ld->err));
-        break;
-    case TS_MATERIAL_MIX: {
-        const cJSON *list;
-        TRY(ts_json_array(m, path, "materials", true, &list, ld->err));
-        ts_jpath lp = ts_jpath_key(path, "materials");
-        if (cJSON_GetArraySize(list) != 2)
-            return ts_error_set(ld->err, TS_ERR_INVALID, "%s: expected the names of two materials, got %d values", lp.s,
-                                cJSON_GetArraySize(list));
-        for (int k = 0; k < 2; k++) {
-            const cJSON *e = cJSON_GetArrayItem(list, k);
-            ts_jpath ep = ts_jpath_index(lp.s, k);
-            if (!cJSON_IsString(e)) {
-                char d[64];
-                ts_json_describe(e, d, sizeof d);
-                return ts_error_set(ld->err, TS_ERR_INVALID, "%s: expected a material name, got %s", ep.s, d);
-            }
-            out->mix_id[k] = ts_scene_builder_find_material(ld->b, e->valuestring);
-            if (out->mix_id[k] == TS_NONE)
-                return ts_error_set(ld->err, TS_ERR_INVALID,
-                                    "%s: no material named \"%s\" before this one in 'materials'", ep.s, e->valuestring);
-        }
-        out->amount = ts_material_rgb_gray(0.5f);
-        TRY(ts_json_material_rgb(tx, m, path, "amount", TS_J_UNIT, &out->amount, ld->err));
-        break;
-    }
-    }
-    if (type == TS_MATERIAL_DIELECTRIC || type == TS_MATERIAL_CONDUCTOR || type == TS_MATERIAL_PLASTIC ||
-        type == TS_MATERIAL_SUBSTRATE || type == TS_MATERIAL_PLASTIC_PBRT3 || type == TS_MATERIAL_UBER ||
-        type == TS_MATERIAL_TRANSLUCENT) {
-        out->roughness = ts_material_float_const(type == TS_MATERIAL_DIELECTRIC  ? 0.0f
-                                                 : type == TS_MATERIAL_CONDUCTOR ? 0.01f
-                                                                                 : 0.1f);
-        TRY(ts_json_material_float(tx, m, path, "roughness", TS_J_NONNEG, &out->roughness, ld->err));
+    if (d->flags & TS_MDESC_ROUGH) {
+        TRY(ts_json_material_float(&ld->textures, m, path, "roughness", TS_J_NONNEG, &out->roughness, ld->err));
         TRY(ts_json_bool(m, path, "remap_roughness", false, &out->remap_roughness, ld->err));
     }
-    if (type == TS_MATERIAL_DIELECTRIC || type == TS_MATERIAL_CONDUCTOR || type == TS_MATERIAL_SUBSTRATE ||
-        type == TS_MATERIAL_UBER) {
+    if (d->flags & TS_MDESC_ANISO) {
         /* uroughness and vroughness each default to roughness (read only when present: an
          * absent key would reset a texture reference). */
         ts_material_float r = out->roughness;
         if (cJSON_GetObjectItemCaseSensitive(m, "uroughness"))
-            TRY(ts_json_material_float(tx, m, path, "uroughness", TS_J_NONNEG, &out->roughness, ld->err));
+            TRY(ts_json_material_float(&ld->textures, m, path, "uroughness", TS_J_NONNEG, &out->roughness, ld->err));
         out->vroughness = r;
         if (cJSON_GetObjectItemCaseSensitive(m, "vroughness"))
-            TRY(ts_json_material_float(tx, m, path, "vroughness", TS_J_NONNEG, &out->vroughness, ld->err));
+            TRY(ts_json_material_float(&ld->textures, m, path, "vroughness", TS_J_NONNEG, &out->vroughness, ld->err));
         out->has_vroughness = out->vroughness.tex != out->roughness.tex || out->vroughness.value != out->roughness.value;
     }
     return TS_OK;

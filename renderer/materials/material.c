@@ -79,28 +79,6 @@ float ts_material_texture_float(const ts_texture *t, const ts_texture_context *c
     return clampf(ts_texture_eval_float(t, context(c)), lo, hi);
 }
 
-bool ts_material_uses_textures(const ts_material *m)
-{
-    /* Every parameter, whether m's type reads it or not: a texture left in a field the type
-     * ignores only costs the context it is never read from. */
-    return m->reflectance.tex || m->transmittance.tex || m->sigma_deg.tex || m->eta.tex || m->conductor_eta.tex ||
-           m->conductor_k.tex || m->roughness.tex || m->diffuse.tex || m->specular.tex ||
-           (m->has_vroughness && m->vroughness.tex) || m->opacity.tex || m->amount.tex || m->bump;
-}
-
-uint64_t ts_material_texture_cost(const ts_material *m)
-{
-    const struct ts_texture *t[] = {m->reflectance.tex, m->transmittance.tex, m->sigma_deg.tex, m->eta.tex,
-                                    m->conductor_eta.tex, m->conductor_k.tex, m->roughness.tex, m->diffuse.tex,
-                                    m->specular.tex, m->has_vroughness ? m->vroughness.tex : NULL, m->opacity.tex,
-                                    m->amount.tex};
-    uint64_t cost = 0;
-    for (size_t i = 0; i < sizeof t / sizeof *t; i++)
-        if (t[i]) cost += t[i]->cost;
-    if (m->bump) cost += 3ull * m->bump->cost;
-    return cost;
-}
-
 /* pbrt-v3's Material::Bump of displacement texture d on si's shading frame. */
 static void bump(const ts_texture *d, ts_interaction *si, const ts_texture_context *c)
 {
@@ -162,25 +140,6 @@ void ts_material_texture_context(const ts_interaction *si, ts_texture_context *c
 }
 
 /* ---------------------------------------------------------------- BSDFs */
-
-int ts_material_max_lobes(const ts_material *m)
-{
-    switch (m->type) {
-    case TS_MATERIAL_DIFFUSE:
-    case TS_MATERIAL_MIRROR:
-    case TS_MATERIAL_CONDUCTOR:
-    case TS_MATERIAL_FOURIER: return 1;
-    case TS_MATERIAL_DIELECTRIC:
-    case TS_MATERIAL_PLASTIC:
-    case TS_MATERIAL_SUBSTRATE:
-    case TS_MATERIAL_PLASTIC_PBRT3: return 2;
-    case TS_MATERIAL_TRANSLUCENT: return 4;
-    case TS_MATERIAL_UBER: return 5;
-    case TS_MATERIAL_MIX:
-        return (m->mix[0] ? ts_material_max_lobes(m->mix[0]) : 0) + (m->mix[1] ? ts_material_max_lobes(m->mix[1]) : 0);
-    }
-    return TS_BSDF_MAX_BXDFS;
-}
 
 /* α along u and v after vroughness and pbrt-v3's remapping (u_raw, v_raw as given), and
  * whether the lobe is specular: both α below TS_MICROFACET_SPECULAR_ALPHA, or a

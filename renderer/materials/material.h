@@ -117,20 +117,6 @@ typedef struct ts_material {
  * counts its own cost (textures/texture.h, TS_TEXTURE_MAX_COST a lookup). */
 #define TS_MATERIAL_MAX_COST 4096
 
-/* The textures one shading of m evaluates at most, its own parameters and bump map only
- * (every parameter with a texture counted, read by m's type or not; the bump map three
- * times: at the point and its two offsets). A mix's materials are the builder's to add. */
-uint64_t ts_material_texture_cost(const ts_material *m);
-
-/* Whether any parameter of m has a texture (whether or not m's type reads it), or m has a
- * bump map. */
-bool ts_material_uses_textures(const ts_material *m);
-
-/* The most lobes m's BSDF can have whatever its parameters' values (a mix: the sum of
- * its two materials'; needs mix[] set). pbrt-v3's BSDF holds 8 and aborts beyond; the
- * builder refuses a mix above TS_BSDF_MAX_BXDFS (materials/bsdf.h) instead. */
-int ts_material_max_lobes(const ts_material *m);
-
 /* pbrt-v3's Material::Bump: with displacement d = m->bump at c, and du = ½(|∂u/∂x| +
  * |∂u/∂y|) of c's footprint (0.0005 without one), likewise dv, the displaced tangents are
  *   ∂p'/∂u = ∂p/∂u + (d(u + du) − d(u))/du · ns + d(u)·∂ns/∂u,  ∂p'/∂v likewise,

@@ -18,6 +18,7 @@
 
 #include "mesh/mesh_read.h"
 #include "mesh/mesh_subdiv.h"
+#include "materials/material_desc.h"
 #include "spectrum/spectrum.h"
 #include "json/json_write.h"
 #include "json/scene_json_texture_write.h"
@@ -752,8 +753,67 @@ static ts_status get_bump(imp *im, ts_pbrt_params *ps, ts_material *m)
     return TS_OK;
 }
 
+/* One row of m's type's description (materials/material_desc.h) as pbrt-v3 reads it: its
+ * pbrt-v3 name and default (v1's default where pbrt-v3 has no such parameter). */
+static ts_status get_material_param(imp *im, ts_pbrt_params *ps, const ts_material_param *p, ts_material *m)
+{
+    switch (p->kind) {
+    case TS_MPARAM_RGB: {
+        ts_rgb def = ts_rgb_gray(p->pbrt3 ? p->pbrt3_def : p->def);
+        if (p->pbrt3_def_rgb) p->pbrt3_def_rgb(&def);
+        if (!p->pbrt3) {
+            *ts_mparam_rgb(m, p) = ts_material_rgb_const(def);
+            return TS_OK;
+        }
+        ts_pbrt_param *pp = ts_pbrt_params_get(ps, p->pbrt3);
+        if ((p->flags & TS_MPARAM_PBRT3_FLOAT_GREY) && pp && pp->type == TS_PBRT_PARAM_FLOAT) {
+            /* pbrt-v3 reads only a spectrum here (it would leave a float unused at its
+             * default); a float is taken as the grey it means (docs/pbrt-v3.md). */
+            float g;
+            TRY(get_float(im, ps, p->pbrt3, p->pbrt3_def, &g));
+            *ts_mparam_rgb(m, p) = ts_material_rgb_gray(g);
+            return TS_OK;
+        }
+        return get_mrgb(im, ps, p->pbrt3, def, ts_mparam_rgb(m, p));
+    }
+    case TS_MPARAM_FLOAT: {
+        float def = p->pbrt3 ? p->pbrt3_def : p->def;
+        if (!p->pbrt3) {
+            *ts_mparam_float(m, p) = ts_material_float_const(def);
+            return TS_OK;
+        }
+        /* pbrt-v3's glass and uber: "float index", overridden by "eta" (a texture or not). */
+        if (p->flags & TS_MPARAM_PBRT3_INDEX) TRY(get_float(im, ps, "index", def, &def));
+        return get_mfloat(im, ps, p->pbrt3, def, ts_mparam_float(m, p));
+    }
+    case TS_MPARAM_ENUM: *ts_mparam_enum(m, p) = (int)p->def; return TS_OK; /* no pbrt-v3 name: v1's default */
+    }
+    return TS_OK;
+}
+
+/* pbrt-v3's MixMaterial's namedmaterial1/2: the parser resolved both names when the mix
+ * was defined, so they are earlier materials and mapping them first cannot loop. */
+static ts_status get_mix_materials(imp *im, int32_t mi, ts_pbrt_params *ps, ts_pbrt_loc loc, ts_material *m)
+{
+    static const char *const keys[2] = {"namedmaterial1", "namedmaterial2"};
+    for (int k = 0; k < 2; k++) {
+        int32_t sub = im->s->materials[mi].mix[k];
+        ts_pbrt_param *kp = ts_pbrt_params_get(ps, keys[k]);
+        if (sub < 0 || sub >= mi)
+            return derr(im, ps, loc, TS_ERR_INVALID, "\"string %s\" names no earlier material", keys[k]);
+        bool none = false;
+        TRY(material_id(im, sub, &m->mix_id[k], &none));
+        if (none)
+            return ts_pbrt_param_error(ps, kp, im->err, TS_ERR_UNSUPPORTED,
+                                       "names material \"%s\" of type \"%s\" (no surface), which cannot be mixed",
+                                       kp->strings[0], im->s->materials[sub].type);
+    }
+    return TS_OK;
+}
+
 /* The tessera material for pbrt-v3 material index mi (-1: the default matte); *no_surface
- * for type "" / "none". */
+ * for type "" / "none". The type is the one whose description names this pbrt-v3 material
+ * (materials/material_desc.h), read row by row; its flags say what else pbrt-v3 reads. */
 static ts_status make_material(imp *im, int32_t mi, ts_material *m, bool *no_surface, const char **json_type)
 {
     static ts_pbrt_params default_params = {.directive = "Material", .directive_arg = "matte"};
@@ -769,115 +829,29 @@ static ts_status make_material(imp *im, int32_t mi, ts_material *m, bool *no_sur
     }
     /* pbrt-v3's MixMaterial reads no bumpmap (its materials' own apply): left unused, warned. */
     if (strcmp(type, "mix") != 0) TRY(get_bump(im, ps, m));
-    if (strcmp(type, "matte") == 0) {
-        m->type = TS_MATERIAL_DIFFUSE;
-        *json_type = "diffuse";
-        TRY(get_mrgb(im, ps, "Kd", ts_rgb_gray(0.5f), &m->reflectance));
-        TRY(get_mfloat(im, ps, "sigma", 0, &m->sigma_deg));
-    } else if (strcmp(type, "plastic") == 0) {
-        /* pbrt-v3's PlasticMaterial (material.h: uncoupled, its code's coat Fresnel). */
-        m->type = TS_MATERIAL_PLASTIC_PBRT3;
-        *json_type = "plastic_pbrt3";
-        TRY(get_mrgb(im, ps, "Kd", ts_rgb_gray(0.25f), &m->diffuse));
-        TRY(get_mrgb(im, ps, "Ks", ts_rgb_gray(0.25f), &m->specular));
-        TRY(get_roughness(im, ps, loc, 0.1f, true, false, false, m));
-    } else if (strcmp(type, "mirror") == 0) {
-        m->type = TS_MATERIAL_MIRROR;
-        *json_type = "mirror";
-        TRY(get_mrgb(im, ps, "Kr", ts_rgb_gray(0.9f), &m->reflectance));
-    } else if (strcmp(type, "glass") == 0) {
-        m->type = TS_MATERIAL_DIELECTRIC;
-        *json_type = "dielectric";
-        TRY(get_mrgb(im, ps, "Kr", ts_rgb_gray(1), &m->reflectance));
-        TRY(get_mrgb(im, ps, "Kt", ts_rgb_gray(1), &m->transmittance));
-        float eta;
-        TRY(get_float(im, ps, "index", 1.5f, &eta));
-        TRY(get_mfloat(im, ps, "eta", eta, &m->eta));
-        /* Smooth where both roughnesses are 0 before remapping (the builder's rule, pbrt-v3's). */
-        TRY(get_roughness(im, ps, loc, 0, false, true, false, m));
-    } else if (strcmp(type, "metal") == 0) {
-        m->type = TS_MATERIAL_CONDUCTOR;
-        *json_type = "conductor";
-        ts_rgb eta, k;
-        ts_spectrum_copper(&eta, &k);
-        TRY(get_mrgb(im, ps, "eta", eta, &m->conductor_eta));
-        TRY(get_mrgb(im, ps, "k", k, &m->conductor_k));
-        m->distribution = TS_MICROFACET_GGX;
-        TRY(get_roughness(im, ps, loc, 0.01f, true, true, false, m));
-    } else if (strcmp(type, "substrate") == 0) {
-        m->type = TS_MATERIAL_SUBSTRATE;
-        *json_type = "substrate";
-        TRY(get_mrgb(im, ps, "Kd", ts_rgb_gray(0.5f), &m->diffuse));
-        TRY(get_mrgb(im, ps, "Ks", ts_rgb_gray(0.5f), &m->specular));
-        TRY(get_roughness(im, ps, loc, 0.1f, false, true, false, m));
-    } else if (strcmp(type, "fourier") == 0) {
-        m->type = TS_MATERIAL_FOURIER;
-        *json_type = "fourier";
+    if (strcmp(type, "disney") == 0 || strcmp(type, "subsurface") == 0 || strcmp(type, "kdsubsurface") == 0 ||
+        strcmp(type, "hair") == 0)
+        return derr(im, ps, loc, TS_ERR_UNSUPPORTED, "is not supported (%s)",
+                    type[0] == 'd'   ? "the Disney BSDF is not implemented"
+                    : type[0] == 'h' ? "hair is not implemented"
+                                     : "subsurface scattering needs media, which tessera does not render");
+    const ts_material_desc *d = ts_material_desc_by_pbrt3(type);
+    if (!d) return derr(im, ps, loc, TS_ERR_UNSUPPORTED, "is not a pbrt-v3 material");
+    m->type = d->type;
+    *json_type = d->name;
+    for (int i = 0; i < d->n_params; i++)
+        TRY(get_material_param(im, ps, &d->params[i], m));
+    if (d->flags & TS_MDESC_ROUGH)
+        TRY(get_roughness(im, ps, loc, d->rough_def, (d->flags & TS_MDESC_PBRT3_ROUGH) != 0,
+                          (d->flags & TS_MDESC_ANISO) != 0, (d->flags & TS_MDESC_PBRT3_V_FOLLOWS_U) != 0, m));
+    if (d->flags & TS_MDESC_FILE) {
         const char *file;
         TRY(ts_pbrt_find_string(ps, "bsdffile", NULL, &file, im->err));
         if (!file) return derr(im, ps, loc, TS_ERR_INVALID, "\"string bsdffile\" is required");
         TRY(at(im, ts_scene_builder_load_fourier(im->b, file, &m->fourier, im->err), ps,
                ts_pbrt_params_get(ps, "bsdffile")->loc));
-    } else if (strcmp(type, "disney") == 0 || strcmp(type, "subsurface") == 0 ||
-               strcmp(type, "kdsubsurface") == 0 || strcmp(type, "hair") == 0) {
-        return derr(im, ps, loc, TS_ERR_UNSUPPORTED, "is not supported (%s)",
-                    type[0] == 'd'   ? "the Disney BSDF is not implemented"
-                    : type[0] == 'h' ? "hair is not implemented"
-                                     : "subsurface scattering needs media, which tessera does not render");
-    } else if (strcmp(type, "uber") == 0) {
-        /* pbrt-v3's UberMaterial: eta, else index; uroughness defaults to roughness, vroughness
-         * to uroughness. */
-        m->type = TS_MATERIAL_UBER;
-        *json_type = "uber";
-        TRY(get_mrgb(im, ps, "Kd", ts_rgb_gray(0.25f), &m->diffuse));
-        TRY(get_mrgb(im, ps, "Ks", ts_rgb_gray(0.25f), &m->specular));
-        TRY(get_mrgb(im, ps, "Kr", ts_rgb_gray(0), &m->reflectance));
-        TRY(get_mrgb(im, ps, "Kt", ts_rgb_gray(0), &m->transmittance));
-        TRY(get_mrgb(im, ps, "opacity", ts_rgb_gray(1), &m->opacity));
-        float eta;
-        TRY(get_float(im, ps, "index", 1.5f, &eta));
-        TRY(get_mfloat(im, ps, "eta", eta, &m->eta));
-        TRY(get_roughness(im, ps, loc, 0.1f, true, true, true, m));
-    } else if (strcmp(type, "translucent") == 0) {
-        m->type = TS_MATERIAL_TRANSLUCENT;
-        *json_type = "translucent";
-        TRY(get_mrgb(im, ps, "Kd", ts_rgb_gray(0.25f), &m->diffuse));
-        TRY(get_mrgb(im, ps, "Ks", ts_rgb_gray(0.25f), &m->specular));
-        TRY(get_mrgb(im, ps, "reflect", ts_rgb_gray(0.5f), &m->reflectance));
-        TRY(get_mrgb(im, ps, "transmit", ts_rgb_gray(0.5f), &m->transmittance));
-        TRY(get_roughness(im, ps, loc, 0.1f, true, false, false, m));
-    } else if (strcmp(type, "mix") == 0) {
-        /* pbrt-v3's MixMaterial: amount (a spectrum texture) weights namedmaterial1. The
-         * parser resolved both names when the mix was defined, so they are earlier
-         * materials and mapping them first cannot loop. */
-        m->type = TS_MATERIAL_MIX;
-        *json_type = "mix";
-        ts_pbrt_param *ap = ts_pbrt_params_get(ps, "amount");
-        if (ap && ap->type == TS_PBRT_PARAM_FLOAT) {
-            /* pbrt-v3 reads only a spectrum amount (it would leave a "float amount" unused
-             * at 0.5); a float is taken as the grey it means (docs/pbrt-v3.md). */
-            float a;
-            TRY(get_float(im, ps, "amount", 0.5f, &a));
-            m->amount = ts_material_rgb_gray(a);
-        } else {
-            TRY(get_mrgb(im, ps, "amount", ts_rgb_gray(0.5f), &m->amount));
-        }
-        static const char *const keys[2] = {"namedmaterial1", "namedmaterial2"};
-        for (int k = 0; k < 2; k++) {
-            int32_t sub = im->s->materials[mi].mix[k];
-            ts_pbrt_param *kp = ts_pbrt_params_get(ps, keys[k]);
-            if (sub < 0 || sub >= mi)
-                return derr(im, ps, loc, TS_ERR_INVALID, "\"string %s\" names no earlier material", keys[k]);
-            bool none = false;
-            TRY(material_id(im, sub, &m->mix_id[k], &none));
-            if (none)
-                return ts_pbrt_param_error(ps, kp, im->err, TS_ERR_UNSUPPORTED,
-                                           "names material \"%s\" of type \"%s\" (no surface), which cannot be mixed",
-                                           kp->strings[0], im->s->materials[sub].type);
-        }
-    } else {
-        return derr(im, ps, loc, TS_ERR_UNSUPPORTED, "is not a pbrt-v3 material");
     }
+    if (d->flags & TS_MDESC_MIX) TRY(get_mix_materials(im, mi, ps, loc, m));
     return TS_OK;
 }
 
@@ -931,55 +905,17 @@ static ts_status jroughness(imp *im, cJSON *j, const char *mname, const ts_mater
     return m->has_vroughness ? jmfloat(im, j, mname, "vroughness", &m->vroughness) : TS_OK;
 }
 
+/* m as scene format v1 has it: its type's rows in the description's order (materials/
+ * material_desc.h), the roughness family after them, then the enums. */
 static ts_status json_material_fill(imp *im, cJSON *j, int32_t mi, const char *name, const char *type,
                                     const ts_material *m)
 {
+    const ts_material_desc *d = ts_material_desc_of(m->type);
     if (!ts_jw_string(j, "type", type)) return nomem(im);
     if (m->texture_clamp_nonneg && ts_material_uses_textures(m) && !ts_jw_string(j, "texture_clamp", "nonnegative"))
         return nomem(im);
     if (m->bump) TRY(jparam(im, j, name, "bumpmap", m->bump, NULL));
-    switch (m->type) {
-    case TS_MATERIAL_DIFFUSE:
-        TRY(jmrgb(im, j, name, "reflectance", &m->reflectance));
-        if (m->sigma_deg.tex || m->sigma_deg.value != 0) TRY(jmfloat(im, j, name, "sigma", &m->sigma_deg));
-        break;
-    case TS_MATERIAL_MIRROR:
-        TRY(jmrgb(im, j, name, "reflectance", &m->reflectance));
-        break;
-    case TS_MATERIAL_DIELECTRIC:
-        TRY(jmfloat(im, j, name, "eta", &m->eta));
-        TRY(jmrgb(im, j, name, "reflectance", &m->reflectance));
-        TRY(jmrgb(im, j, name, "transmittance", &m->transmittance));
-        TRY(jroughness(im, j, name, m));
-        break;
-    case TS_MATERIAL_CONDUCTOR:
-        TRY(jmrgb(im, j, name, "eta", &m->conductor_eta));
-        TRY(jmrgb(im, j, name, "k", &m->conductor_k));
-        TRY(jroughness(im, j, name, m));
-        if (!ts_jw_string(j, "distribution", "ggx")) return nomem(im);
-        break;
-    case TS_MATERIAL_PLASTIC:
-    case TS_MATERIAL_SUBSTRATE:
-    case TS_MATERIAL_PLASTIC_PBRT3:
-        TRY(jmrgb(im, j, name, "diffuse", &m->diffuse));
-        TRY(jmrgb(im, j, name, "specular", &m->specular));
-        TRY(jroughness(im, j, name, m));
-        break;
-    case TS_MATERIAL_FOURIER:
-        break; /* the file is added by the caller */
-    case TS_MATERIAL_UBER:
-    case TS_MATERIAL_TRANSLUCENT:
-        TRY(jmrgb(im, j, name, "diffuse", &m->diffuse));
-        TRY(jmrgb(im, j, name, "specular", &m->specular));
-        TRY(jmrgb(im, j, name, "reflectance", &m->reflectance));
-        TRY(jmrgb(im, j, name, "transmittance", &m->transmittance));
-        if (m->type == TS_MATERIAL_UBER) {
-            TRY(jmrgb(im, j, name, "opacity", &m->opacity));
-            TRY(jmfloat(im, j, name, "eta", &m->eta));
-        }
-        TRY(jroughness(im, j, name, m));
-        break;
-    case TS_MATERIAL_MIX: {
+    if (d->flags & TS_MDESC_MIX) {
         cJSON *list = cJSON_CreateArray();
         if (!ts_jw_add(j, "materials", list)) return nomem(im); /* jadd frees list when it fails */
         for (int k = 0; k < 2; k++) {
@@ -991,11 +927,21 @@ static ts_status json_material_fill(imp *im, cJSON *j, int32_t mi, const char *n
                 return nomem(im);
             }
         }
-        TRY(jmrgb(im, j, name, "amount", &m->amount));
-        break;
     }
+    for (int i = 0; i < d->n_params; i++) {
+        const ts_material_param *p = &d->params[i];
+        if (p->kind == TS_MPARAM_RGB) TRY(jmrgb(im, j, name, p->key, ts_mparam_crgb(m, p)));
+        const ts_material_float *f = ts_mparam_cfloat(m, p);
+        if (p->kind == TS_MPARAM_FLOAT && (f->tex || f->value != 0 || !(p->flags & TS_MPARAM_OMIT_ZERO)))
+            TRY(jmfloat(im, j, name, p->key, f));
     }
-    return TS_OK;
+    if (d->flags & TS_MDESC_ROUGH) TRY(jroughness(im, j, name, m));
+    for (int i = 0; i < d->n_params; i++) {
+        const ts_material_param *p = &d->params[i];
+        int v = *(const int *)(const void *)((const char *)m + p->offset);
+        if (p->kind == TS_MPARAM_ENUM && !ts_jw_string(j, p->key, p->names[v])) return nomem(im);
+    }
+    return TS_OK; /* a file (fourier) is added by the caller */
 }
 
 static ts_status json_material(imp *im, int32_t mi, const char *name, const char *type, const ts_material *m)
