@@ -324,10 +324,8 @@ ts_status ts_scene_builder_set_integrator(ts_scene_builder *b, const ts_integrat
     switch (in->type) {
     case TS_INTEGRATOR_PATH:
     case TS_INTEGRATOR_VOLPATH:
-        /* The path loop is iterative, so depth costs no stack; `direct` recurses on
-         * specular chains and keeps a lower cap. */
-        TRY(int_in(in->max_depth, 0, 65535, "max_depth", err));
-        TRY(int_in(in->rr_depth, 0, 65535, "rr_depth", err));
+        TRY(int_in(in->max_depth, 0, TS_PATH_DEPTH_MAX, "max_depth", err)); /* scene/scene.h */
+        TRY(int_in(in->rr_depth, 0, TS_PATH_DEPTH_MAX, "rr_depth", err));
         if (in->light_sampling != TS_LIGHT_SELECT_UNIFORM && in->light_sampling != TS_LIGHT_SELECT_POWER &&
             in->light_sampling != TS_LIGHT_SELECT_SPATIAL && in->light_sampling != TS_LIGHT_SELECT_BVH &&
             in->light_sampling != TS_LIGHT_SELECT_AUTO)
@@ -338,8 +336,8 @@ ts_status ts_scene_builder_set_integrator(ts_scene_builder *b, const ts_integrat
                                 (int)in->sampling);
         break;
     case TS_INTEGRATOR_DIRECT:
-        TRY(int_in(in->max_depth, 0, 1000, "max_depth", err));
-        TRY(int_in(in->samples_per_light, 1, 4096, "samples_per_light", err));
+        TRY(int_in(in->max_depth, 0, TS_DIRECT_DEPTH_MAX, "max_depth", err));
+        TRY(int_in(in->samples_per_light, 1, TS_LIGHT_SAMPLES_MAX, "samples_per_light", err));
         if (in->strategy != TS_LIGHTS_ALL && in->strategy != TS_LIGHTS_ONE)
             return ts_error_set(err, TS_ERR_INVALID, "integrator.strategy: unknown strategy %d",
                                 (int)in->strategy);
@@ -790,8 +788,9 @@ static ts_status check_shape(const ts_scene_builder *b, const ts_shape_desc *d, 
     TRY(check_shape_media(b, d, err));
     /* Infinite channels are ts_lights_prepare's to refuse, as every light's colour. */
     if (!rgb_nonneg(d->emission)) return bad_rgb(err, "emission", "RGB ≥ 0", d->emission);
-    if (d->light_samples > 4096)
-        return ts_error_set(err, TS_ERR_INVALID, "light_samples: %u is not in [1, 4096]", d->light_samples);
+    if (d->light_samples > TS_LIGHT_SAMPLES_MAX)
+        return ts_error_set(err, TS_ERR_INVALID, "light_samples: %u is not in [1, %d]", d->light_samples,
+                            TS_LIGHT_SAMPLES_MAX);
     const ts_texture *cut_tex[2] = {d->alpha, d->shadow_alpha};
     for (int k = 0; k < 2; k++) {
         const char *what = k ? "shadow_alpha" : "alpha";
@@ -1060,7 +1059,8 @@ ts_status ts_scene_builder_add_light(ts_scene_builder *b, const ts_light_desc *d
     default:
         return ts_error_set(err, TS_ERR_INVALID, "type: unknown light type %d", (int)d->type);
     }
-    if (d->samples > 4096) return ts_error_set(err, TS_ERR_INVALID, "samples: %u is not in [1, 4096]", d->samples);
+    if (d->samples > TS_LIGHT_SAMPLES_MAX)
+        return ts_error_set(err, TS_ERR_INVALID, "samples: %u is not in [1, %d]", d->samples, TS_LIGHT_SAMPLES_MAX);
     l.samples = d->samples;
     if (!grow((void **)&b->lights, &b->cap_lights, (size_t)b->n_lights + 1, sizeof *b->lights))
         return nomem(err, "the lights");

@@ -417,13 +417,11 @@ static ts_status parse_integrator(loader *ld, const cJSON *doc)
     switch (in->type) {
     case TS_INTEGRATOR_PATH:
     case TS_INTEGRATOR_VOLPATH: {
-        /* The path loop is iterative, so depth costs no stack; `direct` recurses on
-         * specular chains and keeps a lower cap. */
-        v = in->max_depth;
-        TRY(ts_json_int(it, "integrator", "max_depth", false, 0, 65535, &v, ld->err));
+        v = in->max_depth; /* the ranges: scene/scene.h */
+        TRY(ts_json_int(it, "integrator", "max_depth", false, 0, TS_PATH_DEPTH_MAX, &v, ld->err));
         in->max_depth = (int)v;
         v = in->rr_depth;
-        TRY(ts_json_int(it, "integrator", "rr_depth", false, 0, 65535, &v, ld->err));
+        TRY(ts_json_int(it, "integrator", "rr_depth", false, 0, TS_PATH_DEPTH_MAX, &v, ld->err));
         in->rr_depth = (int)v;
         static const char *const sel[] = {"uniform", "power", "spatial", "bvh", NULL};
         int k = 1;
@@ -446,10 +444,10 @@ static ts_status parse_integrator(loader *ld, const cJSON *doc)
         TRY(ts_json_enum(it, "integrator", "light_sampling", false, sel, &k, ld->err));
         in->light_sampling = sel_of[k];
         v = in->max_depth;
-        TRY(ts_json_int(it, "integrator", "max_depth", false, 0, 1000, &v, ld->err));
+        TRY(ts_json_int(it, "integrator", "max_depth", false, 0, TS_DIRECT_DEPTH_MAX, &v, ld->err));
         in->max_depth = (int)v;
         v = 1;
-        TRY(ts_json_int(it, "integrator", "samples_per_light", false, 1, 4096, &v, ld->err));
+        TRY(ts_json_int(it, "integrator", "samples_per_light", false, 1, TS_LIGHT_SAMPLES_MAX, &v, ld->err));
         in->samples_per_light = (int)v;
         break;
     }
@@ -878,7 +876,7 @@ static ts_status parse_shape(loader *ld, const cJSON *sh, const char *path, ts_s
     TRY(ts_json_rgb(sh, path, "emission", false, TS_J_NONNEG, &d->emission, ld->err));
     TRY(ts_json_bool(sh, path, "two_sided", false, &d->two_sided, ld->err));
     int64_t light_samples = 0; /* absent: the integrator's samples_per_light */
-    TRY(ts_json_int(sh, path, "light_samples", false, 1, 4096, &light_samples, ld->err));
+    TRY(ts_json_int(sh, path, "light_samples", false, 1, TS_LIGHT_SAMPLES_MAX, &light_samples, ld->err));
     d->light_samples = (uint32_t)light_samples;
     TRY(ts_json_bool(sh, path, "reverse_orientation", false, &d->reverse_orientation, ld->err));
     ts_xform user;
@@ -1101,7 +1099,7 @@ static ts_status parse_light(loader *ld, const cJSON *l, const char *path, ts_li
         }
         TRY(parse_transform(ld, l, path, &out->to_world));
         int64_t samples = 0; /* absent: the integrator's samples_per_light */
-        TRY(ts_json_int(l, path, "samples", false, 1, 4096, &samples, ld->err));
+        TRY(ts_json_int(l, path, "samples", false, 1, TS_LIGHT_SAMPLES_MAX, &samples, ld->err));
         out->samples = (uint32_t)samples;
         break;
     }

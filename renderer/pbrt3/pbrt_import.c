@@ -209,11 +209,11 @@ static ts_status light_samples(imp *im, ts_pbrt_params *ps, uint32_t *out)
     TRY(ts_pbrt_find_int(ps, "nsamples", 1, &ns, im->err));
     TRY(ts_pbrt_find_int(ps, "samples", ns, &ns, im->err));
     if (!im->direct_all || ns <= 1) return TS_OK;
-    if (ns > 4096) {
+    if (ns > TS_LIGHT_SAMPLES_MAX) {
         ts_pbrt_param *p = ts_pbrt_params_get(ps, "samples");
         if (!p) p = ts_pbrt_params_get(ps, "nsamples");
-        return ts_pbrt_param_error(ps, p, im->err, TS_ERR_LIMIT, "%d samples per light is above the limit of 4096",
-                                   (int)ns);
+        return ts_pbrt_param_error(ps, p, im->err, TS_ERR_LIMIT, "%d samples per light is above the limit of %d",
+                                   (int)ns, TS_LIGHT_SAMPLES_MAX);
     }
     *out = (uint32_t)ns;
     return TS_OK;
@@ -636,9 +636,9 @@ static ts_status map_integrator(imp *im)
             return ts_pbrt_param_error(ps, ts_pbrt_params_get(ps, "lightsamplestrategy"), im->err,
                                        TS_ERR_INVALID, "must be uniform, power or spatial, got \"%s\"",
                                        strat);
-        if (depth < 0 || depth > 65535)
-            return derr(im, ps, o->loc, TS_ERR_INVALID, "\"integer maxdepth\" must be in [0, 65535], got %d",
-                        depth);
+        if (depth < 0 || depth > TS_PATH_DEPTH_MAX)
+            return derr(im, ps, o->loc, TS_ERR_INVALID, "\"integer maxdepth\" must be in [0, %d], got %d",
+                        TS_PATH_DEPTH_MAX, depth);
         d.max_depth = depth;
     } else if (strcmp(t, "directlighting") == 0 || strcmp(t, "whitted") == 0) {
         d.type = TS_INTEGRATOR_DIRECT;
@@ -658,9 +658,9 @@ static ts_status map_integrator(imp *im)
         } else if (strcmp(strat, "all") != 0)
             return ts_pbrt_param_error(ps, ts_pbrt_params_get(ps, "strategy"), im->err, TS_ERR_INVALID,
                                        "must be all or one, got \"%s\"", strat);
-        if (depth < 0 || depth > 1000)
-            return derr(im, ps, o->loc, TS_ERR_INVALID, "\"integer maxdepth\" must be in [0, 1000], got %d",
-                        depth);
+        if (depth < 0 || depth > TS_DIRECT_DEPTH_MAX)
+            return derr(im, ps, o->loc, TS_ERR_INVALID, "\"integer maxdepth\" must be in [0, %d], got %d",
+                        TS_DIRECT_DEPTH_MAX, depth);
         d.max_depth = depth;
         im->direct_all = d.strategy == TS_LIGHTS_ALL;
     } else {

@@ -56,6 +56,14 @@ typedef struct ts_integrator_desc {
     float ao_distance;                  /* ao: occluders farther than this are ignored (inf = any) */
 } ts_integrator_desc;
 
+/* The ranges of the integrator's and the lights' counts, stated once for every front end
+ * and the builder (build/scene_builder.c checks them; json/ and pbrt3/ name them in their
+ * errors). The path loop is iterative, so depth costs no stack; `direct` recurses on
+ * specular chains and keeps a lower cap. */
+#define TS_PATH_DEPTH_MAX 65535    /* path and volpath: max_depth and rr_depth, in [0, this] */
+#define TS_DIRECT_DEPTH_MAX 1000   /* direct: max_depth, in [0, this] */
+#define TS_LIGHT_SAMPLES_MAX 4096  /* samples per light (integrator, shape, infinite light), in [1, this] */
+
 /* The optional top-level "job" object: halt conditions and bookkeeping. */
 typedef struct ts_job_desc {
     const char *name;     /* or NULL */
