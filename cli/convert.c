@@ -9,8 +9,9 @@
  * once each, as for render. */
 #include "convert.h"
 
-#include <getopt.h>
 #include <limits.h>
+#include <stdbool.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -18,7 +19,36 @@
 
 #include "diagnostics.h"
 #include "tessera.h"
+#include "options.h"
 #include "usage.h"
+
+typedef struct convert_args {
+    const char *out_path;
+    bool quiet;
+} convert_args;
+
+/* -o once: a second is a usage error rather than the last one silently winning. */
+static bool take_output(void *opts, const char *name, const char *arg, char *why, size_t why_len)
+{
+    (void)name;
+    convert_args *a = opts;
+    if (a->out_path) {
+        snprintf(why, why_len, "given twice");
+        return false;
+    }
+    a->out_path = arg;
+    return true;
+}
+
+/* Every option of `tessera convert`: --help, the parser and the errors are made from this. */
+static const srv_option convert_options[] = {
+    {"output", 'o', "FILE", SRV_OPT_CUSTOM, 0, 0, false, false, NULL, 0, 0, "the document",
+     "standard output", take_output, NULL},
+    {"quiet", 0, NULL, SRV_OPT_FLAG, 0, 0, false, false, NULL, offsetof(convert_args, quiet), sizeof(bool),
+     "no warnings", "", NULL, NULL},
+    {"help", 0, NULL, SRV_OPT_HELP, 0, 0, false, false, NULL, 0, 0, NULL, "", NULL, NULL},
+};
+#define N_CONVERT_OPTIONS (sizeof convert_options / sizeof *convert_options)
 
 static void convert_usage(FILE *f)
 {
@@ -26,10 +56,9 @@ static void convert_usage(FILE *f)
             "usage: tessera convert SCENE.pbrt [-o OUT.json] [--quiet]\n"
             "Writes the pbrt-v3 scene SCENE as the equivalent scene document (JSON, format v1), which\n"
             "renders bit-identically to it. Meshes are written inline; environment maps, image\n"
-            "textures and Fourier tables keep their paths, relative to SCENE's folder (write OUT there for them to load).\n"
-            "  -o, --output FILE   the document (default: standard output)\n"
-            "  --quiet             no warnings\n"
-            "Exit status: 0 written, 1 the scene was refused or OUT could not be written, 2 usage error.\n");
+            "textures and Fourier tables keep their paths, relative to SCENE's folder (write OUT there for them to load).\n");
+    srv_options_help(f, convert_options, N_CONVERT_OPTIONS, NULL);
+    fprintf(f, "Exit status: 0 written, 1 the scene was refused or OUT could not be written, 2 usage error.\n");
 }
 
 #define convert_usage_error(...) (srv_usage_error("tessera convert", NULL, __VA_ARGS__), SRV_USAGE_EXIT)
@@ -50,33 +79,19 @@ static void folder_of(const char *path, char *out, size_t len)
 
 int cli_convert(int argc, char **argv)
 {
-    const char *out_path = NULL;
-    bool quiet = false;
-    enum { OPT_QUIET = 256, OPT_HELP };
-    static const struct option opts[] = {{"output", required_argument, NULL, 'o'},
-                                         {"quiet", no_argument, NULL, OPT_QUIET},
-                                         {"help", no_argument, NULL, OPT_HELP},
-                                         {NULL, 0, NULL, 0}};
-    optind = 1;
-    opterr = 0;
-    for (int c; (c = getopt_long(argc, argv, "o:", opts, NULL)) != -1;) {
-        switch (c) {
-        case 'o':
-            if (out_path) return convert_usage_error("-o given twice");
-            out_path = optarg;
-            break;
-        case OPT_QUIET:
-            quiet = true;
-            break;
-        case OPT_HELP:
-            convert_usage(stdout);
-            return 0;
-        default:
-            return convert_usage_error("unknown or incomplete option '%s'", argv[optind - 1]);
-        }
+    convert_args args = {0};
+    char why[600];
+    int first = 1;
+    int rc_opts = srv_options_parse(convert_options, N_CONVERT_OPTIONS, argc, argv, &args, &first, why, sizeof why);
+    if (rc_opts == SRV_OPTIONS_HELP) {
+        convert_usage(stdout);
+        return 0;
     }
-    if (optind != argc - 1) return convert_usage_error("expected one scene file");
-    const char *scene = argv[optind];
+    if (rc_opts == SRV_OPTIONS_BAD) return convert_usage_error("%s", why);
+    const char *out_path = args.out_path;
+    bool quiet = args.quiet;
+    if (first != argc - 1) return convert_usage_error("expected one scene file");
+    const char *scene = argv[first];
     if (ts_scene_format_of(scene, NULL, 0) == TS_SCENE_FORMAT_JSON && strstr(scene, ".json"))
         return convert_usage_error("'%s' is a scene document already; convert reads pbrt-v3 scenes", scene);
     ts_scene_limits limits;

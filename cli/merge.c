@@ -3,55 +3,68 @@
  * writes the merged film as a shard EXR (so merges merge again) and/or a PNG view. */
 #include "merge.h"
 
-#include <getopt.h>
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <string.h>
 #include <strings.h>
 
 #include "outputs.h"
 #include "tessera.h"
+#include "options.h"
 #include "usage.h"
+
+typedef struct merge_args {
+    cli_outputs outputs;
+    bool allow_partial, quiet;
+} merge_args;
+
+static bool take_output(void *opts, const char *name, const char *arg, char *why, size_t why_len)
+{
+    (void)name;
+    if (cli_outputs_add(&((merge_args *)opts)->outputs, arg)) return true;
+    snprintf(why, why_len, "at most 8 outputs");
+    return false;
+}
+
+#define FLAG(name, field, help) \
+    {name, 0, NULL, SRV_OPT_FLAG, 0, 0, false, false, NULL, offsetof(merge_args, field), sizeof(bool), help, "", NULL, NULL}
+
+/* Every option of `tessera merge`: --help, the parser and the errors are made from this. */
+static const srv_option merge_options[] = {
+    {"output", 'o', "FILE", SRV_OPT_CUSTOM, 0, 0, false, false, NULL, 0, 0,
+     "write FILE (required; may repeat, at most 8): .exr keeps the shard\nlayout, so a merge can be merged again; "
+     ".png is a colour view", "", take_output, NULL},
+    FLAG("allow-partial", allow_partial, "merge even when sample ranges are missing (names them as a warning)"),
+    FLAG("quiet", quiet, "no summary"),
+    {"help", 0, NULL, SRV_OPT_HELP, 0, 0, false, false, NULL, 0, 0, NULL, "", NULL, NULL},
+};
+#define N_MERGE_OPTIONS (sizeof merge_options / sizeof *merge_options)
 
 static void usage(FILE *f)
 {
     fprintf(f, "usage: tessera merge SHARD.exr... -o OUT.exr|OUT.png [-o ...] [--allow-partial] [--quiet]\n"
                "Adds the shards' samples exactly; refuses shards of different scenes, seeds or overlapping\n"
-               "sample ranges; names missing ranges (and merges anyway with --allow-partial).\n"
-               "  -o, --output FILE   write FILE (required; may repeat, at most 8): .exr keeps the shard\n"
-               "                      layout, so a merge can be merged again; .png is a colour view\n"
-               "  --allow-partial     merge even when sample ranges are missing (names them as a warning)\n"
-               "  --quiet             no summary\n");
+               "sample ranges; names missing ranges (and merges anyway with --allow-partial).\n");
+    srv_options_help(f, merge_options, N_MERGE_OPTIONS, NULL);
 }
 
 #define usage_error(...) (srv_usage_error("tessera merge", usage, __VA_ARGS__), SRV_USAGE_EXIT)
 
 int cli_merge(int argc, char **argv)
 {
-    enum { OPT_PARTIAL = 256, OPT_QUIET, OPT_HELP };
-    static const struct option opts[] = {{"output", required_argument, NULL, 'o'},
-                                         {"allow-partial", no_argument, NULL, OPT_PARTIAL},
-                                         {"quiet", no_argument, NULL, OPT_QUIET},
-                                         {"help", no_argument, NULL, OPT_HELP},
-                                         {NULL, 0, NULL, 0}};
-    cli_outputs outputs = {0};
-    bool allow_partial = false, quiet = false;
-    optind = 1;
-    opterr = 0;
-    int c;
-    while ((c = getopt_long(argc, argv, ":o:", opts, NULL)) != -1) {
-        switch (c) {
-        case 'o':
-            if (!cli_outputs_add(&outputs, optarg)) return usage_error("at most %s outputs", "8");
-            break;
-        case OPT_PARTIAL: allow_partial = true; break;
-        case OPT_QUIET: quiet = true; break;
-        case OPT_HELP: usage(stdout); return 0;
-        case ':': return usage_error("option '%s' needs a value", argv[optind - 1]);
-        default: return usage_error("unknown option '%s'", argv[optind - 1]);
-        }
+    merge_args args = {0};
+    char why[600];
+    int first = 1;
+    int rc_opts = srv_options_parse(merge_options, N_MERGE_OPTIONS, argc, argv, &args, &first, why, sizeof why);
+    if (rc_opts == SRV_OPTIONS_HELP) {
+        usage(stdout);
+        return 0;
     }
-    if (optind >= argc) return usage_error("no shard files given");
+    if (rc_opts == SRV_OPTIONS_BAD) return usage_error("%s", why);
+    cli_outputs outputs = args.outputs;
+    bool allow_partial = args.allow_partial, quiet = args.quiet;
+    if (first >= argc) return usage_error("no shard files given");
     if (outputs.n == 0)
         return usage_error("no output: give -o MERGED.exr (mergeable again) and/or -o MERGED.png");
     const char *unsupported = cli_outputs_unsupported(&outputs);
@@ -69,7 +82,7 @@ int cli_merge(int argc, char **argv)
         return 1;
     }
     int rc = 0;
-    for (int i = optind; i < argc && rc == 0; i++) {
+    for (int i = first; i < argc && rc == 0; i++) {
         ts_error_clear(&err);
         if (ts_merge_add_file(m, argv[i], &err)) {
             fprintf(stderr, "tessera merge: %s\n", err.message);
