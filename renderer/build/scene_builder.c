@@ -1005,6 +1005,29 @@ ts_status ts_scene_builder_add_instance(ts_scene_builder *b, uint32_t object, co
 
 /* ---------------------------------------------------------------- lights */
 
+/* The rows of d's type's description (build/light_desc.h): each angle in its range, a point
+ * that must differ from "from" differing. */
+static ts_status check_light_params(const ts_light_desc *d, ts_error *err)
+{
+    const ts_light_type_desc *t = NULL;
+    for (int i = 0; i < TS_LIGHT_DESC_COUNT; i++)
+        if (ts_light_descs[i].type == d->type) t = &ts_light_descs[i];
+    for (int i = 0; t && i < t->n_params; i++) {
+        const ts_light_param *p = &t->params[i];
+        const char *at = (const char *)d + p->offset;
+        if (p->kind == TS_LPARAM_ANGLE && !ts_lparam_angle_ok(p, *(const double *)(const void *)at, d->cone_angle_deg))
+            return ts_error_set(err, TS_ERR_INVALID, "%s: expected an angle in %s degrees, got %g", p->key,
+                                (p->flags & TS_LPARAM_UPTO_ANGLE) ? "[0, cone_angle]" : "(0, 180]",
+                                *(const double *)(const void *)at);
+        if (p->kind == TS_LPARAM_POINT && (p->flags & TS_LPARAM_NOT_FROM)) {
+            const ts_vec3 *v = (const ts_vec3 *)(const void *)at;
+            if (v->x == d->from.x && v->y == d->from.y && v->z == d->from.z)
+                return ts_error_set(err, TS_ERR_INVALID, "%s: must differ from 'from'", p->key);
+        }
+    }
+    return TS_OK;
+}
+
 ts_status ts_scene_builder_add_light(ts_scene_builder *b, const ts_light_desc *d, ts_error *err)
 {
     TRY(usable(b, err));
@@ -1019,20 +1042,13 @@ ts_status ts_scene_builder_add_light(ts_scene_builder *b, const ts_light_desc *d
     l.shape = TS_NONE;
     l.prim = TS_NONE;
     l.to_world = ts_xform_identity();
-    bool same = d->from.x == d->to.x && d->from.y == d->to.y && d->from.z == d->to.z;
+    TRY(check_light_params(d, err));
     switch (d->type) {
     case TS_LIGHT_POINT:
         l.position = d->from;
         break;
     case TS_LIGHT_SPOT: {
-        double angle = d->cone_angle_deg, delta = d->cone_delta_deg;
-        if (same) return ts_error_set(err, TS_ERR_INVALID, "to: must differ from 'from'");
-        if (!(angle > 0 && angle <= 180))
-            return ts_error_set(err, TS_ERR_INVALID,
-                                "cone_angle: expected an angle in (0, 180] degrees, got %g", angle);
-        if (!(delta >= 0 && delta <= angle))
-            return ts_error_set(err, TS_ERR_INVALID,
-                                "cone_delta: expected an angle in [0, cone_angle], got %g", delta);
+        double angle = d->cone_angle_deg, delta = d->cone_delta_deg; /* in range: checked above */
         l.position = d->from;
         l.direction = ts_vec3_normalize(ts_vec3_sub(d->to, d->from));
         l.cos_total = cosf(ts_radians((float)angle));
@@ -1040,7 +1056,6 @@ ts_status ts_scene_builder_add_light(ts_scene_builder *b, const ts_light_desc *d
         break;
     }
     case TS_LIGHT_DISTANT:
-        if (same) return ts_error_set(err, TS_ERR_INVALID, "to: must differ from 'from'");
         l.direction = ts_vec3_normalize(ts_vec3_sub(d->to, d->from));
         break;
     case TS_LIGHT_INFINITE:

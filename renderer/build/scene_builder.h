@@ -48,6 +48,7 @@
 #include "core/vecmath.h"
 #include "film/filter.h"
 #include "geometry/shape.h"
+#include "build/light_desc.h"
 #include "lights/light.h"
 #include "materials/material.h"
 #include "sampling/sampler.h"
@@ -330,20 +331,6 @@ uint32_t ts_scene_builder_find_object(const ts_scene_builder *b, const char *nam
 ts_status ts_scene_builder_add_instance(ts_scene_builder *b, uint32_t object, const ts_xform *to_world,
                                         ts_error *err);
 
-typedef struct ts_light_desc {
-    ts_light_type type;          /* point, spot, distant or infinite (area lights come from shapes) */
-    ts_rgb color;                /* point/spot intensity, distant irradiance, infinite radiance (or
-                                    the map's scale); each channel ≥ 0 */
-    ts_vec3 from, to;            /* point: from is the position; spot: from is the apex, aimed at
-                                    to; distant: the light travels from → to (from ≠ to) */
-    double cone_angle_deg;       /* spot: in (0, 180] */
-    double cone_delta_deg;       /* spot: in [0, cone_angle_deg] */
-    const struct ts_envmap *map; /* infinite: from ts_scene_builder_load_envmap, or NULL */
-    ts_xform to_world;           /* infinite: map space → world */
-    uint32_t samples;            /* its samples per camera sample under direct's strategy all
-                                    (pbrt-v3's nsamples), in [1, 4096]; 0: the integrator's
-                                    samples_per_light */
-} ts_light_desc;
 
 /* Adds a light (with the area lights of the shapes added so far, at most
  * limits.max_lights). */

@@ -21,6 +21,7 @@
 #include "mesh/mesh_read.h"
 #include "mesh/mesh_subdiv.h"
 #include "json/scene_digest.h"
+#include "build/light_desc.h"
 #include "json/scene_json_texture.h"
 #include "materials/material_desc.h"
 #include "core/scene_path.h"
@@ -1027,83 +1028,98 @@ static ts_status parse_instances(loader *ld, const cJSON *doc)
     return TS_OK;
 }
 
+/* One row of a light type's description (build/light_desc.h). */
+static ts_status parse_light_param(loader *ld, const cJSON *l, const char *path, const ts_light_param *p,
+                                   ts_light_desc *out)
+{
+    bool required = (p->flags & TS_LPARAM_REQUIRED) != 0;
+    switch (p->kind) {
+    case TS_LPARAM_POINT: {
+        ts_vec3 *v = ts_lparam_point(out, p);
+        *v = (ts_vec3){(float)p->def[0], (float)p->def[1], (float)p->def[2]};
+        TRY(ts_json_vec3(l, path, p->key, required, false, v, ld->err));
+        if ((p->flags & TS_LPARAM_NOT_FROM) && v->x == out->from.x && v->y == out->from.y && v->z == out->from.z)
+            return ts_error_set(ld->err, TS_ERR_INVALID, "%s.%s: must differ from 'from'", path, p->key);
+        return TS_OK;
+    }
+    case TS_LPARAM_RGB: {
+        ts_rgb *c = ts_lparam_rgb(out, p);
+        *c = ts_rgb_gray((float)p->def[0]);
+        return ts_json_rgb(l, path, p->key, required, TS_J_NONNEG, c, ld->err);
+    }
+    case TS_LPARAM_ANGLE: {
+        double *v = ts_lparam_angle(out, p);
+        *v = p->def[0];
+        bool upto = (p->flags & TS_LPARAM_UPTO_ANGLE) != 0;
+        TRY(ts_json_number(l, path, p->key, required, upto ? TS_J_NONNEG : TS_J_POSITIVE, v, ld->err));
+        if (!upto && *v > 180)
+            return ts_error_set(ld->err, TS_ERR_INVALID, "%s.%s: expected at most 180 degrees, got %g", path, p->key, *v);
+        if (upto && *v > out->cone_angle_deg)
+            return ts_error_set(ld->err, TS_ERR_INVALID, "%s.%s: expected at most cone_angle (%g), got %g", path,
+                                p->key, out->cone_angle_deg, *v);
+        return TS_OK;
+    }
+    }
+    return TS_OK;
+}
+
+/* An infinite light: radiance, or a map with its scale; its transform and sample count. */
+static ts_status parse_environment(loader *ld, const cJSON *l, const char *path, ts_light_desc *out)
+{
+    const char *map = NULL;
+    TRY(ts_json_string(l, path, "map", false, &map, ld->err));
+    bool has_radiance = cJSON_GetObjectItemCaseSensitive(l, "radiance") != NULL;
+    if (map && has_radiance)
+        return ts_error_set(ld->err, TS_ERR_INVALID, "%s: an infinite light takes either 'radiance' or 'map', not both", path);
+    if (!map && !has_radiance)
+        return ts_error_set(ld->err, TS_ERR_INVALID, "%s: an infinite light needs 'radiance' or 'map'", path);
+    if (!map) {
+        if (cJSON_GetObjectItemCaseSensitive(l, "scale"))
+            return ts_error_set(ld->err, TS_ERR_INVALID, "%s.scale: only allowed with 'map'", path);
+        TRY(ts_json_rgb(l, path, "radiance", true, TS_J_NONNEG, &out->color, ld->err));
+    } else {
+        out->color = ts_rgb_gray(1);
+        TRY(ts_json_rgb(l, path, "scale", false, TS_J_NONNEG, &out->color, ld->err));
+        ts_jpath mp = ts_jpath_key(path, "map");
+        TRY(at(ts_scene_builder_load_envmap(ld->b, map, &out->map, ld->err), mp.s, ld->err));
+    }
+    TRY(parse_transform(ld, l, path, &out->to_world));
+    int64_t samples = 0; /* absent: the integrator's samples_per_light */
+    TRY(ts_json_int(l, path, "samples", false, 1, TS_LIGHT_SAMPLES_MAX, &samples, ld->err));
+    out->samples = (uint32_t)samples;
+    return TS_OK;
+}
+
+/* A light: its type's description (build/light_desc.h) says which keys it takes, their
+ * kinds, ranges and defaults. */
 static ts_status parse_light(loader *ld, const cJSON *l, const char *path, ts_light_desc *out)
 {
-    static const char *const types[] = {"point", "spot", "distant", "infinite", NULL};
+    const char *types[TS_LIGHT_DESC_COUNT + 1];
+    for (int i = 0; i < TS_LIGHT_DESC_COUNT; i++)
+        types[i] = ts_light_descs[i].name;
+    types[TS_LIGHT_DESC_COUNT] = NULL;
     if (!cJSON_IsObject(l)) return ts_json_check_object(l, path, types, ld->err);
     int type = 0;
     TRY(ts_json_enum(l, path, "type", true, types, &type, ld->err));
-    static const char *const k_point[] = {"type", "position", "intensity", NULL};
-    static const char *const k_spot[] = {"type", "from", "to", "intensity", "cone_angle", "cone_delta", NULL};
-    static const char *const k_distant[] = {"type", "from", "to", "irradiance", NULL};
-    static const char *const k_inf[] = {"type", "radiance", "map", "scale", "transform", "samples", NULL};
-    const char *const *keys[] = {k_point, k_spot, k_distant, k_inf};
-    TRY(ts_json_check_object(l, path, keys[type], ld->err));
+    const ts_light_type_desc *d = &ts_light_descs[type];
+    const char *keys[16];
+    int n = 0;
+    keys[n++] = "type";
+    for (int i = 0; i < d->n_params && n < 10; i++)
+        keys[n++] = d->params[i].key;
+    if (d->flags & TS_LDESC_ENVIRONMENT) {
+        static const char *const env[] = {"radiance", "map", "scale", "transform", "samples"};
+        for (size_t i = 0; i < sizeof env / sizeof *env; i++)
+            keys[n++] = env[i];
+    }
+    keys[n] = NULL;
+    TRY(ts_json_check_object(l, path, keys, ld->err));
     *out = (ts_light_desc){0};
     out->to_world = ts_xform_identity();
-    switch (type) {
-    case 0:
-        out->type = TS_LIGHT_POINT;
-        TRY(ts_json_vec3(l, path, "position", true, false, &out->from, ld->err));
-        TRY(ts_json_rgb(l, path, "intensity", true, TS_J_NONNEG, &out->color, ld->err));
-        break;
-    case 1: {
-        out->type = TS_LIGHT_SPOT;
-        ts_vec3 from, to;
-        TRY(ts_json_vec3(l, path, "from", true, false, &from, ld->err));
-        TRY(ts_json_vec3(l, path, "to", true, false, &to, ld->err));
-        out->from = from, out->to = to;
-        if (from.x == to.x && from.y == to.y && from.z == to.z)
-            return ts_error_set(ld->err, TS_ERR_INVALID, "%s.to: must differ from 'from'", path);
-        TRY(ts_json_rgb(l, path, "intensity", true, TS_J_NONNEG, &out->color, ld->err));
-        double angle = 30, delta = 5;
-        TRY(ts_json_number(l, path, "cone_angle", false, TS_J_POSITIVE, &angle, ld->err));
-        TRY(ts_json_number(l, path, "cone_delta", false, TS_J_NONNEG, &delta, ld->err));
-        if (angle > 180) return ts_error_set(ld->err, TS_ERR_INVALID, "%s.cone_angle: expected at most 180 degrees, got %g", path, angle);
-        if (delta > angle)
-            return ts_error_set(ld->err, TS_ERR_INVALID, "%s.cone_delta: expected at most cone_angle (%g), got %g", path,
-                                angle, delta);
-        out->cone_angle_deg = angle;
-        out->cone_delta_deg = delta;
-        break;
-    }
-    case 2: {
-        out->type = TS_LIGHT_DISTANT;
-        ts_vec3 from = {0, 0, 0}, to = {0, 0, 1};
-        TRY(ts_json_vec3(l, path, "from", false, false, &from, ld->err));
-        TRY(ts_json_vec3(l, path, "to", false, false, &to, ld->err));
-        if (from.x == to.x && from.y == to.y && from.z == to.z)
-            return ts_error_set(ld->err, TS_ERR_INVALID, "%s.to: must differ from 'from'", path);
-        TRY(ts_json_rgb(l, path, "irradiance", true, TS_J_NONNEG, &out->color, ld->err));
-        out->from = from, out->to = to;
-        break;
-    }
-    case 3: {
-        out->type = TS_LIGHT_INFINITE;
-        const char *map = NULL;
-        TRY(ts_json_string(l, path, "map", false, &map, ld->err));
-        bool has_radiance = cJSON_GetObjectItemCaseSensitive(l, "radiance") != NULL;
-        if (map && has_radiance)
-            return ts_error_set(ld->err, TS_ERR_INVALID, "%s: an infinite light takes either 'radiance' or 'map', not both", path);
-        if (!map && !has_radiance)
-            return ts_error_set(ld->err, TS_ERR_INVALID, "%s: an infinite light needs 'radiance' or 'map'", path);
-        if (!map) {
-            if (cJSON_GetObjectItemCaseSensitive(l, "scale"))
-                return ts_error_set(ld->err, TS_ERR_INVALID, "%s.scale: only allowed with 'map'", path);
-            TRY(ts_json_rgb(l, path, "radiance", true, TS_J_NONNEG, &out->color, ld->err));
-        } else {
-            out->color = ts_rgb_gray(1);
-            TRY(ts_json_rgb(l, path, "scale", false, TS_J_NONNEG, &out->color, ld->err));
-            ts_jpath mp = ts_jpath_key(path, "map");
-            TRY(at(ts_scene_builder_load_envmap(ld->b, map, &out->map, ld->err), mp.s, ld->err));
-        }
-        TRY(parse_transform(ld, l, path, &out->to_world));
-        int64_t samples = 0; /* absent: the integrator's samples_per_light */
-        TRY(ts_json_int(l, path, "samples", false, 1, TS_LIGHT_SAMPLES_MAX, &samples, ld->err));
-        out->samples = (uint32_t)samples;
-        break;
-    }
-    }
+    out->type = d->type;
+    for (int i = 0; i < d->n_params; i++)
+        TRY(parse_light_param(ld, l, path, &d->params[i], out));
+    if (d->flags & TS_LDESC_ENVIRONMENT) TRY(parse_environment(ld, l, path, out));
     return TS_OK;
 }
 

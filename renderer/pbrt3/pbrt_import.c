@@ -18,6 +18,7 @@
 
 #include "mesh/mesh_read.h"
 #include "mesh/mesh_subdiv.h"
+#include "build/light_desc.h"
 #include "materials/material_desc.h"
 #include "spectrum/spectrum.h"
 #include "json/json_write.h"
@@ -1439,122 +1440,113 @@ static ts_dvec3 mat_point(const ts_mat4 *m, ts_vec3 p)
 
 static ts_vec3 to_vec3(ts_dvec3 v) { return (ts_vec3){(float)v.x, (float)v.y, (float)v.z}; }
 
+/* One row of a light type's description (build/light_desc.h) as pbrt-v3 reads it:
+ * points through the light's CTM, colours times its "scale", angles as they are; a value
+ * out of the row's range refused here, by its pbrt-v3 name. */
+static ts_status get_light_param(imp *im, const ts_pbrt_light *l, ts_pbrt_params *ps, const ts_light_param *p,
+                                 ts_rgb scale, ts_light_desc *d)
+{
+    switch (p->kind) {
+    case TS_LPARAM_POINT: {
+        ts_vec3 v, def = {(float)p->pbrt3_def[0], (float)p->pbrt3_def[1], (float)p->pbrt3_def[2]};
+        TRY(ts_pbrt_find_point3(ps, p->pbrt3, def, &v, im->err));
+        ts_vec3 *w = ts_lparam_point(d, p);
+        *w = to_vec3(mat_point(l->light_to_world, v));
+        if ((p->flags & TS_LPARAM_NOT_FROM) && w->x == d->from.x && w->y == d->from.y && w->z == d->from.z)
+            return derr(im, ps, l->loc, TS_ERR_INVALID, "\"point from\" and \"point %s\" must differ", p->pbrt3);
+        return TS_OK;
+    }
+    case TS_LPARAM_RGB: {
+        ts_rgb c;
+        TRY(get_rgb(im, ps, p->pbrt3, ts_rgb_gray((float)p->pbrt3_def[0]), &c));
+        *ts_lparam_rgb(d, p) = (ts_rgb){c.r * scale.r, c.g * scale.g, c.b * scale.b};
+        return TS_OK;
+    }
+    case TS_LPARAM_ANGLE: {
+        float v;
+        TRY(ts_pbrt_find_float(ps, p->pbrt3, (float)p->pbrt3_def[0], &v, im->err));
+        *ts_lparam_angle(d, p) = v;
+        if (!ts_lparam_angle_ok(p, v, d->cone_angle_deg)) {
+            ts_pbrt_param *pp = ts_pbrt_params_get(ps, p->pbrt3);
+            const char *range = (p->flags & TS_LPARAM_UPTO_ANGLE) ? "[0, coneangle]" : "(0, 180]";
+            if (pp) return ts_pbrt_param_error(ps, pp, im->err, TS_ERR_INVALID, "must be in %s degrees, got %g", range, v);
+            return derr(im, ps, l->loc, TS_ERR_INVALID, "\"float %s\" must be in %s degrees, got %g", p->pbrt3, range, v);
+        }
+        return TS_OK;
+    }
+    }
+    return TS_OK;
+}
+
+/* pbrt-v3's infinite light: L, or mapname (then L × scale is the map's scale), its CTM as
+ * the map's transform, nsamples. */
+static ts_status get_environment(imp *im, const ts_pbrt_light *l, ts_pbrt_params *ps, ts_rgb scale, ts_light_desc *d,
+                                 const char **map)
+{
+    ts_rgb L;
+    TRY(get_rgb(im, ps, "L", ts_rgb_gray(1), &L));
+    TRY(ts_pbrt_find_string(ps, "mapname", "", map, im->err));
+    TRY(light_samples(im, ps, &d->samples));
+    d->color = (ts_rgb){L.r * scale.r, L.g * scale.g, L.b * scale.b};
+    if (!user_xform(l->light_to_world, &d->to_world))
+        return derr(im, ps, l->loc, TS_ERR_INVALID, "the transformation matrix is singular");
+    if ((*map)[0])
+        TRY(at(im, ts_scene_builder_load_envmap(im->b, *map, &d->map, im->err), ps, ts_pbrt_params_get(ps, "mapname")->loc));
+    return TS_OK;
+}
+
+/* A light as scene format v1 has it: its rows in the description's order. */
+static bool json_light(cJSON *j, const ts_light_type_desc *t, const ts_light_desc *d, const ts_pbrt_light *l,
+                       const char *map)
+{
+    bool ok = ts_jw_string(j, "type", t->name);
+    for (int i = 0; ok && i < t->n_params; i++) {
+        const ts_light_param *p = &t->params[i];
+        ts_light_desc *dd = (ts_light_desc *)d;
+        switch (p->kind) {
+        case TS_LPARAM_POINT: ok = ts_jw_vec3(j, p->key, *ts_lparam_point(dd, p)); break;
+        case TS_LPARAM_RGB: ok = ts_jw_rgb(j, p->key, *ts_lparam_rgb(dd, p)); break;
+        case TS_LPARAM_ANGLE: ok = ts_jw_number(j, p->key, *ts_lparam_angle(dd, p)); break;
+        }
+    }
+    if (ok && (t->flags & TS_LDESC_ENVIRONMENT))
+        ok = (map[0] ? ts_jw_string(j, "map", map) && ts_jw_rgb(j, "scale", d->color)
+                     : ts_jw_rgb(j, "radiance", d->color)) &&
+             ts_jw_add(j, "transform", ts_jw_transform(l->light_to_world)) &&
+             (!d->samples || ts_jw_number(j, "samples", d->samples));
+    return ok;
+}
+
+/* pbrt-v3's LightSource li: the type whose description names it (build/light_desc.h), read
+ * row by row. */
 static ts_status map_light(imp *im, size_t li)
 {
     ts_pbrt_light *l = &im->s->lights[li];
     ts_pbrt_params *ps = &l->params;
     ts_light_desc d = {0};
     d.to_world = ts_xform_identity();
-    ts_rgb scale;
-    TRY(get_rgb(im, ps, "scale", ts_rgb_gray(1), &scale));
-    cJSON *j = NULL;
-    if (im->doc && !(j = cJSON_CreateObject())) return nomem(im);
-    bool jok = true;
-    ts_status st = TS_OK;
-    const char *t = l->type;
-    if (strcmp(t, "point") == 0 || strcmp(t, "spot") == 0) {
-        bool spot = t[1] == 'p' && t[2] == 'o';
-        ts_rgb I;
-        ts_vec3 from, to;
-        TRY(get_rgb(im, ps, "I", ts_rgb_gray(1), &I));
-        TRY(ts_pbrt_find_point3(ps, "from", (ts_vec3){0, 0, 0}, &from, im->err));
-        TRY(ts_pbrt_find_point3(ps, "to", (ts_vec3){0, 0, 1}, &to, im->err));
-        d.type = spot ? TS_LIGHT_SPOT : TS_LIGHT_POINT;
-        d.color = (ts_rgb){I.r * scale.r, I.g * scale.g, I.b * scale.b};
-        d.from = to_vec3(mat_point(l->light_to_world, from));
-        if (spot) {
-            float angle, delta;
-            TRY(ts_pbrt_find_float(ps, "coneangle", 30, &angle, im->err));
-            TRY(ts_pbrt_find_float(ps, "conedelta", 5, &delta, im->err));
-            if (!(angle > 0 && angle <= 180) || !(delta >= 0 && delta <= angle)) {
-                cJSON_Delete(j);
-                return derr(im, ps, l->loc, TS_ERR_INVALID,
-                            "coneangle must be in (0, 180] and conedelta in [0, coneangle], got %g and %g",
-                            angle, delta);
-            }
-            d.to = to_vec3(mat_point(l->light_to_world, to));
-            if (d.to.x == d.from.x && d.to.y == d.from.y && d.to.z == d.from.z) {
-                cJSON_Delete(j);
-                return derr(im, ps, l->loc, TS_ERR_INVALID, "\"point from\" and \"point to\" must differ");
-            }
-            d.cone_angle_deg = angle;
-            d.cone_delta_deg = delta;
-            if (j)
-                jok = ts_jw_string(j, "type", "spot") && ts_jw_vec3(j, "from", d.from) && ts_jw_vec3(j, "to", d.to) &&
-                      ts_jw_rgb(j, "intensity", d.color) && ts_jw_number(j, "cone_angle", angle) &&
-                      ts_jw_number(j, "cone_delta", delta);
-        } else if (j) {
-            jok =
-                ts_jw_string(j, "type", "point") && ts_jw_vec3(j, "position", d.from) && ts_jw_rgb(j, "intensity", d.color);
-        }
-    } else if (strcmp(t, "distant") == 0) {
-        ts_rgb L;
-        ts_vec3 from, to;
-        TRY(get_rgb(im, ps, "L", ts_rgb_gray(1), &L));
-        TRY(ts_pbrt_find_point3(ps, "from", (ts_vec3){0, 0, 0}, &from, im->err));
-        TRY(ts_pbrt_find_point3(ps, "to", (ts_vec3){0, 0, 1}, &to, im->err));
-        d.type = TS_LIGHT_DISTANT;
-        d.color = (ts_rgb){L.r * scale.r, L.g * scale.g, L.b * scale.b};
-        d.from = to_vec3(mat_point(l->light_to_world, from));
-        d.to = to_vec3(mat_point(l->light_to_world, to));
-        if (d.to.x == d.from.x && d.to.y == d.from.y && d.to.z == d.from.z) {
-            cJSON_Delete(j);
-            return derr(im, ps, l->loc, TS_ERR_INVALID, "\"point from\" and \"point to\" must differ");
-        }
-        if (j)
-            jok = ts_jw_string(j, "type", "distant") && ts_jw_vec3(j, "from", d.from) && ts_jw_vec3(j, "to", d.to) &&
-                  ts_jw_rgb(j, "irradiance", d.color);
-    } else if (strcmp(t, "infinite") == 0) {
-        ts_rgb L;
-        TRY(get_rgb(im, ps, "L", ts_rgb_gray(1), &L));
-        const char *map;
-        TRY(ts_pbrt_find_string(ps, "mapname", "", &map, im->err));
-        TRY(light_samples(im, ps, &d.samples));
-        d.type = TS_LIGHT_INFINITE;
-        d.color = (ts_rgb){L.r * scale.r, L.g * scale.g, L.b * scale.b};
-        if (!user_xform(l->light_to_world, &d.to_world)) {
-            cJSON_Delete(j);
-            return derr(im, ps, l->loc, TS_ERR_INVALID, "the transformation matrix is singular");
-        }
-        if (map[0]) {
-            st = at(im, ts_scene_builder_load_envmap(im->b, map, &d.map, im->err), ps,
-                    ts_pbrt_params_get(ps, "mapname")->loc);
-            if (st) {
-                cJSON_Delete(j);
-                return st;
-            }
-        }
-        if (j) {
-            jok = ts_jw_string(j, "type", "infinite") &&
-                  (map[0] ? ts_jw_string(j, "map", map) && ts_jw_rgb(j, "scale", d.color)
-                          : ts_jw_rgb(j, "radiance", d.color)) &&
-                  ts_jw_add(j, "transform", ts_jw_transform(l->light_to_world)) &&
-                  (!d.samples || ts_jw_number(j, "samples", d.samples));
-        }
-    } else {
-        cJSON_Delete(j);
+    const ts_light_type_desc *t = ts_light_desc_by_pbrt3(l->type);
+    if (!t)
         return derr(im, ps, l->loc, TS_ERR_UNSUPPORTED,
                     "is not supported (point, spot, distant, infinite and diffuse area lights are)");
-    }
+    ts_rgb scale;
+    TRY(get_rgb(im, ps, "scale", ts_rgb_gray(1), &scale));
+    d.type = t->type;
+    for (int i = 0; i < t->n_params; i++)
+        TRY(get_light_param(im, l, ps, &t->params[i], scale, &d));
+    const char *map = "";
+    if (t->flags & TS_LDESC_ENVIRONMENT) TRY(get_environment(im, l, ps, scale, &d, &map));
     warn_unused(im, ps);
-    st = at(im, ts_scene_builder_add_light(im->b, &d, im->err), ps, l->loc);
-    if (!st && j) {
-        if (!jok || !cJSON_AddItemToArray(im->jlights, j))
-            st = nomem(im);
-        else
-            j = NULL;
+    ts_status st = at(im, ts_scene_builder_add_light(im->b, &d, im->err), ps, l->loc);
+    if (st || !im->doc) return st;
+    cJSON *j = cJSON_CreateObject();
+    if (!j || !json_light(j, t, &d, l, map) || !cJSON_AddItemToArray(im->jlights, j)) {
+        cJSON_Delete(j);
+        return nomem(im);
     }
-    cJSON_Delete(j);
-    return st;
+    return TS_OK;
 }
 
-/* ---------------------------------------------------------------- the scene */
-
-/* pbrt-v3's ObjectBegin/End + ObjectInstance onto the builder's objects and instances
- * (scene_builder.h), in the JSON front end's order (objects after the shapes, then the
- * instances): each object some ObjectInstance names is defined once with its shapes in
- * its own space; an object nothing instances is not made, as pbrt-v3 makes nothing of it.
- * Area lights inside a definition were dropped by the parser with pbrt-v3's warning. */
 static ts_status map_objects(imp *im)
 {
     ts_pbrt_scene *s = im->s;

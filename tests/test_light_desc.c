@@ -1,0 +1,209 @@
+/* test_light_desc.c — the one description per light type (build/light_desc.h) against the
+ * places that must agree with it without reading it, and through the readers that do:
+ *  - the JSON schema (proto/scene.schema.json): each type's keys, its required keys, each
+ *    row's default, and the angles' bounds;
+ *  - pbrt-v3's defaults, written out here from pbrt-v3's src/lights (an independent copy);
+ *  - the JSON front end and the builder, generically over the rows: an angle outside its
+ *    range and a "to" equal to "from" are refused, naming the row's key.
+ * Every check is exact; there is no false-failure rate to name. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+// clang-format off
+#include <cmocka.h>
+// clang-format on
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cjson/cJSON.h>
+
+#include "build/light_desc.h"
+#include "build/scene_builder.h"
+#include "json/scene_json.h"
+#include "scene/scene.h"
+
+static cJSON *load_schema(void)
+{
+    const char *src = getenv("TS_SOURCE_DIR");
+    if (!src) fail_msg("TS_SOURCE_DIR is not set (run through ctest)");
+    char path[4096];
+    snprintf(path, sizeof path, "%s/proto/scene.schema.json", src);
+    FILE *f = fopen(path, "rb");
+    if (!f) fail_msg("cannot open %s", path);
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *buf = malloc((size_t)n + 1);
+    assert_non_null(buf);
+    assert_int_equal(fread(buf, 1, (size_t)n, f), (size_t)n);
+    buf[n] = 0;
+    fclose(f);
+    cJSON *s = cJSON_Parse(buf);
+    free(buf);
+    assert_non_null(s);
+    return s;
+}
+
+/* The schema's object for light type `name` (its oneOf entry, or an entry of a nested one). */
+static const cJSON *schema_light(const cJSON *node, const char *name)
+{
+    if (!node) return NULL;
+    const cJSON *props = cJSON_GetObjectItemCaseSensitive(node, "properties");
+    const cJSON *t = cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(props, "type"), "const");
+    if (cJSON_IsString(t) && strcmp(t->valuestring, name) == 0) return node;
+    const char *lists[] = {"oneOf", "anyOf", "allOf"};
+    for (size_t k = 0; k < 3; k++) {
+        const cJSON *e;
+        cJSON_ArrayForEach(e, cJSON_GetObjectItemCaseSensitive(node, lists[k]))
+        {
+            const cJSON *r = schema_light(e, name);
+            if (r) return r;
+        }
+    }
+    return NULL;
+}
+
+static bool in_required(const cJSON *alt, const char *key)
+{
+    const cJSON *e;
+    cJSON_ArrayForEach(e, cJSON_GetObjectItemCaseSensitive(alt, "required"))
+    if (cJSON_IsString(e) && strcmp(e->valuestring, key) == 0) return true;
+    return false;
+}
+
+static void test_schema_agrees(void **state)
+{
+    (void)state;
+    cJSON *schema = load_schema();
+    const cJSON *light = cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(schema, "$defs"), "light");
+    for (int t = 0; t < TS_LIGHT_DESC_COUNT; t++) {
+        const ts_light_type_desc *d = &ts_light_descs[t];
+        if (d->flags & TS_LDESC_ENVIRONMENT) continue; /* radiance-or-map: test_envmap's */
+        const cJSON *alt = schema_light(light, d->name);
+        if (!alt) fail_msg("the schema has no light of type %s", d->name);
+        const cJSON *props = cJSON_GetObjectItemCaseSensitive(alt, "properties");
+        assert_int_equal(cJSON_GetArraySize(props), 1 + d->n_params);
+        for (int i = 0; i < d->n_params; i++) {
+            const ts_light_param *p = &d->params[i];
+            const cJSON *sp = cJSON_GetObjectItemCaseSensitive(props, p->key);
+            if (!sp) fail_msg("%s: the table has %s, the schema does not", d->name, p->key);
+            bool req = (p->flags & TS_LPARAM_REQUIRED) != 0;
+            if (req != in_required(alt, p->key))
+                fail_msg("%s.%s: required in %s only", d->name, p->key, req ? "the table" : "the schema");
+            const cJSON *def = cJSON_GetObjectItemCaseSensitive(sp, "default");
+            if (req) {
+                if (def) fail_msg("%s.%s: required, with a default in the schema", d->name, p->key);
+                continue;
+            }
+            if (!def) fail_msg("%s.%s: the schema gives no default", d->name, p->key);
+            if (p->kind == TS_LPARAM_POINT) {
+                for (int k = 0; k < 3; k++)
+                    if (cJSON_GetArrayItem(def, k)->valuedouble != p->def[k])
+                        fail_msg("%s.%s: the schema's default differs from the table's", d->name, p->key);
+            } else if (def->valuedouble != p->def[0]) {
+                fail_msg("%s.%s: the table's default is %g, the schema's %g", d->name, p->key, p->def[0], def->valuedouble);
+            }
+            if (p->kind == TS_LPARAM_ANGLE) {
+                const cJSON *bound = cJSON_GetObjectItemCaseSensitive(
+                    sp, (p->flags & TS_LPARAM_UPTO_ANGLE) ? "minimum" : "exclusiveMinimum");
+                if (!cJSON_IsNumber(bound) || bound->valuedouble != 0)
+                    fail_msg("%s.%s: the schema does not state the table's lower bound", d->name, p->key);
+                if (!(p->flags & TS_LPARAM_UPTO_ANGLE) &&
+                    cJSON_GetObjectItemCaseSensitive(sp, "maximum")->valuedouble != 180)
+                    fail_msg("%s.%s: the schema's maximum is not 180", d->name, p->key);
+            }
+        }
+    }
+    cJSON_Delete(schema);
+}
+
+/* pbrt-v3's CreatePointLight, CreateSpotLight, CreateDistantLight. */
+static void test_pbrt3_defaults(void **state)
+{
+    (void)state;
+    static const struct {
+        const char *light, *param;
+        double def[3];
+    } want[] = {
+        {"point", "I", {1}},          {"point", "from", {0, 0, 0}},    {"spot", "I", {1}},
+        {"spot", "from", {0, 0, 0}},  {"spot", "to", {0, 0, 1}},       {"spot", "coneangle", {30}},
+        {"spot", "conedelta", {5}},   {"distant", "L", {1}},           {"distant", "from", {0, 0, 0}},
+        {"distant", "to", {0, 0, 1}},
+    };
+    int rows = 0;
+    for (size_t k = 0; k < sizeof want / sizeof *want; k++) {
+        const ts_light_type_desc *d = ts_light_desc_by_pbrt3(want[k].light);
+        assert_non_null(d);
+        const ts_light_param *p = NULL;
+        for (int i = 0; i < d->n_params; i++)
+            if (strcmp(d->params[i].pbrt3, want[k].param) == 0) p = &d->params[i];
+        if (!p) fail_msg("%s: no row reads pbrt-v3's %s", want[k].light, want[k].param);
+        int n = p->kind == TS_LPARAM_POINT ? 3 : 1;
+        for (int i = 0; i < n; i++)
+            if (p->pbrt3_def[i] != want[k].def[i])
+                fail_msg("%s.%s: the table's pbrt-v3 default differs from pbrt-v3's", want[k].light, want[k].param);
+        rows++;
+    }
+    int all = 0;
+    for (int t = 0; t < TS_LIGHT_DESC_COUNT; t++)
+        all += ts_light_descs[t].n_params;
+    assert_int_equal(all, rows);
+}
+
+#define HEAD "{\"tessera\":1,\"camera\":{\"from\":[0,0,5],\"to\":[0,0,0]},\"film\":{\"width\":4,\"height\":4},"
+
+/* An angle out of range, and "to" at "from", through the JSON front end and the builder. */
+static void test_ranges_refused(void **state)
+{
+    (void)state;
+    static const struct {
+        const char *light, *want;
+    } cases[] = {
+        {"{\"type\":\"spot\",\"from\":[0,1,0],\"to\":[0,0,0],\"intensity\":1,\"cone_angle\":181}", "lights[0].cone_angle"},
+        {"{\"type\":\"spot\",\"from\":[0,1,0],\"to\":[0,0,0],\"intensity\":1,\"cone_angle\":0}", "lights[0].cone_angle"},
+        {"{\"type\":\"spot\",\"from\":[0,1,0],\"to\":[0,0,0],\"intensity\":1,\"cone_delta\":31}", "lights[0].cone_delta"},
+        {"{\"type\":\"spot\",\"from\":[0,1,0],\"to\":[0,1,0],\"intensity\":1}", "lights[0].to: must differ"},
+        {"{\"type\":\"distant\",\"to\":[0,0,0],\"irradiance\":1}", "lights[0].to: must differ"},
+        {"{\"type\":\"point\",\"position\":[0,0,0]}", "lights[0].intensity"},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof *cases; k++) {
+        char doc[1024];
+        snprintf(doc, sizeof doc, HEAD "\"lights\":[%s]}", cases[k].light);
+        ts_scene *s = NULL;
+        ts_error err = {0};
+        if (ts_scene_load_text(doc, strlen(doc), NULL, "t", NULL, &s, &err) == TS_OK)
+            fail_msg("%s accepted", cases[k].light);
+        if (!strstr(err.message, cases[k].want)) fail_msg("\"%s\" names no %s", err.message, cases[k].want);
+    }
+    /* The builder, called directly: each angle row's range and the NOT_FROM row. */
+    ts_scene_builder *b = NULL;
+    ts_error err = {0};
+    assert_int_equal(ts_scene_builder_create(NULL, NULL, &b, &err), TS_OK);
+    ts_light_desc ok = {.type = TS_LIGHT_SPOT, .color = {1, 1, 1}, .from = {0, 1, 0}, .to = {0, 0, 0},
+                        .cone_angle_deg = 30, .cone_delta_deg = 5, .to_world = ts_xform_identity()};
+    assert_int_equal(ts_scene_builder_add_light(b, &ok, &err), TS_OK);
+    const ts_light_type_desc *spot = ts_light_desc_by_name("spot");
+    for (int i = 0; i < spot->n_params; i++) {
+        const ts_light_param *p = &spot->params[i];
+        ts_light_desc bad = ok;
+        if (p->kind == TS_LPARAM_ANGLE) *ts_lparam_angle(&bad, p) = (p->flags & TS_LPARAM_UPTO_ANGLE) ? 31 : 190;
+        else if (p->flags & TS_LPARAM_NOT_FROM) *ts_lparam_point(&bad, p) = bad.from;
+        else continue;
+        ts_error e = {0};
+        if (ts_scene_builder_add_light(b, &bad, &e) == TS_OK) fail_msg("spot.%s out of range accepted", p->key);
+        if (strncmp(e.message, p->key, strlen(p->key)) != 0) fail_msg("\"%s\" does not start with %s", e.message, p->key);
+    }
+    ts_scene_builder_destroy(b);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_schema_agrees),
+        cmocka_unit_test(test_pbrt3_defaults),
+        cmocka_unit_test(test_ranges_refused),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
