@@ -37,6 +37,7 @@
 #include <string.h>
 
 #include "film/film.h"
+#include "integrators/effects.h"
 #include "render/render.h"
 #include "scene/scene.h"
 #include "build/scene_builder.h"
@@ -137,17 +138,25 @@ static void camera_doc(char *buf, size_t n, const char *cut)
              cut);
 }
 
-/* The shadow scene with the occluder's cut-out keys CUT. */
-static void shadow_doc(char *buf, size_t n, const char *cut)
+/* The shadow scene with the occluder's cut-out keys CUT, rendered by `direct`; with media,
+ * by volpath (max_depth 1) with the whole scene inside a surface-less sphere bounding a
+ * clear medium (σ = 0: transmittance exactly 1), so every shadow ray is traced through
+ * media and a boundary (volpath's ratio-tracking path) and the pixels stay the same. */
+static void shadow_doc_in(char *buf, size_t n, bool media, const char *cut)
 {
     snprintf(buf, n,
-             VIEW "\"integrator\":{\"type\":\"direct\"},\"textures\":{" CHECKS "},"
+             VIEW "\"integrator\":{\"type\":\"%s\",\"max_depth\":1},\"textures\":{" CHECKS "},%s"
                   "\"lights\":[{\"type\":\"distant\",\"from\":[1,0,1],\"to\":[0,0,0],\"irradiance\":4.442882938158366}],"
                   "\"materials\":{\"white\":{\"type\":\"diffuse\",\"reflectance\":0.5}},"
-                  "\"shapes\":[{\"type\":\"mesh\",%s\"material\":\"white\"," OCCLUDER_QUAD "},"
+                  "\"shapes\":[{\"type\":\"mesh\",%s\"material\":\"white\"," OCCLUDER_QUAD "},%s"
                   "{\"type\":\"mesh\",\"material\":\"white\"," BIG_QUAD "}]}",
-             cut);
+             media ? "volpath" : "direct",
+             media ? "\"media\":{\"clear\":{\"type\":\"homogeneous\",\"sigma_a\":[0,0,0],\"sigma_s\":[0,0,0]}}," : "",
+             cut,
+             media ? "{\"type\":\"sphere\",\"radius\":20,\"material\":null,\"medium\":{\"inside\":\"clear\"}}," : "");
 }
+
+static void shadow_doc(char *buf, size_t n, const char *cut) { shadow_doc_in(buf, n, false, cut); }
 
 static float front_where_even(int px, int py) { return even_check(view_x(px), view_y(py)) ? 2.0f : 0.5f; }
 static float front_everywhere(int px, int py) { (void)px, (void)py; return 2.0f; }
@@ -247,6 +256,34 @@ static void test_shadows_through_cut_outs(void **state)
     expect_pixels("alpha 0, shadow_alpha 1", doc, lit_everywhere);
     shadow_doc(doc, sizeof doc, "\"alpha\":1,\"shadow_alpha\":0.3,");
     expect_pixels("alpha 1, shadow_alpha 0.3", doc, lit_nowhere);
+}
+
+/* volpath's shadow rays through media and surface-less boundaries (transmittance by
+ * ratio tracking, segment by segment) see the cut-outs as the surface shadow rays above
+ * do: alpha and shadow_alpha alike. Camera at z = 5 outside the sphere, max_depth 1: a
+ * floor pixel is its direct light, the same exact values. */
+static void test_media_shadows_through_cut_outs(void **state)
+{
+    (void)state;
+    static char doc[4096];
+    static const struct { const char *cut; expect_fn want; } cases[] = {
+        {"", lit_nowhere},
+        {"\"alpha\":\"checks\",", lit_where_odd},
+        {"\"shadow_alpha\":\"checks\",", lit_where_odd},
+        {"\"alpha\":\"checks\",\"shadow_alpha\":1,", lit_where_odd},
+        {"\"shadow_alpha\":0,", lit_everywhere},
+        {"\"alpha\":0,\"shadow_alpha\":1,", lit_everywhere},
+        {"\"alpha\":1,\"shadow_alpha\":0.3,", lit_nowhere},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+        shadow_doc_in(doc, sizeof doc, true, cases[i].cut);
+        ts_scene *s = load(doc);
+        assert_true(s->effects & TS_EFFECT_MEDIA);
+        ts_scene_destroy(s);
+        char what[96];
+        snprintf(what, sizeof what, "volpath through media, occluder %s", cases[i].cut[0] ? cases[i].cut : "opaque");
+        expect_pixels(what, doc, cases[i].want);
+    }
 }
 
 /* ---------------------------------------------------------------- instances */
@@ -571,6 +608,37 @@ static void test_pbrt_refusals(void **state)
                  "(\"texture alpha\")");
 }
 
+/* pbrt-v3's volpath traces its shadow rays with Scene::Intersect (VisibilityTester::Tr),
+ * which tests alpha and never shadowalpha: under volpath a mesh's shadowalpha is left out
+ * with a warning at its file:line:column, alpha kept; under directlighting both are kept. */
+static void test_pbrt_volpath_shadowalpha(void **state)
+{
+    (void)state;
+    const char *body = "Shape \"trianglemesh\" \"texture alpha\" \"checks\" \"texture shadowalpha\" \"checks\" " PBRT_QUAD(1);
+    char head[2048], text[4096];
+    snprintf(head, sizeof head, "%s", PBRT_HEAD);
+    char *at = strstr(head, "\"directlighting\"");
+    assert_non_null(at);
+    *at = 0;
+    snprintf(text, sizeof text, "%s\"volpath\"%s%s\nWorldEnd\n", head, at + strlen("\"directlighting\""), body);
+    ts_scene *s = NULL;
+    ts_error err = {0};
+    warnings w = {0};
+    if (ts_scene_load_pbrt_text(text, strlen(text), NULL, "t.pbrt", NULL, on_warning, &w, &s, &err))
+        fail_msg("%s", err.message);
+    assert_int_equal(w.n, 1);
+    if (!strstr(w.last, "t.pbrt:10:") || !strstr(w.last, "\"texture shadowalpha\" is not used: pbrt-v3's volpath"))
+        fail_msg("warning: %s", w.last);
+    assert_non_null(s->shapes[0].alpha);
+    assert_null(s->shapes[0].shadow_alpha);
+    ts_scene_destroy(s);
+    w = (warnings){0};
+    s = pbrt_load(body, &w);
+    assert_int_equal(w.n, 0);
+    assert_non_null(s->shapes[0].shadow_alpha);
+    ts_scene_destroy(s);
+}
+
 /* pbrt-v3's CreateTriangleMeshShape: "float alpha" 0 cuts out the whole mesh (left out when
  * it does not emit: nothing of it shows or shadows; kept as an emitter that light sampling
  * still finds); other values leave it opaque, those in (0, 1) with a warning; a sphere's
@@ -692,6 +760,7 @@ int main(void)
         cmocka_unit_test(test_camera_sees_through_cut_outs),
         cmocka_unit_test(test_image_alpha_finest_level),
         cmocka_unit_test(test_shadows_through_cut_outs),
+        cmocka_unit_test(test_media_shadows_through_cut_outs),
         cmocka_unit_test(test_instanced_cut_outs),
         cmocka_unit_test(test_emitter_light_sampling),
         cmocka_unit_test(test_emitter_bsdf_sees_opaque_part),
@@ -700,6 +769,7 @@ int main(void)
         cmocka_unit_test(test_builder_refusals),
         cmocka_unit_test(test_pbrt_refusals),
         cmocka_unit_test(test_pbrt_constants),
+        cmocka_unit_test(test_pbrt_volpath_shadowalpha),
         cmocka_unit_test(test_pbrt_and_convert),
     };
     return cmocka_run_group_tests(tests, ts_tmp_group_setup, ts_tmp_group_teardown);

@@ -16,7 +16,9 @@
  *
  * Alpha cut-outs (shape.h): a mesh with an alpha texture gets other filter functions —
  * the intersect filter tests alpha, the occluded filter alpha and then shadow_alpha
- * (pbrt-v3's Triangle::Intersect and IntersectP), each after the skip test above, at the
+ * (pbrt-v3's Triangle::Intersect and IntersectP), as does the intersect filter of a shadow
+ * ray's nearest-hit query (ts_accel_intersect_shadow: the context says which), each after
+ * the skip test above, at the
  * hit's point and (u, v) as ts_shape_triangle_point_uv computes them from the ray (taken to
  * the object's space through an instance, where pbrt-v3's TransformedPrimitive tests the
  * object's own triangles), with no footprint: a texture lookup of the finest MIP level. A
@@ -102,6 +104,7 @@ typedef struct query_ctx {
     struct RTCIntersectContext rtc;
     const ts_ray *ray;
     const ts_accel *a;
+    bool shadow; /* a shadow ray's nearest hit (ts_accel_intersect_shadow): shadow_alpha cuts out too */
 } query_ctx;
 
 /* The instance a callback runs under (Embree's context instID), or NONE at top level. */
@@ -332,8 +335,17 @@ static inline void cutout_filter(const struct RTCFilterFunctionNArguments *args,
     }
 }
 
-static void alpha_filter(const struct RTCFilterFunctionNArguments *args) { cutout_filter(args, false); }
+static void alpha_filter(const struct RTCFilterFunctionNArguments *args)
+{
+    cutout_filter(args, ((const query_ctx *)args->context)->shadow);
+}
 static void shadow_alpha_filter(const struct RTCFilterFunctionNArguments *args) { cutout_filter(args, true); }
+/* The intersect filter of a mesh with shadow_alpha only: cut-outs for shadow rays alone. */
+static void shadow_only_filter(const struct RTCFilterFunctionNArguments *args)
+{
+    if (((const query_ctx *)args->context)->shadow) cutout_filter(args, true);
+    else triangle_filter(args);
+}
 
 /* ---- build ---- */
 
@@ -369,7 +381,7 @@ static RTCGeometry make_mesh(ts_accel *a, uint32_t i)
     memcpy(v, m->p, (size_t)m->n_vertices * 3 * sizeof(float));
     rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, m->index, 0, 3 * sizeof(uint32_t),
                                m->n_triangles);
-    rtcSetGeometryIntersectFilterFunction(g, s->alpha ? alpha_filter : triangle_filter);
+    rtcSetGeometryIntersectFilterFunction(g, s->alpha ? alpha_filter : s->shadow_alpha ? shadow_only_filter : triangle_filter);
     rtcSetGeometryOccludedFilterFunction(g, s->alpha || s->shadow_alpha ? shadow_alpha_filter : triangle_filter);
     rtcSetGeometryUserData(g, mg);
     return g;
@@ -681,7 +693,7 @@ static void instanced_interaction(const ts_accel *a, uint32_t k, uint32_t local,
     si->inst = k + 1;
 }
 
-bool ts_accel_intersect(const ts_accel *a, const ts_ray *ray, ts_interaction *si)
+static inline bool intersect(const ts_accel *a, const ts_ray *ray, bool shadow, ts_interaction *si)
 {
     if (!(ray->tmax > 0) || !ray_valid(ray)) return false;
     if (__builtin_expect(a->log != NULL, 0)) log_ray(a->log, ray, TS_RAY_LOG_INTERSECT);
@@ -689,6 +701,7 @@ bool ts_accel_intersect(const ts_accel *a, const ts_ray *ray, ts_interaction *si
     rtcInitIntersectContext(&q.rtc);
     q.ray = ray;
     q.a = a;
+    q.shadow = shadow;
     struct RTCRayHit rh;
     ray_to_rtc(ray, &rh.ray);
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
@@ -712,6 +725,16 @@ bool ts_accel_intersect(const ts_accel *a, const ts_ray *ray, ts_interaction *si
     return true;
 }
 
+bool ts_accel_intersect(const ts_accel *a, const ts_ray *ray, ts_interaction *si)
+{
+    return intersect(a, ray, false, si);
+}
+
+bool ts_accel_intersect_shadow(const ts_accel *a, const ts_ray *ray, ts_interaction *si)
+{
+    return intersect(a, ray, true, si);
+}
+
 bool ts_accel_occluded(const ts_accel *a, const ts_ray *ray)
 {
     if (!(ray->tmax > 0)) return false;
@@ -721,6 +744,7 @@ bool ts_accel_occluded(const ts_accel *a, const ts_ray *ray)
     rtcInitIntersectContext(&q.rtc);
     q.ray = ray;
     q.a = a;
+    q.shadow = true;
     struct RTCRay r;
     ray_to_rtc(ray, &r);
     rtcOccluded1(a->scene, &q.rtc, &r);

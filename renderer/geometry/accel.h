@@ -54,6 +54,10 @@ void ts_accel_destroy(ts_accel *a);
 
 /* Nearest hit in (0, ray.tmax): fills si fully and returns true; false on a miss. */
 bool ts_accel_intersect(const ts_accel *a, const ts_ray *ray, ts_interaction *si);
+/* ts_accel_intersect for a shadow ray that must find every shape on its way, not only the
+ * first opaque one (volpath's transmittance through surface-less shapes): a mesh's hit is
+ * cut out where alpha or shadow_alpha is 0, as ts_accel_occluded's. */
+bool ts_accel_intersect_shadow(const ts_accel *a, const ts_ray *ray, ts_interaction *si);
 /* True if anything is hit in (0, ray.tmax). */
 bool ts_accel_occluded(const ts_accel *a, const ts_ray *ray);
 /* World bounds of everything. */

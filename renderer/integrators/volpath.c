@@ -53,7 +53,8 @@ static bool trace_tr(vp *v, ts_ray ray, uint32_t medium, bool to_point, ts_inter
     const ts_scene *s = v->s;
     const ts_vec3 target = ts_vec3_add(ray.o, ray.d), zero = {0, 0, 0};
     for (uint32_t k = 0;; k++) {
-        bool found = ts_accel_intersect(s->accel, &ray, hit);
+        /* A shadow ray sees cut-outs as ts_accel_occluded does (alpha and shadow_alpha). */
+        bool found = to_point ? ts_accel_intersect_shadow(s->accel, &ray, hit) : ts_accel_intersect(s->accel, &ray, hit);
         v->c->other_rays++;
         if (medium != TS_NONE) {
             *tr = ts_rgb_mul(*tr, ts_medium_tr(&s->media[medium], &ray, found ? hit->t : ray.tmax, &v->walk));

@@ -1259,6 +1259,14 @@ static ts_status map_shape(imp *im, size_t si)
     if (strcmp(t, "trianglemesh") == 0 || strcmp(t, "plymesh") == 0) {
         TRY(get_cutout(im, ps, "alpha", &alpha));
         TRY(get_cutout(im, ps, "shadowalpha", &salpha));
+        if (salpha.tex && strcmp(im->s->integrator.type, "volpath") == 0) {
+            /* pbrt-v3's volpath traces every shadow ray with Scene::Intersect (VisibilityTester::Tr),
+             * which tests alpha, never shadowalpha; tessera's volpath would honour it. */
+            pwarn(im, ps, ts_pbrt_params_get(ps, "shadowalpha"),
+                  "is not used: pbrt-v3's volpath integrator traces shadow rays that test alpha only, so the "
+                  "mesh shadows where it is not cut out by alpha; left out");
+            salpha = (cutout){0};
+        }
         if (alpha.zero && !emits) {
             /* Cut out everywhere for every ray, and no light: nothing of it can be seen. */
             pwarn(im, ps, ts_pbrt_params_get(ps, "alpha"),
