@@ -588,6 +588,9 @@ static srv_job *submit(srv_store *st, const char *text, size_t len, const char *
         srv_warnings_fini(&warnings);
         return NULL;
     }
+    char media_note[600]; /* a JSON scene's: a .pbrt file's importer says it at its Integrator */
+    if ((!files || !files->pbrt) && ts_integrator_media_warning(s, media_note, sizeof media_note))
+        srv_warnings_collect(&warnings, media_note);
     uint64_t pixels = (uint64_t)(s->crop_x1 - s->crop_x0) * (uint64_t)(s->crop_y1 - s->crop_y0);
     ts_job_settings js;
     ts_job_settings_from_scene(s, &js);

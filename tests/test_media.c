@@ -15,11 +15,14 @@
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
+#include <stdlib.h>
+#include <unistd.h>
 
 #include "chi2.h"
 #include "integrators/effects.h"
 #include "integrators/integrator.h"
 #include "json/scene_json.h"
+#include "load/scene_load.h"
 #include "media/medium.h"
 
 #define K_SIGMA 4.5
@@ -424,6 +427,83 @@ static void test_furnace(void **state)
                  SPHERE("1", "\"a\"", "\"b\"") "," SPHERE("2", "\"b\"", "null"), (ts_vec3){0, 0, 5}, 20000);
 }
 
+/* ---------------------------------------------------------------- other integrators */
+
+/* A surface-less dome (radius 10, no medium) over a diffuse floor disk, under a uniform
+ * environment of radiance 1, seen from outside. pbrt-v3's integrators other than volpath
+ * skip a hit without a BSDF and go on along the ray, while its shadow rays (Unoccluded,
+ * IntersectP) and its BSDF-sampled light rays (Intersect) stop at the dome: so the floor
+ * receives nothing, by either strategy — exactly 0 for path, direct and ao — while a
+ * camera ray that escapes through the dome sees the environment, exactly 1; normals shows
+ * the floor's. Also the load-time warning of each (ts_integrator_media_warning, and through
+ * ts_scene_load_path's warning callback). */
+#define DOME_SCENE                                                                                              \
+    "\"materials\":{\"grey\":{\"type\":\"diffuse\",\"reflectance\":0.5}},"                                    \
+    "\"shapes\":[{\"type\":\"sphere\",\"radius\":10,\"material\":null},"                                      \
+    "{\"type\":\"disk\",\"center\":[0,0,0],\"normal\":[0,0,1],\"radius\":5,\"material\":\"grey\"}],"          \
+    "\"lights\":[{\"type\":\"infinite\",\"radiance\":1}]}"
+
+static void warned(void *ctx, const char *msg) { snprintf(ctx, 1024, "%s", msg); }
+
+static void test_surface_less_other_integrators(void **state)
+{
+    (void)state;
+    const char *names[] = {"path", "direct", "ao", "normals"};
+    const ts_integrator_type types[] = {TS_INTEGRATOR_PATH, TS_INTEGRATOR_DIRECT, TS_INTEGRATOR_AO,
+                                        TS_INTEGRATOR_NORMALS};
+    const ts_vec3 o = {20, 0, 3}, to_floor = {-18, 0, -3}, escape = {-1, 0, 0.05f};
+    for (int i = 0; i < 4; i++) {
+        char doc[4096];
+        snprintf(doc, sizeof doc, HEAD DOME_SCENE, "", 3, names[i], 5);
+        if (i >= 2) { /* ao and normals take no max_depth */
+            char *md = strstr(doc, ",\"max_depth\":5");
+            memmove(md, md + strlen(",\"max_depth\":5"), strlen(md + strlen(",\"max_depth\":5")) + 1);
+        }
+        ts_scene *s = load(doc);
+        assert_true(s->effects & TS_EFFECT_MEDIA);
+        estimate e = run(s, types[i], o, to_floor, 2000);
+        assert_int_equal(e.nonfinite, 0);
+        const float floor_value[3] = {types[i] == TS_INTEGRATOR_NORMALS ? 0.5f : 0,
+                                      types[i] == TS_INTEGRATOR_NORMALS ? 0.5f : 0,
+                                      types[i] == TS_INTEGRATOR_NORMALS ? 1.0f : 0};
+        for (int k = 0; k < 3; k++)
+            if (fabs(e.mean[k] - floor_value[k]) > 1e-6)
+                fail_msg("%s: the floor under the dome is %g in channel %d, expected %g", names[i], e.mean[k], k,
+                         floor_value[k]);
+        if (types[i] == TS_INTEGRATOR_PATH || types[i] == TS_INTEGRATOR_DIRECT) {
+            e = run(s, types[i], o, escape, 100);
+            for (int k = 0; k < 3; k++) assert_float_equal(e.mean[k], 1, 1e-6);
+        }
+        char msg[600];
+        assert_true(ts_integrator_media_warning(s, msg, sizeof msg));
+        char want[64];
+        snprintf(want, sizeof want, "integrator.type: \"%s\" ", names[i]);
+        if (strncmp(msg, want, strlen(want)) != 0) fail_msg("warning: %s", msg);
+        if (i == 0) { /* the CLI's loader says it at load time, with the file */
+            char path[] = "/tmp/tessera-media-XXXXXX.json";
+            int fd = mkstemps(path, 5);
+            assert_true(fd >= 0);
+            assert_true(write(fd, doc, strlen(doc)) == (ssize_t)strlen(doc));
+            close(fd);
+            char got[1024] = "";
+            ts_scene *t = NULL;
+            ts_error err = {0};
+            if (ts_scene_load_path(path, NULL, warned, got, &t, &err)) fail_msg("%s", err.message);
+            unlink(path);
+            ts_scene_destroy(t);
+            if (!strstr(got, path) || !strstr(got, msg)) fail_msg("load-time warning: '%s'", got);
+        }
+        ts_scene_destroy(s);
+    }
+    /* volpath: no warning. */
+    char doc[4096];
+    snprintf(doc, sizeof doc, HEAD DOME_SCENE, "", 3, "volpath", 5);
+    ts_scene *s = load(doc);
+    char msg[600];
+    assert_false(ts_integrator_media_warning(s, msg, sizeof msg));
+    ts_scene_destroy(s);
+}
+
 /* ---------------------------------------------------------------- input */
 
 static void test_presets(void **state)
@@ -490,6 +570,7 @@ int main(void)
         cmocka_unit_test(test_zero_grid),     cmocka_unit_test(test_single_scattering),
         cmocka_unit_test(test_constant_grid), cmocka_unit_test(test_furnace),
         cmocka_unit_test(test_presets),       cmocka_unit_test(test_bad_input),
+        cmocka_unit_test(test_surface_less_other_integrators),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,6 +1,8 @@
 /* integrator.c — integrator dispatch and the debugging views; see integrator.h. */
 #include "integrators/integrator.h"
 
+#include <stdio.h>
+
 #include "integrators/effects.h"
 #include "integrators/volpath.h"
 #include "lights/light.h"
@@ -21,13 +23,34 @@ const char *ts_integrator_name(ts_integrator_type type)
     return "unknown";
 }
 
+/* The camera ray's first hit on a surface: shapes without one (material none, bounding a
+ * medium) are passed through, as pbrt-v3's integrators skip a hit without a BSDF
+ * (`ray = isect.SpawnRay(ray.d)`); false on a miss or past the crossing bound (counted). */
+static bool first_surface(const ts_scene *s, uint32_t fx, const ts_ray *ray, ts_interaction *si, ts_counters *c)
+{
+    if (!ts_accel_intersect(s->accel, ray, si)) return false;
+    if (!(fx & TS_EFFECT_MEDIA)) return true; /* no shape without a surface */
+    for (uint32_t k = 0; s->shapes[si->shape].material == TS_NONE; k++) {
+        if (k >= TS_VOLPATH_MAX_CROSSINGS) {
+            c->walks_truncated++;
+            return false;
+        }
+        ts_ray next = ts_spawn_ray(si, s->shapes, ray->d);
+        c->other_rays++;
+        if (!ts_accel_intersect(s->accel, &next, si)) return false;
+    }
+    return true;
+}
+
 /* Ambient occlusion: the cosine-weighted fraction of the hemisphere around the shading
  * normal (turned to face the viewer) that is open within ao_distance. One shadow ray per
- * sample, so the estimate is 0 or 1 and its mean is the occlusion integral ∫V cosθ/π. */
-static ts_rgb li_ao(const ts_scene *s, const ts_ray *ray, ts_sample_stream *st, ts_counters *c)
+ * sample, so the estimate is 0 or 1 and its mean is the occlusion integral ∫V cosθ/π.
+ * As pbrt-v3's AOIntegrator, the camera ray passes shapes without a surface and the
+ * occlusion ray (its IntersectP) is blocked by them. */
+static ts_rgb li_ao(const ts_scene *s, uint32_t fx, const ts_ray *ray, ts_sample_stream *st, ts_counters *c)
 {
     ts_interaction si;
-    if (!ts_accel_intersect(s->accel, ray, &si)) return ts_rgb_gray(0);
+    if (!first_surface(s, fx, ray, &si, c)) return ts_rgb_gray(0);
     ts_vec3 n = ts_vec3_faceforward(si.n, si.wo);
     ts_vec3 ns = ts_vec3_faceforward(si.ns, n);
     ts_vec3 a, b;
@@ -42,10 +65,11 @@ static ts_rgb li_ao(const ts_scene *s, const ts_ray *ray, ts_sample_stream *st, 
     return ts_accel_occluded(s->accel, &shadow) ? ts_rgb_gray(0) : ts_rgb_gray(1);
 }
 
-static ts_rgb li_normals(const ts_scene *s, const ts_ray *ray)
+/* The shading normal of the first surface (shapes without one passed, as ao's). */
+static ts_rgb li_normals(const ts_scene *s, uint32_t fx, const ts_ray *ray, ts_counters *c)
 {
     ts_interaction si;
-    if (!ts_accel_intersect(s->accel, ray, &si)) return ts_rgb_gray(0);
+    if (!first_surface(s, fx, ray, &si, c)) return ts_rgb_gray(0);
     return (ts_rgb){0.5f * (si.ns.x + 1), 0.5f * (si.ns.y + 1), 0.5f * (si.ns.z + 1)};
 }
 
@@ -362,13 +386,18 @@ static ts_rgb li_path(const ts_scene *s, uint32_t fx, ts_ray ray, const ts_ray_d
     ts_interaction prev = {0};
     float prev_pdf = 0;
     uint32_t crossings = 0;
+    bool crossed = false; /* the ray left its vertex through a shape without a surface */
     for (int bounces = 0;; bounces++) {
         /* Emission found by this ray counts at the camera, after a specular bounce, and
          * (MIS-weighted, or in full for BSDF-only sampling) unless light sampling alone
          * is asked for. A ray whose hit can add nothing — the last one, when nothing
          * emits or its emission does not count — is not traced; it draws no sample
-         * dimensions, so nothing else changes. */
-        bool counts = emitters && (bounces == 0 || specular_bounce || (!v3_direct && sampling != TS_SAMPLING_LIGHT));
+         * dimensions, so nothing else changes. Past a shape without a surface only the
+         * first two count: pbrt-v3's light sample is blocked by it (Unoccluded) and so is
+         * its BSDF sample (Intersect finds the shape, not the light), so light behind a
+         * medium boundary reaches a diffuse or glossy vertex through neither strategy. */
+        bool counts = emitters && (bounces == 0 || specular_bounce ||
+                                   (!v3_direct && sampling != TS_SAMPLING_LIGHT && !crossed));
         if ((bounces > 0 && bounces >= max_depth && !counts) || stopped(c)) break;
         ts_interaction si;
         bool found = ts_accel_intersect(s->accel, &ray, &si);
@@ -384,9 +413,11 @@ static ts_rgb li_path(const ts_scene *s, uint32_t fx, ts_ray ray, const ts_ray_d
                 break;
             }
             ray = ts_spawn_ray(&si, s->shapes, ray.d);
+            crossed = bounces > 0;
             bounces--;
             continue;
         }
+        crossed = false;
         ts_bsdf bsdf;
         /* The camera ray's differentials only, as pbrt-v3's PathIntegrator (differential.h). */
         material_bsdf(s, &si, bounces == 0 ? rd : NULL, &bsdf);
@@ -516,11 +547,40 @@ ts_rgb ts_integrator_li(const ts_scene *s, ts_integrator_type type, uint32_t fx,
 {
     c->camera_rays++;
     switch (type) {
-    case TS_INTEGRATOR_AO: return li_ao(s, ray, st, c);
-    case TS_INTEGRATOR_NORMALS: return li_normals(s, ray);
+    case TS_INTEGRATOR_AO: return li_ao(s, fx, ray, st, c);
+    case TS_INTEGRATOR_NORMALS: return li_normals(s, fx, ray, c);
     case TS_INTEGRATOR_PATH: return li_path(s, fx, *ray, rd, st, c);
     case TS_INTEGRATOR_DIRECT: return li_direct(s, fx, *ray, rd, st, c, 0);
     case TS_INTEGRATOR_VOLPATH: return ts_volpath_li(s, fx, *ray, rd, st, c);
     }
     return ts_rgb_gray(0);
+}
+
+bool ts_integrator_media_warning(const ts_scene *s, char *buf, size_t n)
+{
+    if (!(s->effects & TS_EFFECT_MEDIA) || s->integrator.type == TS_INTEGRATOR_VOLPATH) return false;
+    const char *name = ts_integrator_name(s->integrator.type);
+    switch (s->integrator.type) {
+    case TS_INTEGRATOR_AO:
+        snprintf(buf, n,
+                 "integrator.type: \"%s\" does not simulate the scene's participating media, as pbrt-v3's ambient "
+                 "occlusion does not: camera rays pass through the shapes without a surface, occlusion rays are "
+                 "blocked by them; use volpath",
+                 name);
+        break;
+    case TS_INTEGRATOR_NORMALS:
+        snprintf(buf, n,
+                 "integrator.type: \"%s\" shows the first surface a camera ray meets, through the shapes without a "
+                 "surface that bound the scene's media",
+                 name);
+        break;
+    default:
+        snprintf(buf, n,
+                 "integrator.type: \"%s\" does not simulate the scene's participating media, as pbrt-v3's does not: "
+                 "rays pass through the shapes that bound them, shadow rays are blocked by them, and light behind "
+                 "such a shape reaches a surface only after a specular bounce; use volpath",
+                 name);
+        break;
+    }
+    return true;
 }

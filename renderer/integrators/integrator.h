@@ -49,6 +49,12 @@ const char *ts_integrator_name(ts_integrator_type type);
  * renderer is this × spp × pixels (the server's --max-work, docs/security.md). */
 double ts_integrator_rays_per_sample(const ts_scene *s, ts_integrator_type type, uint32_t effects);
 
+/* What a scene with media (the media effect) rendered by an integrator other than volpath
+ * does, for the user at load time: true with one sentence in buf, headed by its JSON path
+ * (integrator.type), else false. pbrt-v3's integrators are the reference: rays pass through
+ * the shapes without a surface, shadow (and occlusion) rays are blocked by them. */
+bool ts_integrator_media_warning(const ts_scene *s, char *buf, size_t n);
+
 /* Radiance arriving along ray (from the camera), simulating the effects in `effects`
  * (effects.h: the scene's own set, or all of them; never more than the scene has). rd:
  * the camera ray's differential (differential.h), or NULL for none. */

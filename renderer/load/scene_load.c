@@ -1,6 +1,8 @@
 /* scene_load.c — scene files of either format; see scene_load.h. */
 #include "load/scene_load.h"
 
+#include "integrators/integrator.h"
+
 #include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -114,7 +116,15 @@ ts_status ts_scene_load_path(const char *path, const ts_scene_limits *limits, ts
         }
         fmt = ts_scene_format_of(NULL, head, n);
     }
-    if (fmt == TS_SCENE_FORMAT_JSON) return ts_scene_load_file(path, limits, out, err);
+    if (fmt == TS_SCENE_FORMAT_JSON) {
+        ts_status st = ts_scene_load_file(path, limits, out, err);
+        char msg[600], line[1200];
+        if (!st && warn && ts_integrator_media_warning(*out, msg, sizeof msg)) {
+            snprintf(line, sizeof line, "%s: %s", path, msg);
+            warn(warn_ctx, line);
+        }
+        return st;
+    }
     char dir[PATH_MAX], name[256];
     ts_scene_path_split(path, dir, sizeof dir, name, sizeof name);
     return load_pbrt(path, NULL, 0, NULL, name, limits, warn, warn_ctx, NULL, out, err);
