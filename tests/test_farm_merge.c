@@ -513,6 +513,86 @@ static void test_film_scale_shards(void **state)
     assert_int_equal(run(mixed), 1);
 }
 
+/* Shards of a media scene (proto/examples/media.json: volpath, a camera in haze, a
+ * homogeneous sphere and a grid, their surface-less boundaries) merge like every other
+ * effect's: the merged sums within the bounds above of the single render's, and the image
+ * a merge gives (its film as a plain EXR's channels, as the server publishes a farm job's)
+ * bit for bit the plain `tessera render` EXR of the whole scene. Tracking draws from a
+ * stream per pixel sample (media/medium.h), so a sample's walk is the same in any shard. */
+static void test_media_shards(void **state)
+{
+    (void)state;
+    const char *src = getenv("TS_SOURCE_DIR");
+    assert_non_null(src);
+    char in[512];
+    snprintf(in, sizeof in, "%s/proto/examples/media.json", src);
+    FILE *f = fopen(in, "r");
+    assert_non_null(f);
+    static char text[1 << 16];
+    size_t n = fread(text, 1, sizeof text - 1, f);
+    fclose(f);
+    text[n] = '\0';
+    cJSON *doc = cJSON_Parse(text);
+    assert_non_null(doc);
+    cJSON *film = cJSON_GetObjectItem(doc, "film");
+    cJSON_ReplaceItemInObject(film, "width", cJSON_CreateNumber(24));
+    cJSON_ReplaceItemInObject(film, "height", cJSON_CreateNumber(16));
+    cJSON_AddItemToObject(film, "filter", cJSON_Parse("{\"type\":\"box\",\"radius\":0.5}"));
+    cJSON_ReplaceItemInObject(cJSON_GetObjectItem(doc, "sampler"), "spp", cJSON_CreateNumber(7));
+    char *out = cJSON_Print(doc);
+    const char *scene = tmp("media.json");
+    write_file(scene, out);
+    cJSON_free(out);
+    cJSON_Delete(doc);
+
+    render_shard(scene, "0/1", tmp("media-full.exr"));
+    const char *files[3];
+    char names[3][512];
+    for (int i = 0; i < 3; i++) {
+        char spec[8], name[32];
+        snprintf(spec, sizeof spec, "%d/3", i);
+        snprintf(name, sizeof name, "media-s%d.exr", i);
+        snprintf(names[i], sizeof names[i], "%s", tmp(name));
+        files[i] = names[i];
+        render_shard(scene, spec, files[i]);
+    }
+    merge_files(files, 3, tmp("media-merged.exr"));
+    log_has("7 spp of 7 (samples [0,7))");
+    double px, mean;
+    compare_shards(tmp("media-merged.exr"), tmp("media-full.exr"), &px, &mean);
+    printf("media shards merged vs the single render: largest pixel difference %.3g relative, mean %.3g\n", px, mean);
+    assert_true(px <= PIXEL_BOUND);
+    assert_true(mean <= MEAN_BOUND);
+
+    const char *plain[] = {"render", scene, "-o", tmp("media-plain.exr"), "--quiet", NULL};
+    assert_int_equal(run(plain), 0);
+    ts_shard_info info;
+    ts_film *merged;
+    ts_error err = {0};
+    if (ts_shard_read(tmp("media-merged.exr"), &info, &merged, &err)) fail_msg("%s", err.message);
+    ts_image a = {0}, b = {0};
+    if (ts_film_to_image(merged, TS_FILM_IMAGE_STATS, &a, &err)) fail_msg("%s", err.message);
+    if (ts_exr_read(tmp("media-plain.exr"), &b, &err)) fail_msg("%s", err.message);
+    assert_int_equal(a.width, b.width);
+    assert_int_equal(a.height, b.height);
+    assert_int_equal(a.n_channels, b.n_channels);
+    size_t pixels = (size_t)a.width * a.height, values = pixels * a.n_channels, differ = 0;
+    for (int c = 0; c < a.n_channels; c++) { /* by name: an EXR file keeps its channels sorted */
+        int cb = ts_image_channel(&b, a.channel_names[c]);
+        if (cb < 0) fail_msg("the render's EXR lacks channel %s", a.channel_names[c]);
+        for (size_t i = 0; i < pixels; i++)
+            differ += memcmp(&a.data[i * a.n_channels + c], &b.data[i * b.n_channels + cb], sizeof(float)) != 0;
+    }
+    printf("media: the merge's image vs the single render's EXR: %zu of %zu values differ\n", differ, values);
+    assert_int_equal(differ, 0);
+    double lit = 0;
+    for (size_t i = 0; i < values; i++) lit += a.data[i] > 0;
+    assert_true(lit > 0);
+    ts_image_fini(&a);
+    ts_image_fini(&b);
+    ts_film_destroy(merged);
+}
+
 static void test_shard_auto(void **state)
 {
     (void)state;
@@ -618,6 +698,7 @@ int main(void)
         cmocka_unit_test(test_region_shards),
         cmocka_unit_test(test_bad_merges_refused),
         cmocka_unit_test(test_film_scale_shards),
+        cmocka_unit_test(test_media_shards),
         cmocka_unit_test(test_shard_auto),
         cmocka_unit_test(test_sigterm_sigkill_resume),
     };
