@@ -5,9 +5,11 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <cmocka.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "assets.h"
+#include "integrators/effects.h"
 
 static void test_index(void **state)
 {
@@ -44,6 +46,33 @@ static void test_referenced_assets(void **state)
     assert_true(found >= 2); /* the script and the style sheet */
 }
 
+/* Every effect a job's status can list (integrators/effects.h) has its words in the page's
+ * script (EFFECT_TEXT in web/src/main.js: the job list shows them, the key as the title),
+ * so none falls back to its identifier. */
+static void test_effect_labels(void **state)
+{
+    (void)state;
+    const char *html = (const char *)srv_asset_find("/")->data;
+    const char *js = NULL;
+    for (const char *p = strstr(html, "./assets/"); p && !js; p = strstr(p + 1, "./assets/")) {
+        char path[256];
+        size_t n = strcspn(p + 1, "\"' >");
+        assert_true(n < sizeof path);
+        memcpy(path, p + 1, n);
+        path[n] = '\0';
+        if (n > 3 && !strcmp(path + n - 3, ".js")) js = (const char *)srv_asset_find(path)->data;
+    }
+    assert_non_null(js);
+    for (uint32_t b = 0; b < TS_EFFECT_COUNT; b++) {
+        const char *key = ts_effect_key(1u << b);
+        assert_non_null(key);
+        char a[64], q[64];
+        snprintf(a, sizeof a, "%s:\"", key); /* as Vite writes it */
+        snprintf(q, sizeof q, "%s: '", key);  /* as the source has it */
+        if (!strstr(js, a) && !strstr(js, q)) fail_msg("the web UI has no words for the effect \"%s\"", key);
+    }
+}
+
 static void test_scenes(void **state)
 {
     (void)state;
@@ -71,6 +100,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_index),
         cmocka_unit_test(test_referenced_assets),
+        cmocka_unit_test(test_effect_labels),
         cmocka_unit_test(test_scenes),
         cmocka_unit_test(test_misses),
     };
