@@ -9,6 +9,7 @@
 
 #include "textures/noise.h"
 #include "textures/texture_cache.h"
+#include "textures/texture_desc.h"
 #include "textures/texture_image.h"
 
 #define TRY(expr)                                                                                            \
@@ -227,17 +228,8 @@ static ts_status world_to_texture(const cJSON *obj, const char *path, ts_mat4 *o
     return TS_OK;
 }
 
-static ts_status octaves(const reader *r, int *oct, float *omega)
-{
-    int64_t o = 8;
-    TRY(ts_json_int(r->obj, r->path, "octaves", false, 0, TS_NOISE_MAX_OCTAVES, &o, r->err));
-    *oct = (int)o;
-    return number(r, "roughness", 0.5, omega);
-}
-
 static ts_status imagemap(const reader *r, ts_texture *t)
 {
-    TRY(mapping2d(r, &t->image.map));
     const char *file;
     TRY(ts_json_string(r->obj, r->path, "file", true, &file, r->err));
     static const char *const wraps[] = {"repeat", "black", "clamp", NULL};
@@ -270,135 +262,95 @@ static ts_status imagemap(const reader *r, ts_texture *t)
     return TS_OK;
 }
 
+/* One row of the type's description (textures/texture_desc.h). */
+static ts_status texture_param(const reader *r, const ts_texture_param *p, ts_texture *t)
+{
+    switch (p->kind) {
+    case TS_TPARAM_CHILD: return child(r, p->key, r->rgb, p->def, ts_tparam_texture(t, p));
+    case TS_TPARAM_AMOUNT: return child(r, p->key, false, p->def, ts_tparam_texture(t, p));
+    case TS_TPARAM_VALUE: return value(r, r->obj, p->key, r->rgb, p->def, ts_tparam_rgb(t, p));
+    case TS_TPARAM_NUMBER: return number(r, p->key, p->def, ts_tparam_float(t, p));
+    case TS_TPARAM_OCTAVES: {
+        int64_t o = (int64_t)p->def;
+        TRY(ts_json_int(r->obj, r->path, p->key, false, 0, TS_NOISE_MAX_OCTAVES, &o, r->err));
+        *ts_tparam_octaves(t, p) = (int)o;
+        return number(r, "roughness", 0.5, ts_tparam_omega(t, p));
+    }
+    }
+    return TS_OK;
+}
+
+/* A texture: its type's description (textures/texture_desc.h) says which keys it takes,
+ * their kinds and defaults; a checkerboard's "dimension" picks its 2D or 3D description. */
 ts_status ts_json_texture_parse(ts_json_textures *tt, ts_scene_builder *b, const cJSON *obj, const char *path,
                                 const char *name, const ts_xform *to_world, ts_error *err)
 {
-    static const char *const types[] = {"constant",     "scale",    "mix", "bilerp",   "uv",
-                                        "checkerboard", "dots",     "fbm", "wrinkled", "windy",
-                                        "marble",       "imagemap", NULL};
-    enum { CONSTANT, SCALE, MIX, BILERP, UV, CHECKERBOARD, DOTS, FBM, WRINKLED, WINDY, MARBLE, IMAGEMAP };
+    /* v1's type names, each once (the two checkerboards share theirs). */
+    const char *types[TS_TEXTURE_TYPE_COUNT + 1];
+    int n_types = 0;
+    for (int i = 0; i < TS_TEXTURE_TYPE_COUNT; i++)
+        if (!n_types || strcmp(types[n_types - 1], ts_texture_descs[i].name) != 0) types[n_types++] = ts_texture_descs[i].name;
+    types[n_types] = NULL;
     if (!cJSON_IsObject(obj)) return ts_json_check_object(obj, path, types, err);
     int type;
     TRY(ts_json_enum(obj, path, "type", true, types, &type, err));
-#define COMMON "type", "kind", "transform", "world_to_texture"
-#define MAP2D  COMMON, "mapping"
-    static const char *const k_constant[] = {COMMON, "value", NULL};
-    static const char *const k_scale[] = {COMMON, "tex1", "tex2", NULL};
-    static const char *const k_mix[] = {COMMON, "tex1", "tex2", "amount", NULL};
-    static const char *const k_bilerp[] = {MAP2D, "v00", "v01", "v10", "v11", NULL};
-    static const char *const k_uv[] = {MAP2D, NULL};
-    static const char *const k_checker[] = {MAP2D, "dimension", "tex1", "tex2", "aamode", NULL};
-    static const char *const k_dots[] = {MAP2D, "inside", "outside", NULL};
-    static const char *const k_fbm[] = {COMMON, "octaves", "roughness", NULL};
-    static const char *const k_windy[] = {COMMON, NULL};
-    static const char *const k_marble[] = {COMMON, "octaves", "roughness", "scale", "variation", NULL};
-    static const char *const k_image[] = {MAP2D,   "file",  "wrap",   "trilinear", "max_anisotropy",
-                                          "scale", "gamma", "invert", NULL};
-#undef MAP2D
-#undef COMMON
-    const char *const *keys[] = {k_constant, k_scale, k_mix, k_bilerp, k_uv,     k_checker,
-                                 k_dots,     k_fbm,   k_fbm, k_windy,  k_marble, k_image};
-    TRY(ts_json_check_object(obj, path, keys[type], err));
+    const ts_texture_desc *d = ts_texture_desc_by_name(types[type], 2);
+    if (d->dimension) {
+        int64_t dim = 2;
+        TRY(ts_json_int(obj, path, "dimension", false, 2, 3, &dim, err));
+        d = ts_texture_desc_by_name(types[type], (int)dim);
+    }
+    /* The keys of this type: every texture's, its rows', its flags'. A 3D checkerboard
+     * takes the 2D one's keys so that a mapping or aamode given it gets the sentence below. */
+    const ts_texture_desc *keyed = d->dimension ? ts_texture_desc_by_name(d->name, 2) : d;
+    const char *keys[32];
+    int n = 0;
+    keys[n++] = "type", keys[n++] = "kind", keys[n++] = "transform", keys[n++] = "world_to_texture";
+    if (keyed->dimension) keys[n++] = "dimension";
+    if (keyed->flags & TS_TDESC_MAP2D) keys[n++] = "mapping";
+    for (int i = 0; i < keyed->n_params; i++) {
+        keys[n++] = keyed->params[i].key;
+        if (keyed->params[i].kind == TS_TPARAM_OCTAVES) keys[n++] = "roughness";
+    }
+    if (keyed->flags & TS_TDESC_AAMODE) keys[n++] = "aamode";
+    if (keyed->flags & TS_TDESC_IMAGE) {
+        static const char *const image_keys[] = {"file", "wrap", "trilinear", "max_anisotropy", "scale", "gamma", "invert"};
+        for (size_t i = 0; i < sizeof image_keys / sizeof *image_keys; i++)
+            keys[n++] = image_keys[i];
+    }
+    keys[n] = NULL;
+    TRY(ts_json_check_object(obj, path, keys, err));
     static const char *const kinds[] = {"rgb", "float", NULL};
     int kind = 0;
     TRY(ts_json_enum(obj, path, "kind", false, kinds, &kind, err));
     bool rgb = kind == 0;
-    if (!rgb && (type == UV || type == MARBLE)) {
+    if (!rgb && (d->flags & TS_TDESC_RGB_ONLY)) {
         ts_jpath kp = ts_jpath_key(path, "kind");
-        return ts_error_set(err, TS_ERR_INVALID, "%s: a %s texture is RGB only (as in pbrt-v3)", kp.s,
-                            types[type]);
+        return ts_error_set(err, TS_ERR_INVALID, "%s: a %s texture is RGB only (as in pbrt-v3)", kp.s, d->name);
+    }
+    if (d->dimension == 3 &&
+        (cJSON_GetObjectItemCaseSensitive(obj, "mapping") || cJSON_GetObjectItemCaseSensitive(obj, "aamode"))) {
+        ts_jpath p = ts_jpath_key(path, "dimension");
+        return ts_error_set(err, TS_ERR_INVALID,
+                            "%s: a 3D checkerboard takes no mapping or aamode (its space is 'transform')", p.s);
     }
     ts_mat4 w2t = to_world->m_inv;
     TRY(world_to_texture(obj, path, &w2t, err));
     reader r = {tt, b, obj, path, rgb, &w2t, err};
-    ts_texture t = {.is_rgb = rgb};
-    switch (type) {
-    case CONSTANT: {
-        ts_rgb v;
-        TRY(value(&r, obj, "value", rgb, 1, &v));
-        t = rgb ? ts_texture_constant_rgb(v) : ts_texture_constant_float(v.r);
-        break;
+    ts_texture t = {.is_rgb = rgb, .type = d->type};
+    if (d->flags & TS_TDESC_MAP3D) TRY(mapping3d(&r, ts_tdesc_map3d(&t, d)));
+    if (d->flags & TS_TDESC_MAP2D) TRY(mapping2d(&r, ts_tdesc_map2d(&t, d)));
+    for (int i = 0; i < d->n_params; i++)
+        TRY(texture_param(&r, &d->params[i], &t));
+    if (d->flags & TS_TDESC_CONSTANT)
+        t = rgb ? ts_texture_constant_rgb(t.constant.value) : ts_texture_constant_float(t.constant.value.r);
+    if (d->flags & TS_TDESC_AAMODE) {
+        static const char *const modes[] = {"closedform", "none", NULL};
+        int mode;
+        TRY(choice(&r, obj, path, "aamode", modes, &mode));
+        t.checkerboard2d.closed_form = mode == 0;
     }
-    case SCALE:
-        t.type = TS_TEXTURE_SCALE;
-        TRY(child(&r, "tex1", rgb, 1, &t.scale.tex1));
-        TRY(child(&r, "tex2", rgb, 1, &t.scale.tex2));
-        break;
-    case MIX:
-        t.type = TS_TEXTURE_MIX;
-        TRY(child(&r, "tex1", rgb, 0, &t.mix.tex1));
-        TRY(child(&r, "tex2", rgb, 1, &t.mix.tex2));
-        TRY(child(&r, "amount", false, 0.5f, &t.mix.amount));
-        break;
-    case BILERP: {
-        t.type = TS_TEXTURE_BILERP;
-        TRY(mapping2d(&r, &t.bilerp.map));
-        TRY(value(&r, obj, "v00", rgb, 0, &t.bilerp.v00));
-        TRY(value(&r, obj, "v01", rgb, 1, &t.bilerp.v01));
-        TRY(value(&r, obj, "v10", rgb, 0, &t.bilerp.v10));
-        TRY(value(&r, obj, "v11", rgb, 1, &t.bilerp.v11));
-        break;
-    }
-    case UV:
-        t.type = TS_TEXTURE_UV;
-        TRY(mapping2d(&r, &t.uv.map));
-        break;
-    case CHECKERBOARD: {
-        int64_t dim = 2;
-        TRY(ts_json_int(obj, path, "dimension", false, 2, 3, &dim, err));
-        const ts_texture *t1, *t2;
-        TRY(child(&r, "tex1", rgb, 1, &t1));
-        TRY(child(&r, "tex2", rgb, 0, &t2));
-        if (dim == 2) {
-            t.type = TS_TEXTURE_CHECKERBOARD2D;
-            t.checkerboard2d.tex1 = t1, t.checkerboard2d.tex2 = t2;
-            TRY(mapping2d(&r, &t.checkerboard2d.map));
-            static const char *const modes[] = {"closedform", "none", NULL};
-            int mode;
-            TRY(choice(&r, obj, path, "aamode", modes, &mode));
-            t.checkerboard2d.closed_form = mode == 0;
-        } else {
-            if (cJSON_GetObjectItemCaseSensitive(obj, "mapping") ||
-                cJSON_GetObjectItemCaseSensitive(obj, "aamode")) {
-                ts_jpath p = ts_jpath_key(path, "dimension");
-                return ts_error_set(
-                    err, TS_ERR_INVALID,
-                    "%s: a 3D checkerboard takes no mapping or aamode (its space is 'transform')", p.s);
-            }
-            t.type = TS_TEXTURE_CHECKERBOARD3D;
-            t.checkerboard3d.tex1 = t1, t.checkerboard3d.tex2 = t2;
-            TRY(mapping3d(&r, &t.checkerboard3d.map));
-        }
-        break;
-    }
-    case DOTS:
-        t.type = TS_TEXTURE_DOTS;
-        TRY(child(&r, "inside", rgb, 1, &t.dots.inside));
-        TRY(child(&r, "outside", rgb, 0, &t.dots.outside));
-        TRY(mapping2d(&r, &t.dots.map));
-        break;
-    case FBM:
-    case WRINKLED:
-        t.type = type == FBM ? TS_TEXTURE_FBM : TS_TEXTURE_WRINKLED;
-        TRY(mapping3d(&r, &t.fbm.map));
-        TRY(octaves(&r, &t.fbm.octaves, &t.fbm.omega));
-        break;
-    case WINDY:
-        t.type = TS_TEXTURE_WINDY;
-        TRY(mapping3d(&r, &t.windy.map));
-        break;
-    case MARBLE:
-        t.type = TS_TEXTURE_MARBLE;
-        TRY(mapping3d(&r, &t.marble.map));
-        TRY(octaves(&r, &t.marble.octaves, &t.marble.omega));
-        TRY(number(&r, "scale", 1, &t.marble.scale));
-        TRY(number(&r, "variation", 0.2, &t.marble.variation));
-        break;
-    case IMAGEMAP:
-        t.type = TS_TEXTURE_IMAGEMAP;
-        TRY(imagemap(&r, &t));
-        break;
-    }
+    if (d->flags & TS_TDESC_IMAGE) TRY(imagemap(&r, &t));
     const ts_texture *made;
     ts_status st = ts_scene_builder_add_texture(b, &t, &made, err);
     if (st) {

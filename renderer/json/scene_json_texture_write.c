@@ -3,6 +3,7 @@
 #include "json/scene_json_texture_write.h"
 
 #include "json/json_write.h"
+#include "textures/texture_desc.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -109,85 +110,65 @@ static bool mapping2d(cJSON *obj, const ts_texture_mapping2d *m)
     return false;
 }
 
+/* t's mapping as v1 has it: a 2D one as "mapping", a 3D one's world → texture. */
+static bool write_mapping(cJSON *j, const ts_texture_desc *d, const ts_texture *t)
+{
+    ts_texture *u = (ts_texture *)t;
+    if (d->flags & TS_TDESC_MAP2D) return mapping2d(j, ts_tdesc_map2d(u, d));
+    if (d->flags & TS_TDESC_MAP3D) return ts_jw_matrix(j, "world_to_texture", &ts_tdesc_map3d(u, d)->world_to_texture);
+    return true;
+}
+
+/* An image map's file and options. */
+static ts_status write_image(ts_json_texture_writer *w, cJSON *j, const ts_texture *t, const char *name, ts_error *err)
+{
+    const char *file;
+    ts_texture_image_options opt;
+    if (!ts_texture_cache_source(w->cache, t->image.mipmap, &file, &opt))
+        return ts_error_set(err, TS_ERR_INTERNAL,
+                            "texture \"%s\": its image map is not one of the scene's texture cache", name);
+    static const char *const wraps[] = {"repeat", "black", "clamp"};
+    bool ok = ts_jw_add(j, "file", cJSON_CreateString(file)) && ts_jw_add(j, "wrap", cJSON_CreateString(wraps[opt.wrap])) &&
+              ts_jw_add(j, "trilinear", cJSON_CreateBool(t->image.trilinear)) &&
+              ts_jw_number(j, "max_anisotropy", t->image.max_anisotropy) && ts_jw_number(j, "scale", opt.scale) &&
+              ts_jw_add(j, "gamma", cJSON_CreateBool(opt.gamma)) && ts_jw_add(j, "invert", cJSON_CreateBool(t->image.invert));
+    return ok ? TS_OK : nomem(err);
+}
+
+/* t as v1 has it: its type's description (textures/texture_desc.h) in the table's order —
+ * the mapping first where the description says so, else after the rows (and a
+ * checkerboard's dimension). */
 static ts_status fill(ts_json_texture_writer *w, cJSON *j, const ts_texture *t, const char *name, ts_error *err)
 {
-    static const char *const types[] = {
-        [TS_TEXTURE_CONSTANT] = "constant",     [TS_TEXTURE_SCALE] = "scale",
-        [TS_TEXTURE_MIX] = "mix",               [TS_TEXTURE_BILERP] = "bilerp",
-        [TS_TEXTURE_UV] = "uv",                 [TS_TEXTURE_CHECKERBOARD2D] = "checkerboard",
-        [TS_TEXTURE_CHECKERBOARD3D] = "checkerboard", [TS_TEXTURE_DOTS] = "dots",
-        [TS_TEXTURE_FBM] = "fbm",               [TS_TEXTURE_WRINKLED] = "wrinkled",
-        [TS_TEXTURE_WINDY] = "windy",           [TS_TEXTURE_MARBLE] = "marble",
-        [TS_TEXTURE_IMAGEMAP] = "imagemap",
-    };
-    if (!ts_jw_add(j, "type", cJSON_CreateString(types[t->type])) ||
+    const ts_texture_desc *d = &ts_texture_descs[t->type];
+    if (!ts_jw_add(j, "type", cJSON_CreateString(d->name)) ||
         !ts_jw_add(j, "kind", cJSON_CreateString(t->is_rgb ? "rgb" : "float")))
         return nomem(err);
-    bool rgb = t->is_rgb, ok = true;
-    switch (t->type) {
-    case TS_TEXTURE_CONSTANT:
-        return value(j, "value", rgb, t->constant.value, name, err);
-    case TS_TEXTURE_SCALE:
-        TRY(child(w, j, "tex1", t->scale.tex1, name, err));
-        return child(w, j, "tex2", t->scale.tex2, name, err);
-    case TS_TEXTURE_MIX:
-        TRY(child(w, j, "tex1", t->mix.tex1, name, err));
-        TRY(child(w, j, "tex2", t->mix.tex2, name, err));
-        return child(w, j, "amount", t->mix.amount, name, err);
-    case TS_TEXTURE_BILERP:
-        if (!mapping2d(j, &t->bilerp.map)) return nomem(err);
-        TRY(value(j, "v00", rgb, t->bilerp.v00, name, err));
-        TRY(value(j, "v01", rgb, t->bilerp.v01, name, err));
-        TRY(value(j, "v10", rgb, t->bilerp.v10, name, err));
-        return value(j, "v11", rgb, t->bilerp.v11, name, err);
-    case TS_TEXTURE_UV:
-        ok = mapping2d(j, &t->uv.map);
-        break;
-    case TS_TEXTURE_CHECKERBOARD2D:
-        TRY(child(w, j, "tex1", t->checkerboard2d.tex1, name, err));
-        TRY(child(w, j, "tex2", t->checkerboard2d.tex2, name, err));
-        ok = ts_jw_number(j, "dimension", 2) && mapping2d(j, &t->checkerboard2d.map) &&
-             ts_jw_add(j, "aamode", cJSON_CreateString(t->checkerboard2d.closed_form ? "closedform" : "none"));
-        break;
-    case TS_TEXTURE_CHECKERBOARD3D:
-        TRY(child(w, j, "tex1", t->checkerboard3d.tex1, name, err));
-        TRY(child(w, j, "tex2", t->checkerboard3d.tex2, name, err));
-        ok = ts_jw_number(j, "dimension", 3) && ts_jw_matrix(j, "world_to_texture", &t->checkerboard3d.map.world_to_texture);
-        break;
-    case TS_TEXTURE_DOTS:
-        TRY(child(w, j, "inside", t->dots.inside, name, err));
-        TRY(child(w, j, "outside", t->dots.outside, name, err));
-        ok = mapping2d(j, &t->dots.map);
-        break;
-    case TS_TEXTURE_FBM:
-    case TS_TEXTURE_WRINKLED:
-        ok = ts_jw_number(j, "octaves", t->fbm.octaves) && ts_jw_number(j, "roughness", t->fbm.omega) &&
-             ts_jw_matrix(j, "world_to_texture", &t->fbm.map.world_to_texture);
-        break;
-    case TS_TEXTURE_WINDY:
-        ok = ts_jw_matrix(j, "world_to_texture", &t->windy.map.world_to_texture);
-        break;
-    case TS_TEXTURE_MARBLE:
-        ok = ts_jw_number(j, "octaves", t->marble.octaves) && ts_jw_number(j, "roughness", t->marble.omega) &&
-             ts_jw_number(j, "scale", t->marble.scale) && ts_jw_number(j, "variation", t->marble.variation) &&
-             ts_jw_matrix(j, "world_to_texture", &t->marble.map.world_to_texture);
-        break;
-    case TS_TEXTURE_IMAGEMAP: {
-        const char *file;
-        ts_texture_image_options opt;
-        if (!ts_texture_cache_source(w->cache, t->image.mipmap, &file, &opt))
-            return ts_error_set(err, TS_ERR_INTERNAL,
-                                "texture \"%s\": its image map is not one of the scene's texture cache", name);
-        static const char *const wraps[] = {"repeat", "black", "clamp"};
-        ok = mapping2d(j, &t->image.map) && ts_jw_add(j, "file", cJSON_CreateString(file)) &&
-             ts_jw_add(j, "wrap", cJSON_CreateString(wraps[opt.wrap])) &&
-             ts_jw_add(j, "trilinear", cJSON_CreateBool(t->image.trilinear)) &&
-             ts_jw_number(j, "max_anisotropy", t->image.max_anisotropy) && ts_jw_number(j, "scale", opt.scale) &&
-             ts_jw_add(j, "gamma", cJSON_CreateBool(opt.gamma)) && ts_jw_add(j, "invert", cJSON_CreateBool(t->image.invert));
-        break;
+    bool rgb = t->is_rgb;
+    ts_texture *u = (ts_texture *)t;
+    if ((d->flags & TS_TDESC_MAP_FIRST) && !write_mapping(j, d, t)) return nomem(err);
+    for (int i = 0; i < d->n_params; i++) {
+        const ts_texture_param *p = &d->params[i];
+        switch (p->kind) {
+        case TS_TPARAM_CHILD:
+        case TS_TPARAM_AMOUNT: TRY(child(w, j, p->key, *ts_tparam_texture(u, p), name, err)); break;
+        case TS_TPARAM_VALUE: TRY(value(j, p->key, rgb, *ts_tparam_rgb(u, p), name, err)); break;
+        case TS_TPARAM_NUMBER:
+            if (!ts_jw_number(j, p->key, *ts_tparam_float(u, p))) return nomem(err);
+            break;
+        case TS_TPARAM_OCTAVES:
+            if (!ts_jw_number(j, p->key, *ts_tparam_octaves(u, p)) || !ts_jw_number(j, "roughness", *ts_tparam_omega(u, p)))
+                return nomem(err);
+            break;
+        }
     }
-    }
-    return ok ? TS_OK : nomem(err);
+    if (d->dimension && !ts_jw_number(j, "dimension", d->dimension)) return nomem(err);
+    if (!(d->flags & TS_TDESC_MAP_FIRST) && !write_mapping(j, d, t)) return nomem(err);
+    if ((d->flags & TS_TDESC_AAMODE) &&
+        !ts_jw_add(j, "aamode", cJSON_CreateString(t->checkerboard2d.closed_form ? "closedform" : "none")))
+        return nomem(err);
+    if (d->flags & TS_TDESC_IMAGE) TRY(write_image(w, j, t, name, err));
+    return TS_OK;
 }
 
 ts_status ts_json_texture_write(ts_json_texture_writer *w, const ts_texture *t, const char *want, ts_error *err)

@@ -8,7 +8,14 @@
 
 #include "pbrt3/pbrt_lexer.h"
 #include "textures/noise.h"
+#include "textures/texture_desc.h"
 #include "textures/texture_image.h"
+
+#define TRY(expr)                          \
+    do {                                   \
+        ts_status st_ = (expr);            \
+        if (st_ != TS_OK) return st_;      \
+    } while (0)
 
 /* What the making of one texture needs to word its errors. */
 typedef struct maker {
@@ -183,7 +190,6 @@ static ts_texture_mapping3d map3d(const maker *m)
 static ts_status make_imagemap(const maker *m, ts_texture *t, ts_error *err)
 {
     ts_status st;
-    if ((st = map2d(m, &t->image.map, err))) return st;
     float max_aniso, scale;
     bool trilinear, invert, gamma;
     int wrap = 0;
@@ -221,117 +227,70 @@ static ts_status make_imagemap(const maker *m, ts_texture *t, ts_error *err)
     return TS_OK;
 }
 
+/* One row of the type's description (textures/texture_desc.h) as pbrt-v3 reads it: a
+ * texture parameter, a value (read as a value, FindFloat / FindSpectrum), a finite number. */
+static ts_status texture_param(const maker *m, const ts_texture_param *p, ts_texture *t, ts_error *err)
+{
+    switch (p->kind) {
+    case TS_TPARAM_CHILD: return child(m, p->pbrt3, p->pbrt3_def, ts_tparam_texture(t, p), err);
+    case TS_TPARAM_AMOUNT:
+        return param_texture(m->tp, m->ps, p->pbrt3, false, ts_rgb_gray(p->pbrt3_def), ts_tparam_texture(t, p), err);
+    case TS_TPARAM_VALUE: {
+        ts_rgb *dst = ts_tparam_rgb(t, p);
+        if (m->rgb) return ts_pbrt_find_rgb(m->ps, p->pbrt3, ts_rgb_gray(p->pbrt3_def), dst, err);
+        float v;
+        TRY(ts_pbrt_find_float(m->ps, p->pbrt3, p->pbrt3_def, &v, err));
+        *dst = ts_rgb_gray(v);
+        return TS_OK;
+    }
+    case TS_TPARAM_NUMBER: return find_finite(m, p->pbrt3, p->pbrt3_def, ts_tparam_float(t, p), err);
+    case TS_TPARAM_OCTAVES: return find_octaves(m, ts_tparam_octaves(t, p), ts_tparam_omega(t, p), err);
+    }
+    return TS_OK;
+}
+
+/* pbrt-v3's Texture def: the type whose description names its class (a checkerboard by
+ * its "dimension"), read row by row. */
 static ts_status make_one(const ts_texture_pbrt *tp, ts_pbrt_texture *def, const ts_texture **out,
                           ts_error *err)
 {
     maker m = {.tp = tp, .def = def, .ps = &def->params, .rgb = !def->is_float};
-    ts_texture t = {.is_rgb = m.rgb};
     const char *cls = def->class_name;
     ts_status st = TS_OK;
-    if (strcmp(cls, "constant") == 0) {
-        /* pbrt-v3 reads "value" as a value here (FindFloat / FindSpectrum), not a texture. */
-        if (m.rgb) {
-            ts_rgb v;
-            if ((st = ts_pbrt_find_rgb(m.ps, "value", ts_rgb_gray(1), &v, err))) return st;
-            t = ts_texture_constant_rgb(v);
-        } else {
-            float v;
-            if ((st = ts_pbrt_find_float(m.ps, "value", 1, &v, err))) return st;
-            t = ts_texture_constant_float(v);
-        }
-    } else if (strcmp(cls, "scale") == 0) {
-        t.type = TS_TEXTURE_SCALE;
-        if ((st = child(&m, "tex1", 1, &t.scale.tex1, err)) ||
-            (st = child(&m, "tex2", 1, &t.scale.tex2, err)))
-            return st;
-    } else if (strcmp(cls, "mix") == 0) {
-        t.type = TS_TEXTURE_MIX;
-        if ((st = child(&m, "tex1", 0, &t.mix.tex1, err)) || (st = child(&m, "tex2", 1, &t.mix.tex2, err)) ||
-            (st = param_texture(tp, m.ps, "amount", false, ts_rgb_gray(0.5f), &t.mix.amount, err)))
-            return st;
-    } else if (strcmp(cls, "bilerp") == 0) {
-        t.type = TS_TEXTURE_BILERP;
-        if ((st = map2d(&m, &t.bilerp.map, err))) return st;
-        const char *names[4] = {"v00", "v01", "v10", "v11"};
-        ts_rgb *dst[4] = {&t.bilerp.v00, &t.bilerp.v01, &t.bilerp.v10, &t.bilerp.v11};
-        for (int i = 0; i < 4; i++) {
-            float def_v = (i == 1 || i == 3) ? 1.0f : 0.0f;
-            if (m.rgb) {
-                st = ts_pbrt_find_rgb(m.ps, names[i], ts_rgb_gray(def_v), dst[i], err);
-            } else {
-                float v;
-                st = ts_pbrt_find_float(m.ps, names[i], def_v, &v, err);
-                *dst[i] = ts_rgb_gray(v);
-            }
-            if (st) return st;
-        }
-    } else if (strcmp(cls, "uv") == 0) {
-        if (!m.rgb)
-            return tex_error(&m, err, TS_ERR_INVALID,
-                             "the uv texture is a color texture in pbrt-v3 (declare it "
-                             "\"color\" or \"spectrum\", not \"float\")");
-        t.type = TS_TEXTURE_UV;
-        if ((st = map2d(&m, &t.uv.map, err))) return st;
-    } else if (strcmp(cls, "checkerboard") == 0) {
-        int32_t dim;
-        if ((st = ts_pbrt_find_int(m.ps, "dimension", 2, &dim, err))) return st;
-        if (dim != 2 && dim != 3)
-            return ts_pbrt_param_error(m.ps, ts_pbrt_params_get(m.ps, "dimension"), err, TS_ERR_INVALID,
-                                       "must be 2 or 3, got %d", (int)dim);
-        const ts_texture *t1, *t2;
-        if ((st = child(&m, "tex1", 1, &t1, err)) || (st = child(&m, "tex2", 0, &t2, err))) return st;
-        if (dim == 2) {
-            t.type = TS_TEXTURE_CHECKERBOARD2D;
-            t.checkerboard2d.tex1 = t1, t.checkerboard2d.tex2 = t2;
-            static const char *const modes[] = {"closedform", "none"};
-            int mode = 0;
-            if ((st = map2d(&m, &t.checkerboard2d.map, err)) ||
-                (st = find_choice(&m, "aamode", modes, 2, &mode, err)))
-                return st;
-            t.checkerboard2d.closed_form = mode == 0;
-        } else {
-            t.type = TS_TEXTURE_CHECKERBOARD3D;
-            t.checkerboard3d.tex1 = t1, t.checkerboard3d.tex2 = t2;
-            t.checkerboard3d.map = map3d(&m);
-        }
-    } else if (strcmp(cls, "dots") == 0) {
-        /* pbrt-v3's CreateDotsFloatTexture / CreateDotsSpectrumTexture pass "inside" where
-         * DotsTexture takes its outside texture and "outside" where it takes the inside one:
-         * pbrt-v3 paints the dots with "outside". A .pbrt file means what pbrt-v3 renders,
-         * so the two are swapped here (the importer warns; JSON keeps the names' meaning). */
-        t.type = TS_TEXTURE_DOTS;
-        if ((st = child(&m, "inside", 1, &t.dots.outside, err)) ||
-            (st = child(&m, "outside", 0, &t.dots.inside, err)) || (st = map2d(&m, &t.dots.map, err)))
-            return st;
-    } else if (strcmp(cls, "fbm") == 0 || strcmp(cls, "wrinkled") == 0) {
-        t.type = cls[0] == 'f' ? TS_TEXTURE_FBM : TS_TEXTURE_WRINKLED;
-        t.fbm.map = map3d(&m);
-        if ((st = find_octaves(&m, &t.fbm.octaves, &t.fbm.omega, err))) return st;
-    } else if (strcmp(cls, "windy") == 0) {
-        t.type = TS_TEXTURE_WINDY;
-        t.windy.map = map3d(&m);
-    } else if (strcmp(cls, "marble") == 0) {
-        if (!m.rgb)
-            return tex_error(&m, err, TS_ERR_INVALID,
-                             "the marble texture is a color texture in pbrt-v3 (declare it "
-                             "\"color\" or \"spectrum\", not \"float\")");
-        t.type = TS_TEXTURE_MARBLE;
-        t.marble.map = map3d(&m);
-        if ((st = find_octaves(&m, &t.marble.octaves, &t.marble.omega, err)) ||
-            (st = find_finite(&m, "scale", 1, &t.marble.scale, err)) ||
-            (st = find_finite(&m, "variation", 0.2f, &t.marble.variation, err)))
-            return st;
-    } else if (strcmp(cls, "imagemap") == 0) {
-        t.type = TS_TEXTURE_IMAGEMAP;
-        if ((st = make_imagemap(&m, &t, err))) return st;
-    } else if (strcmp(cls, "ptex") == 0) {
+    if (strcmp(cls, "ptex") == 0)
         return tex_error(
             &m, err, TS_ERR_UNSUPPORTED,
             "ptex textures are not supported (image textures are read from .exr, .png, .tga and .pfm "
             "files)");
-    } else {
-        return tex_error(&m, err, TS_ERR_INVALID, "unknown texture class \"%s\"", cls);
+    const ts_texture_desc *d = ts_texture_desc_by_pbrt3(cls, 2);
+    if (!d) return tex_error(&m, err, TS_ERR_INVALID, "unknown texture class \"%s\"", cls);
+    if (d->flags & TS_TDESC_RGB_ONLY && !m.rgb)
+        return tex_error(&m, err, TS_ERR_INVALID,
+                         "the %s texture is a color texture in pbrt-v3 (declare it "
+                         "\"color\" or \"spectrum\", not \"float\")",
+                         cls);
+    if (d->dimension) {
+        int32_t dim;
+        TRY(ts_pbrt_find_int(m.ps, "dimension", 2, &dim, err));
+        if (dim != 2 && dim != 3)
+            return ts_pbrt_param_error(m.ps, ts_pbrt_params_get(m.ps, "dimension"), err, TS_ERR_INVALID,
+                                       "must be 2 or 3, got %d", (int)dim);
+        d = ts_texture_desc_by_pbrt3(cls, dim);
     }
+    ts_texture t = {.is_rgb = m.rgb, .type = d->type};
+    for (int i = 0; i < d->n_params; i++)
+        TRY(texture_param(&m, &d->params[i], &t, err));
+    if (d->flags & TS_TDESC_CONSTANT)
+        t = m.rgb ? ts_texture_constant_rgb(t.constant.value) : ts_texture_constant_float(t.constant.value.r);
+    if (d->flags & TS_TDESC_MAP2D) TRY(map2d(&m, ts_tdesc_map2d(&t, d), err));
+    if (d->flags & TS_TDESC_MAP3D) *ts_tdesc_map3d(&t, d) = map3d(&m);
+    if (d->flags & TS_TDESC_AAMODE) {
+        static const char *const modes[] = {"closedform", "none"};
+        int mode = 0;
+        TRY(find_choice(&m, "aamode", modes, 2, &mode, err));
+        t.checkerboard2d.closed_form = mode == 0;
+    }
+    if (d->flags & TS_TDESC_IMAGE) TRY(make_imagemap(&m, &t, err));
     if ((st = make(tp, &t, out, err))) {
         if (st != TS_ERR_NOMEM) {
             char msg[TS_ERROR_MAX];
