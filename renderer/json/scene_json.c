@@ -22,6 +22,7 @@
 #include "mesh/mesh_subdiv.h"
 #include "json/scene_digest.h"
 #include "build/light_desc.h"
+#include "build/medium_desc.h"
 #include "json/scene_json_texture.h"
 #include "materials/material_desc.h"
 #include "core/scene_path.h"
@@ -62,42 +63,65 @@ static ts_status float_array(loader *ld, const cJSON *obj, const char *path, con
 /* ---------------------------------------------------------------- media */
 
 /* "media": name → medium (docs/design.md §4): pbrt-v3's homogeneous and heterogeneous
- * (here "grid") media, checked by the builder. */
+ * (here "grid") media, their keys, kinds and defaults from the type's description
+ * (build/medium_desc.h), checked by the builder. */
 static ts_status parse_medium(loader *ld, const cJSON *m, const char *path)
 {
-    static const char *const types[] = {"homogeneous", "grid", NULL};
+    const char *types[TS_MEDIUM_DESC_COUNT + 1];
+    for (int i = 0; i < TS_MEDIUM_DESC_COUNT; i++)
+        types[i] = ts_medium_descs[i].name;
+    types[TS_MEDIUM_DESC_COUNT] = NULL;
     int type = 0;
     TRY(ts_json_enum(m, path, "type", true, types, &type, ld->err));
-    static const char *const hkeys[] = {"type", "sigma_a", "sigma_s", "preset", "scale", "g", NULL};
-    static const char *const gkeys[] = {"type", "sigma_a", "sigma_s", "preset", "scale", "g", "nx", "ny", "nz",
-                                        "density", "p0", "p1", "transform", NULL};
-    TRY(ts_json_check_object(m, path, type ? gkeys : hkeys, ld->err));
-    ts_medium_desc d = {.type = type ? TS_MEDIUM_GRID : TS_MEDIUM_HOMOGENEOUS, .scale = 1};
-    TRY(ts_json_string(m, path, "preset", false, &d.preset, ld->err));
-    d.has_sigma_a = cJSON_GetObjectItemCaseSensitive(m, "sigma_a") != NULL;
-    d.has_sigma_s = cJSON_GetObjectItemCaseSensitive(m, "sigma_s") != NULL;
-    TRY(ts_json_rgb(m, path, "sigma_a", false, TS_J_ANY, &d.sigma_a, ld->err));
-    TRY(ts_json_rgb(m, path, "sigma_s", false, TS_J_ANY, &d.sigma_s, ld->err));
-    TRY(ts_json_number(m, path, "scale", false, TS_J_ANY, &d.scale, ld->err));
-    TRY(ts_json_number(m, path, "g", false, TS_J_ANY, &d.g, ld->err));
+    const ts_medium_type_desc *t = &ts_medium_descs[type];
+    const char *keys[24];
+    int n = 0;
+    keys[n++] = "type";
+    for (int i = 0; i < t->n_params && n < 20; i++)
+        keys[n++] = t->params[i].key;
+    if (t->flags & TS_VDESC_TRANSFORM) keys[n++] = "transform";
+    keys[n] = NULL;
+    TRY(ts_json_check_object(m, path, keys, ld->err));
+    ts_medium_desc d = {.type = t->type};
     float *density = NULL;
-    if (type) {
-        int64_t n[3] = {1, 1, 1};
-        static const char *const nk[] = {"nx", "ny", "nz"};
-        for (int k = 0; k < 3; k++) TRY(ts_json_int(m, path, nk[k], true, 1, 1 << 20, &n[k], ld->err));
-        d.nx = (uint32_t)n[0], d.ny = (uint32_t)n[1], d.nz = (uint32_t)n[2];
-        ts_vec3 p0 = {0, 0, 0}, p1 = {1, 1, 1};
-        TRY(ts_json_vec3(m, path, "p0", false, false, &p0, ld->err));
-        TRY(ts_json_vec3(m, path, "p1", false, false, &p1, ld->err));
-        d.p0 = ts_dvec3_from(p0);
-        d.p1 = ts_dvec3_from(p1);
-        TRY(parse_transform(ld, m, path, &d.to_world));
-        uint32_t count = 0;
-        TRY(float_array(ld, m, path, "density", 1, true, &density, &count));
-        d.density = density;
-        d.n_density = count;
+    ts_status st = TS_OK;
+    for (int i = 0; i < t->n_params && !st; i++) {
+        const ts_medium_param *p = &t->params[i];
+        void *f = ts_vparam_field(&d, p);
+        switch (p->kind) {
+        case TS_VPARAM_RGB:
+            *ts_vparam_has(&d, p) = cJSON_GetObjectItemCaseSensitive(m, p->key) != NULL;
+            *(ts_rgb *)f = ts_rgb_gray((float)p->def[0]);
+            st = ts_json_rgb(m, path, p->key, false, TS_J_ANY, f, ld->err);
+            break;
+        case TS_VPARAM_NUMBER:
+            *(double *)f = p->def[0];
+            st = ts_json_number(m, path, p->key, false, TS_J_ANY, f, ld->err);
+            break;
+        case TS_VPARAM_STRING: st = ts_json_string(m, path, p->key, false, (const char **)f, ld->err); break;
+        case TS_VPARAM_COUNT: {
+            int64_t v = (int64_t)p->def[0];
+            st = ts_json_int(m, path, p->key, true, 1, 1 << 20, &v, ld->err);
+            *(uint32_t *)f = (uint32_t)v;
+            break;
+        }
+        case TS_VPARAM_POINT: {
+            ts_vec3 v = {(float)p->def[0], (float)p->def[1], (float)p->def[2]};
+            st = ts_json_vec3(m, path, p->key, false, false, &v, ld->err);
+            *(ts_dvec3 *)f = ts_dvec3_from(v);
+            break;
+        }
+        case TS_VPARAM_DENSITY: {
+            uint32_t count = 0;
+            st = float_array(ld, m, path, p->key, 1, true, &density, &count);
+            d.density = density;
+            d.n_density = count;
+            break;
+        }
+        }
     }
-    ts_status st = at(ts_scene_builder_add_medium(ld->b, path + strlen("media."), &d, NULL, ld->err), path, ld->err);
+    if (!st && (t->flags & TS_VDESC_TRANSFORM)) st = parse_transform(ld, m, path, &d.to_world);
+    if (!st) st = at(ts_scene_builder_add_medium(ld->b, path + strlen("media."), &d, NULL, ld->err), path, ld->err);
     free(density);
     return st;
 }

@@ -19,6 +19,7 @@
 #include "mesh/mesh_read.h"
 #include "mesh/mesh_subdiv.h"
 #include "build/light_desc.h"
+#include "build/medium_desc.h"
 #include "materials/material_desc.h"
 #include "spectrum/spectrum.h"
 #include "json/json_write.h"
@@ -1650,68 +1651,87 @@ static bool find_medium(const imp *im, const char *name, uint32_t *id, size_t *k
 
 /* pbrt-v3's MakeMedium (api.cpp): "homogeneous" and "heterogeneous" (GridDensityMedium),
  * with its parameters and defaults; the builder checks the values. */
+/* pbrt-v3's MakeNamedMedium k: the type whose description names its "string type"
+ * (build/medium_desc.h), read row by row; the builder checks every value. */
 static ts_status map_medium(imp *im, size_t k)
 {
     ts_pbrt_medium *m = &im->s->media[k];
     ts_pbrt_params *ps = &m->params;
-    bool grid = strcmp(m->type, "heterogeneous") == 0;
-    if (!grid && strcmp(m->type, "homogeneous") != 0)
+    const ts_medium_type_desc *t = ts_medium_desc_by_pbrt3(m->type);
+    if (!t)
         return derr(im, ps, m->loc, TS_ERR_UNSUPPORTED,
                     "has \"string type\" \"%s\", not a pbrt-v3 medium (homogeneous, heterogeneous)", m->type);
-    ts_medium_desc d = {.type = grid ? TS_MEDIUM_GRID : TS_MEDIUM_HOMOGENEOUS};
-    TRY(ts_pbrt_find_string(ps, "preset", NULL, &d.preset, im->err));
-    if (d.preset && !*d.preset) d.preset = NULL; /* pbrt-v3: "" is no preset */
-    d.has_sigma_a = ts_pbrt_params_get(ps, "sigma_a") != NULL;
-    d.has_sigma_s = ts_pbrt_params_get(ps, "sigma_s") != NULL;
-    TRY(get_rgb(im, ps, "sigma_a", ts_rgb_gray(0), &d.sigma_a));
-    TRY(get_rgb(im, ps, "sigma_s", ts_rgb_gray(0), &d.sigma_s));
-    float scale, g;
-    TRY(ts_pbrt_find_float(ps, "scale", 1, &scale, im->err));
-    TRY(ts_pbrt_find_float(ps, "g", 0, &g, im->err));
-    d.scale = scale;
-    d.g = g;
-    if (grid) {
-        int32_t n[3];
-        TRY(ts_pbrt_find_int(ps, "nx", 1, &n[0], im->err));
-        TRY(ts_pbrt_find_int(ps, "ny", 1, &n[1], im->err));
-        TRY(ts_pbrt_find_int(ps, "nz", 1, &n[2], im->err));
-        for (int a = 0; a < 3; a++)
-            if (n[a] < 1)
-                return derr(im, ps, m->loc, TS_ERR_INVALID, "\"integer n%c\" must be at least 1, got %d", "xyz"[a],
-                            n[a]);
-        d.nx = (uint32_t)n[0], d.ny = (uint32_t)n[1], d.nz = (uint32_t)n[2];
-        size_t count;
-        TRY(ts_pbrt_find_floats(ps, "density", &d.density, &count, im->err));
-        if (!d.density)
-            return derr(im, ps, m->loc, TS_ERR_INVALID, "has no \"float density\" values (pbrt-v3 refuses it too)");
-        d.n_density = count;
-        ts_vec3 p0, p1;
-        TRY(ts_pbrt_find_point3(ps, "p0", (ts_vec3){0, 0, 0}, &p0, im->err));
-        TRY(ts_pbrt_find_point3(ps, "p1", (ts_vec3){1, 1, 1}, &p1, im->err));
-        d.p0 = ts_dvec3_from(p0);
-        d.p1 = ts_dvec3_from(p1);
-        if (!user_xform(m->medium_to_world, &d.to_world))
-            return derr(im, ps, m->loc, TS_ERR_INVALID, "the transformation matrix is singular");
+    ts_medium_desc d = {.type = t->type};
+    for (int i = 0; i < t->n_params; i++) {
+        const ts_medium_param *p = &t->params[i];
+        void *f = ts_vparam_field(&d, p);
+        switch (p->kind) {
+        case TS_VPARAM_RGB:
+            *ts_vparam_has(&d, p) = ts_pbrt_params_get(ps, p->key) != NULL;
+            TRY(get_rgb(im, ps, p->key, ts_rgb_gray((float)p->def[0]), f));
+            break;
+        case TS_VPARAM_NUMBER: {
+            float v;
+            TRY(ts_pbrt_find_float(ps, p->key, (float)p->def[0], &v, im->err));
+            *(double *)f = v;
+            break;
+        }
+        case TS_VPARAM_STRING:
+            TRY(ts_pbrt_find_string(ps, p->key, NULL, (const char **)f, im->err));
+            if (*(const char **)f && !**(const char **)f) *(const char **)f = NULL; /* pbrt-v3: "" is none */
+            break;
+        case TS_VPARAM_COUNT: {
+            int32_t v;
+            TRY(ts_pbrt_find_int(ps, p->key, (int32_t)p->def[0], &v, im->err));
+            if (v < 1) return derr(im, ps, m->loc, TS_ERR_INVALID, "\"integer %s\" must be at least 1, got %d", p->key, v);
+            *(uint32_t *)f = (uint32_t)v;
+            break;
+        }
+        case TS_VPARAM_POINT: {
+            ts_vec3 v;
+            TRY(ts_pbrt_find_point3(ps, p->key, (ts_vec3){(float)p->def[0], (float)p->def[1], (float)p->def[2]}, &v,
+                                    im->err));
+            *(ts_dvec3 *)f = ts_dvec3_from(v);
+            break;
+        }
+        case TS_VPARAM_DENSITY: {
+            size_t count;
+            TRY(ts_pbrt_find_floats(ps, p->key, &d.density, &count, im->err));
+            if (!d.density)
+                return derr(im, ps, m->loc, TS_ERR_INVALID, "has no \"float %s\" values (pbrt-v3 refuses it too)", p->key);
+            d.n_density = count;
+            break;
+        }
+        }
     }
+    if ((t->flags & TS_VDESC_TRANSFORM) && !user_xform(m->medium_to_world, &d.to_world))
+        return derr(im, ps, m->loc, TS_ERR_INVALID, "the transformation matrix is singular");
     warn_unused(im, ps);
     TRY(at(im, ts_scene_builder_add_medium(im->b, NULL, &d, &im->medium_id[k], im->err), ps, m->loc));
     if (!im->jmedia) return TS_OK;
-    /* The document holds the medium's parameters as given (the JSON front end resolves the
-     * preset, the defaults and the scale as this one did). */
+    /* The document holds the medium's parameters as given, in the description's order (the
+     * JSON front end resolves the preset, the defaults and the scale as this one did). */
     char name[260];
     medium_doc_name(im, k, name, sizeof name);
     cJSON *j = cJSON_CreateObject();
-    bool ok = j && ts_jw_string(j, "type", grid ? "grid" : "homogeneous") && ts_jw_rgb(j, "sigma_a", d.sigma_a) &&
-              ts_jw_rgb(j, "sigma_s", d.sigma_s) && ts_jw_number(j, "scale", d.scale) && ts_jw_number(j, "g", d.g) &&
-              (!d.preset || ts_jw_string(j, "preset", d.preset));
-    if (ok && !d.has_sigma_a) cJSON_DeleteItemFromObject(j, "sigma_a");
-    if (ok && !d.has_sigma_s) cJSON_DeleteItemFromObject(j, "sigma_s");
-    if (ok && grid) {
-        const ts_vec3 p0 = {(float)d.p0.x, (float)d.p0.y, (float)d.p0.z}, p1 = {(float)d.p1.x, (float)d.p1.y, (float)d.p1.z};
-        ok = ts_jw_number(j, "nx", d.nx) && ts_jw_number(j, "ny", d.ny) && ts_jw_number(j, "nz", d.nz) &&
-             ts_jw_add(j, "density", ts_jw_floats(d.density, d.n_density)) && ts_jw_vec3(j, "p0", p0) &&
-             ts_jw_vec3(j, "p1", p1) && ts_jw_add(j, "transform", ts_jw_transform(m->medium_to_world));
+    bool ok = j && ts_jw_string(j, "type", t->name);
+    for (int i = 0; ok && i < t->n_params; i++) {
+        const ts_medium_param *p = &t->params[i];
+        void *f = ts_vparam_field(&d, p);
+        switch (p->kind) {
+        case TS_VPARAM_RGB: ok = !*ts_vparam_has(&d, p) || ts_jw_rgb(j, p->key, *(ts_rgb *)f); break;
+        case TS_VPARAM_NUMBER: ok = ts_jw_number(j, p->key, *(double *)f); break;
+        case TS_VPARAM_STRING: ok = !*(const char **)f || ts_jw_string(j, p->key, *(const char **)f); break;
+        case TS_VPARAM_COUNT: ok = ts_jw_number(j, p->key, *(uint32_t *)f); break;
+        case TS_VPARAM_POINT: {
+            const ts_dvec3 *v = f;
+            ok = ts_jw_vec3(j, p->key, (ts_vec3){(float)v->x, (float)v->y, (float)v->z});
+            break;
+        }
+        case TS_VPARAM_DENSITY: ok = ts_jw_add(j, p->key, ts_jw_floats(d.density, d.n_density)); break;
+        }
     }
+    if (ok && (t->flags & TS_VDESC_TRANSFORM)) ok = ts_jw_add(j, "transform", ts_jw_transform(m->medium_to_world));
     if (!ok || !ts_jw_add(im->jmedia, name, j)) {
         if (!ok) cJSON_Delete(j);
         return nomem(im);

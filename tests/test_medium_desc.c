@@ -1,0 +1,118 @@
+/* test_medium_desc.c — the one description per medium type (build/medium_desc.h) against
+ * the JSON schema (proto/scene.schema.json: each type's keys, its required keys and each
+ * row's default) and against pbrt-v3's names (MakeNamedMedium's "homogeneous" and
+ * "heterogeneous") and defaults, written out here from pbrt-v3's src/core/api.cpp and
+ * media/grid.cpp (an independent copy). Every check is exact. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+// clang-format off
+#include <cmocka.h>
+// clang-format on
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cjson/cJSON.h>
+
+#include "build/medium_desc.h"
+
+static cJSON *load_schema(void)
+{
+    const char *src = getenv("TS_SOURCE_DIR");
+    if (!src) fail_msg("TS_SOURCE_DIR is not set (run through ctest)");
+    char path[4096];
+    snprintf(path, sizeof path, "%s/proto/scene.schema.json", src);
+    FILE *f = fopen(path, "rb");
+    if (!f) fail_msg("cannot open %s", path);
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *buf = malloc((size_t)n + 1);
+    assert_non_null(buf);
+    assert_int_equal(fread(buf, 1, (size_t)n, f), (size_t)n);
+    buf[n] = 0;
+    fclose(f);
+    cJSON *s = cJSON_Parse(buf);
+    free(buf);
+    assert_non_null(s);
+    return s;
+}
+
+static bool required(const cJSON *alt, const char *key)
+{
+    const cJSON *e;
+    cJSON_ArrayForEach(e, cJSON_GetObjectItemCaseSensitive(alt, "required"))
+    if (cJSON_IsString(e) && strcmp(e->valuestring, key) == 0) return true;
+    return false;
+}
+
+static void test_schema_agrees(void **state)
+{
+    (void)state;
+    cJSON *schema = load_schema();
+    const cJSON *medium = cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(schema, "$defs"), "medium");
+    for (int t = 0; t < TS_MEDIUM_DESC_COUNT; t++) {
+        const ts_medium_type_desc *d = &ts_medium_descs[t];
+        const cJSON *alt = NULL, *e;
+        cJSON_ArrayForEach(e, cJSON_GetObjectItemCaseSensitive(medium, "oneOf"))
+        {
+            const cJSON *c = cJSON_GetObjectItemCaseSensitive(
+                cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(e, "properties"), "type"), "const");
+            if (cJSON_IsString(c) && strcmp(c->valuestring, d->name) == 0) alt = e;
+        }
+        if (!alt) fail_msg("the schema has no medium of type %s", d->name);
+        const cJSON *props = cJSON_GetObjectItemCaseSensitive(alt, "properties");
+        int n = 1 + d->n_params + ((d->flags & TS_VDESC_TRANSFORM) ? 1 : 0);
+        if (cJSON_GetArraySize(props) != n) fail_msg("%s: the schema has %d keys, the table %d", d->name, cJSON_GetArraySize(props), n);
+        if ((d->flags & TS_VDESC_TRANSFORM) && !cJSON_GetObjectItemCaseSensitive(props, "transform"))
+            fail_msg("%s: the schema has no transform", d->name);
+        for (int i = 0; i < d->n_params; i++) {
+            const ts_medium_param *p = &d->params[i];
+            const cJSON *sp = cJSON_GetObjectItemCaseSensitive(props, p->key);
+            if (!sp) fail_msg("%s: the table has %s, the schema does not", d->name, p->key);
+            bool req = p->kind == TS_VPARAM_COUNT || p->kind == TS_VPARAM_DENSITY;
+            if (req != required(alt, p->key)) fail_msg("%s.%s: required in one of the table and the schema only", d->name, p->key);
+            const cJSON *def = cJSON_GetObjectItemCaseSensitive(sp, "default");
+            if (p->kind == TS_VPARAM_NUMBER && (!cJSON_IsNumber(def) || def->valuedouble != p->def[0]))
+                fail_msg("%s.%s: the schema's default differs from the table's %g", d->name, p->key, p->def[0]);
+            if (p->kind == TS_VPARAM_POINT)
+                for (int k = 0; k < 3; k++)
+                    if (!cJSON_IsArray(def) || cJSON_GetArrayItem(def, k)->valuedouble != p->def[k])
+                        fail_msg("%s.%s: the schema's default differs from the table's", d->name, p->key);
+        }
+    }
+    cJSON_Delete(schema);
+}
+
+static void test_pbrt3_names_and_defaults(void **state)
+{
+    (void)state;
+    assert_int_equal(ts_medium_desc_by_pbrt3("homogeneous")->type, TS_MEDIUM_HOMOGENEOUS);
+    assert_int_equal(ts_medium_desc_by_pbrt3("heterogeneous")->type, TS_MEDIUM_GRID);
+    assert_null(ts_medium_desc_by_pbrt3("grid"));
+    static const struct {
+        const char *key;
+        double def[3];
+    } want[] = {{"scale", {1}}, {"g", {0}}, {"sigma_a", {0}}, {"sigma_s", {0}}, {"nx", {1}}, {"ny", {1}},
+                {"nz", {1}},    {"p0", {0, 0, 0}}, {"p1", {1, 1, 1}}};
+    const ts_medium_type_desc *grid = ts_medium_desc_by_pbrt3("heterogeneous");
+    for (size_t k = 0; k < sizeof want / sizeof *want; k++) {
+        const ts_medium_param *p = NULL;
+        for (int i = 0; i < grid->n_params; i++)
+            if (strcmp(grid->params[i].key, want[k].key) == 0) p = &grid->params[i];
+        if (!p) fail_msg("heterogeneous: no row %s", want[k].key);
+        for (int i = 0; i < 3; i++)
+            if (p->def[i] != want[k].def[i]) fail_msg("heterogeneous.%s: default differs from pbrt-v3's", want[k].key);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_schema_agrees),
+        cmocka_unit_test(test_pbrt3_names_and_defaults),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
