@@ -123,6 +123,19 @@ static const struct {
      "\"shapes\":[" FLOOR ",{\"type\":\"sphere\",\"center\":[0,0.5,0],\"radius\":0.5,\"material\":null,"
      "\"medium\":{\"inside\":\"fog\"}}],\"lights\":[{\"type\":\"point\",\"position\":[1,3,1],\"intensity\":10}]}",
      TS_EFFECT_DELTA_LIGHTS | TS_EFFECT_DIFFUSE | TS_EFFECT_INDIRECT | TS_EFFECT_MEDIA},
+    {"a sphere moving and a camera turning during the shutter, path",
+     "{\"tessera\":1,\"camera\":{\"from\":[0,2,6],\"to\":[0,0.5,0],\"fov\":40,\"shutter\":[0,1],"
+     "\"motion\":{\"start\":[],\"end\":[{\"rotate\":{\"angle\":3,\"axis\":[0,1,0]}}]}}," FILM
+     ",\"integrator\":{\"type\":\"path\"},\"materials\":{\"floor\":{\"type\":\"diffuse\"}},\"shapes\":[" FLOOR
+     ",{\"type\":\"sphere\",\"center\":[0,0.5,0],\"radius\":0.5,\"material\":\"floor\",\"motion\":{\"times\":[0,1],"
+     "\"transform\":[{\"translate\":[0.5,0,0]}]}}],\"lights\":[{\"type\":\"point\",\"position\":[1,3,1],\"intensity\":10}]}",
+     TS_EFFECT_DELTA_LIGHTS | TS_EFFECT_DIFFUSE | TS_EFFECT_INDIRECT | TS_EFFECT_MOTION},
+    {"motion outside the shutter: none",
+     "{\"tessera\":1,\"camera\":{\"from\":[0,2,6],\"to\":[0,0.5,0],\"fov\":40,\"shutter\":[2,3]}," FILM
+     ",\"integrator\":{\"type\":\"path\"},\"materials\":{\"floor\":{\"type\":\"diffuse\"}},\"shapes\":[" FLOOR
+     ",{\"type\":\"sphere\",\"center\":[0,0.5,0],\"radius\":0.5,\"material\":\"floor\",\"motion\":{\"times\":[0,1],"
+     "\"transform\":[{\"translate\":[0.5,0,0]}]}}],\"lights\":[{\"type\":\"point\",\"position\":[1,3,1],\"intensity\":10}]}",
+     TS_EFFECT_DELTA_LIGHTS | TS_EFFECT_DIFFUSE | TS_EFFECT_INDIRECT},
     {"nothing emits",
      "{\"tessera\":1," CAMERA "," FILM ",\"integrator\":{\"type\":\"path\"},"
      "\"materials\":{\"floor\":{\"type\":\"diffuse\"}},\"shapes\":[" FLOOR "]}",

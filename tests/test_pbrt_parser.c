@@ -694,17 +694,20 @@ static void test_options_motion_media(void **state)
     /* Media are recorded for the importer, without a warning (they are rendered). */
     assert_false(has_warning(s, "MakeNamedMedium"));
     assert_false(has_warning(s, "MediumInterface"));
-    assert_true(has_warning(s, "ActiveTransform EndTime: motion blur is not supported"));
-    assert_true(has_warning(s, "ActiveTransform StartTime: motion blur is not supported"));
-    /* the start transform is kept: Translate 5 under EndTime is dropped */
+    /* Motion blur: the two CTMs, each changed only while active, no warning. */
+    assert_false(has_warning(s, "ActiveTransform"));
     ts_dvec3 p = apply(s->shapes[0].object_to_world, 0, 0, 0);
     assert_true(p.x == 1);
+    assert_non_null(s->shapes[0].object_to_world_end);
+    p = apply(s->shapes[0].object_to_world_end, 0, 0, 0);
+    assert_true(p.x == 5);
     assert_string_equal(s->shapes[0].inside_medium, "fog");
     assert_string_equal(s->shapes[0].outside_medium, "fog");
     /* the active transform is restored by AttributeEnd */
     p = apply(s->shapes[1].object_to_world, 0, 0, 0);
     assert_true(p.x == 1 && p.y == 1);
-    assert_int_equal(s->warnings[0].loc.line, 11); /* the first: ActiveTransform EndTime */
+    p = apply(s->shapes[1].object_to_world_end, 0, 0, 0);
+    assert_true(p.x == 5 && p.y == 1);
     ts_pbrt_scene_destroy(s);
 }
 

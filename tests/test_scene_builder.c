@@ -107,6 +107,7 @@ static void test_same_scene_as_json(void **state)
     ts_film_desc film = {64, 48, {0.25f, 0.75f, 0, 0.5f}, TS_FILTER_MITCHELL, 2.0f};
     ok(ts_scene_builder_set_film(b, &film, &err), &err);
     ts_camera_desc cam = {TS_CAMERA_PERSPECTIVE, {0, 1, 6}, {0, 0, 0}, {0, 1, 0}, 40, 1, 0, 1};
+    cam.shutter_close = 1; /* the JSON front end's default shutter [0, 1] */
     ok(ts_scene_builder_set_camera(b, &cam, &err), &err);
     ts_sampler smp = {TS_SAMPLER_SOBOL, 3};
     ok(ts_scene_builder_set_sampler(b, &smp, 4, &err), &err);

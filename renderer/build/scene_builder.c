@@ -978,29 +978,122 @@ uint32_t ts_scene_builder_find_object(const ts_scene_builder *b, const char *nam
     return i == TS_NAME_MAP_NONE ? TS_NONE : i;
 }
 
-ts_status ts_scene_builder_add_instance(ts_scene_builder *b, uint32_t object, const ts_xform *to_world, ts_error *err)
+static bool finite_invertible(const ts_xform *x)
 {
-    TRY(usable(b, err));
+    const double(*m)[4] = x->m.m;
+    double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                 m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+    bool finite = isfinite(det);
+    for (int i = 0; i < 4; i++)
+        for (int j = 0; j < 4; j++) finite = finite && isfinite(m[i][j]) && isfinite(x->m_inv.m[i][j]);
+    return finite && det != 0;
+}
+
+/* An instance of object under to_world, moving (motion, in the arena) or not (NULL). */
+static ts_status push_instance(ts_scene_builder *b, uint32_t object, const ts_xform *to_world,
+                               const ts_anim_xform *motion, ts_error *err)
+{
     if (b->open_object != TS_NONE)
         return ts_error_set(err, TS_ERR_UNSUPPORTED,
                             "an instance inside object \"%s\": instances do not nest (nor do they in pbrt-v3)",
                             b->object_names[b->open_object]);
     if (object >= b->n_objects)
         return ts_error_set(err, TS_ERR_INVALID, "object: no object of id %u (%u were defined)", object, b->n_objects);
-    const double(*m)[4] = to_world->m.m;
-    double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
-                 m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-    bool finite = isfinite(det);
-    for (int i = 0; i < 4; i++)
-        for (int j = 0; j < 4; j++) finite = finite && isfinite(m[i][j]) && isfinite(to_world->m_inv.m[i][j]);
-    if (!finite || det == 0)
+    if (!finite_invertible(to_world))
         return ts_error_set(err, TS_ERR_INVALID, "transform: expected a finite, invertible transform");
     if ((uint64_t)b->n_instances + b->n_shapes >= b->lim.max_shapes)
         return ts_error_set(err, TS_ERR_LIMIT, "more than the limit of %u shapes and instances", b->lim.max_shapes);
     if (!grow((void **)&b->instances, &b->cap_instances, (size_t)b->n_instances + 1, sizeof *b->instances))
         return nomem(err, "the instances");
-    b->instances[b->n_instances++] = (ts_instance){object, *to_world};
+    b->instances[b->n_instances++] = (ts_instance){object, *to_world, motion};
     return TS_OK;
+}
+
+ts_status ts_scene_builder_add_instance(ts_scene_builder *b, uint32_t object, const ts_xform *to_world, ts_error *err)
+{
+    TRY(usable(b, err));
+    return push_instance(b, object, to_world, NULL, err);
+}
+
+/* The motion of start → end over [t0, t1] into the arena (*out NULL when the two are equal:
+ * no motion). */
+static ts_status make_motion(ts_scene_builder *b, const ts_xform *start, const ts_xform *end, double t0, double t1,
+                             const ts_anim_xform **out, ts_error *err)
+{
+    *out = NULL;
+    if (!finite_invertible(start))
+        return ts_error_set(err, TS_ERR_INVALID, "transform: expected a finite, invertible transform");
+    if (!finite_invertible(end))
+        return ts_error_set(err, TS_ERR_INVALID, "motion.transform: expected a finite, invertible transform");
+    if (!isfinite(t0) || !isfinite(t1))
+        return ts_error_set(err, TS_ERR_INVALID, "motion.times: expected finite times");
+    ts_anim_xform m;
+    if (!ts_anim_xform_init(&m, start, t0, end, t1)) {
+        if (!(t1 > t0))
+            return ts_error_set(err, TS_ERR_INVALID,
+                                "motion.times: the end time %g must be after the start time %g", t1, t0);
+        return ts_error_set(err, TS_ERR_INVALID, "motion.transform: an affine transform is needed to interpolate");
+    }
+    if (!m.animated) return TS_OK;
+    ts_anim_xform *copy = ts_arena_alloc(&b->s->arena, sizeof *copy, 16);
+    if (!copy) return nomem(err, "the motion");
+    *copy = m;
+    *out = copy;
+    return TS_OK;
+}
+
+ts_status ts_scene_builder_add_moving_instance(ts_scene_builder *b, uint32_t object, const ts_xform *start,
+                                               double t0, const ts_xform *end, double t1, ts_error *err)
+{
+    TRY(usable(b, err));
+    const ts_anim_xform *m;
+    TRY(make_motion(b, start, end, t0, t1, &m, err));
+    return push_instance(b, object, start, m, err);
+}
+
+ts_status ts_scene_builder_add_moving_shape(ts_scene_builder *b, const ts_shape_desc *d, const ts_xform *start,
+                                            double t0, const ts_xform *end, double t1, uint32_t *id, ts_error *err)
+{
+    TRY(usable(b, err));
+    if (b->open_object != TS_NONE)
+        return ts_error_set(err, TS_ERR_UNSUPPORTED,
+                            "a moving shape inside object \"%s\": a moving shape is an instance of its own, "
+                            "and instances do not nest",
+                            b->object_names[b->open_object]);
+    const ts_anim_xform *m;
+    TRY(make_motion(b, start, end, t0, t1, &m, err));
+    if (!m) { /* it does not move: a shape like any */
+        ts_shape_desc placed_d = *d;
+        placed_d.to_world = ts_xform_compose(start, &d->to_world);
+        return ts_scene_builder_add_shape(b, &placed_d, id, err);
+    }
+    if (!ts_rgb_is_black(d->emission))
+        return ts_error_set(err, TS_ERR_UNSUPPORTED,
+                            "emission: a moving shape cannot emit (pbrt-v3 ignores the area light of an animated "
+                            "shape)");
+    /* An object of its own (no name: nothing can refer to it), the shape in it as pbrt-v3
+     * makes an animated shape — in its own space (d->to_world) — and one moving instance. */
+    if (!grow((void **)&b->objects, &b->cap_objects, (size_t)b->n_objects + 1, sizeof *b->objects) ||
+        !grow((void **)&b->object_names, &b->cap_object_names, (size_t)b->n_objects + 1, sizeof *b->object_names))
+        return nomem(err, "the objects");
+    uint32_t obj = b->n_objects;
+    b->objects[obj] = (ts_object){b->n_shapes, 0};
+    b->object_names[obj] = "";
+    b->open_object = obj;
+    b->n_objects++;
+    ts_status st = ts_scene_builder_add_shape(b, d, id, err);
+    b->open_object = TS_NONE;
+    if (st) {
+        b->n_objects--; /* nothing was added to it */
+        return st;
+    }
+    st = push_instance(b, obj, start, m, err);
+    if (st) { /* take the shape back out: the call adds nothing when it fails */
+        if (d->type == TS_SHAPE_MESH) b->n_triangles -= d->mesh.n_triangles;
+        b->n_shapes--;
+        b->n_objects--;
+    }
+    return st;
 }
 
 /* ---------------------------------------------------------------- lights */

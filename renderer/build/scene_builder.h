@@ -331,6 +331,25 @@ uint32_t ts_scene_builder_find_object(const ts_scene_builder *b, const char *nam
 ts_status ts_scene_builder_add_instance(ts_scene_builder *b, uint32_t object, const ts_xform *to_world,
                                         ts_error *err);
 
+/* ---- motion blur (pbrt-v3's animated transforms; core/animated_transform.h, accel.h)
+ *
+ * add_moving_instance: an instance whose object-to-world moves from start (at t0) to end
+ * (at t1), interpolated as pbrt's AnimatedTransform. add_moving_shape: pbrt-v3's shape
+ * under an animated CTM — the shape in an object of its own, placed there by d->to_world
+ * (the shape's own placement: a disk's height, a cylinder's z range; the identity for a
+ * mesh), and a moving instance of it from start to end; *id is the shape's. Both: equal
+ * keyframes are no motion (the static call, bit for bit: add_shape with to_world
+ * start ∘ d->to_world); refused
+ * ("motion.times: the end time 0 must be after the start time 1") when the keyframes
+ * differ and t1 ≤ t0, a keyframe that is not finite, invertible and affine; a moving
+ * shape that emits ("emission: a moving shape cannot emit …", TS_ERR_UNSUPPORTED; the
+ * pbrt-v3 front end drops the area light with pbrt-v3's warning) or inside an object
+ * definition (TS_ERR_UNSUPPORTED: instances do not nest). The instance is counted as
+ * add_instance's; a moving shape as a shape, an object and an instance. */
+ts_status ts_scene_builder_add_moving_instance(ts_scene_builder *b, uint32_t object, const ts_xform *start,
+                                               double t0, const ts_xform *end, double t1, ts_error *err);
+ts_status ts_scene_builder_add_moving_shape(ts_scene_builder *b, const ts_shape_desc *d, const ts_xform *start,
+                                            double t0, const ts_xform *end, double t1, uint32_t *id, ts_error *err);
 
 /* Adds a light (with the area lights of the shapes added so far, at most
  * limits.max_lights). */

@@ -5,6 +5,24 @@
 
 #include "sampling/sampling.h"
 
+/* The shutter and the keyframes (camera.h). */
+static ts_status camera_motion(ts_camera *cam, const ts_camera_desc *d, ts_error *err)
+{
+    cam->shutter_open = d->shutter_open;
+    cam->shutter_close = d->shutter_close;
+    if (!isfinite(d->shutter_open) || !isfinite(d->shutter_close) || d->shutter_close < d->shutter_open)
+        return ts_error_set(err, TS_ERR_INVALID,
+                            "camera.shutter: expected [open, close] with open ≤ close, got [%g, %g]",
+                            d->shutter_open, d->shutter_close);
+    if (!d->moving) return TS_OK;
+    if (!ts_anim_xform_init(&cam->motion, &d->motion_start, d->motion_t0, &d->motion_end, d->motion_t1))
+        return ts_error_set(err, TS_ERR_INVALID,
+                            "camera.motion: expected times [t0, t1] with t0 < t1 and invertible affine "
+                            "start and end transforms");
+    cam->moving = cam->motion.animated;
+    return TS_OK;
+}
+
 ts_status ts_camera_init(ts_camera *cam, const ts_camera_desc *d, int width, int height, ts_error *err)
 {
     ts_vec3 fwd = ts_vec3_sub(d->to, d->from);
@@ -30,6 +48,8 @@ ts_status ts_camera_init(ts_camera *cam, const ts_camera_desc *d, int width, int
     cam->focus_distance = d->focus_distance;
     cam->width = width;
     cam->height = height;
+    ts_status st = camera_motion(cam, d, err);
+    if (st) return st;
 
     float aspect = (float)width / (float)height;
     float half_short;
@@ -94,4 +114,33 @@ ts_ray ts_camera_ray(const ts_camera *cam, ts_vec2 p_raster, ts_vec2 u_lens)
         d = ts_vec3_normalize(ts_vec3_sub(p_focus, o));
     }
     return ts_ray_make(o, d, INFINITY);
+}
+
+void ts_camera_move_ray(const ts_camera *cam, ts_ray *ray, float time)
+{
+    ray->time = time;
+    if (!cam->moving || time <= cam->motion.start_time) return;
+    /* world ← camera at time ← camera at the start, in double, rounded once. */
+    ts_mat4 m = ts_anim_xform_matrix(&cam->motion, time);
+    ts_mat4 delta = ts_mat4_mul(&m, &cam->motion.start.m_inv);
+    ts_xform x = {delta, delta}; /* only the forward matrix is read */
+    ray->o = ts_dvec3_to_vec3(ts_xform_point(&x, ts_dvec3_from(ray->o)));
+    ray->d = ts_dvec3_to_vec3(ts_xform_vector(&x, ts_dvec3_from(ray->d)));
+}
+
+void ts_camera_move_points(const ts_camera *cam, float time, ts_vec3 *o, ts_vec3 *d, int n)
+{
+    if (!cam->moving || time <= cam->motion.start_time) return;
+    ts_mat4 m = ts_anim_xform_matrix(&cam->motion, time);
+    ts_mat4 delta = ts_mat4_mul(&m, &cam->motion.start.m_inv);
+    ts_xform x = {delta, delta};
+    for (int i = 0; i < n; i++) {
+        o[i] = ts_dvec3_to_vec3(ts_xform_point(&x, ts_dvec3_from(o[i])));
+        d[i] = ts_dvec3_to_vec3(ts_xform_vector(&x, ts_dvec3_from(d[i])));
+    }
+}
+
+float ts_camera_time(const ts_camera *cam, float u)
+{
+    return ts_lerpf(u, cam->shutter_open, cam->shutter_close);
 }

@@ -88,6 +88,10 @@ struct ts_accel {
     RTCScene *obj_scene;
     const ts_instance *instances; /* caller-owned, outlive the accel */
     uint32_t n_instances;
+    /* Motion (accel.h), immutable after create: Embree's ray time is
+     * clamp((time − time0)·time_scale, 0, 1) when `moving`. */
+    bool moving;
+    double time0, time1, time_scale;
     ts_bounds3 bounds;
     ts_ray_log *log; /* NULL, or set by ts_accel_set_ray_log while no query runs */
     /* Written only by the Embree error callback while the creating thread builds; never
@@ -99,13 +103,41 @@ struct ts_accel {
     _Atomic int64_t embree_bytes, embree_peak;
 };
 
-/* The per-query context: Embree's first, then what our callbacks need. */
+/* The per-query context: Embree's first, then what our callbacks need. The last moving
+ * instance's transform at the ray's time is kept in it (the context is the caller's, on
+ * its stack: one thread writes it). */
 typedef struct query_ctx {
     struct RTCIntersectContext rtc;
     const ts_ray *ray;
     const ts_accel *a;
     bool shadow; /* a shadow ray's nearest hit (ts_accel_intersect_shadow): shadow_alpha cuts out too */
+    uint32_t moved_k;  /* TS_NONE, or the instance moved_x holds */
+    bool moved_ok;     /* its transform at the ray's time is invertible */
+    ts_xform moved_x;
 } query_ctx;
+
+static void query_init(query_ctx *q, const ts_accel *a, const ts_ray *ray, bool shadow)
+{
+    rtcInitIntersectContext(&q->rtc);
+    q->ray = ray;
+    q->a = a;
+    q->shadow = shadow;
+    q->moved_k = TS_NONE;
+}
+
+/* Instance k's object → world at the query ray's time: its own transform when it does not
+ * move; NULL where the moving transform is singular at that time (nothing is hit). */
+static const ts_xform *instance_xform(const query_ctx *cq, uint32_t k)
+{
+    const ts_instance *in = &cq->a->instances[k];
+    if (!in->motion) return &in->to_world;
+    query_ctx *q = (query_ctx *)cq; /* the caller's own context */
+    if (q->moved_k != k) {
+        q->moved_ok = ts_anim_xform_at(in->motion, q->ray ? q->ray->time : 0, &q->moved_x);
+        q->moved_k = k;
+    }
+    return q->moved_ok ? &q->moved_x : NULL;
+}
 
 /* The instance a callback runs under (Embree's context instID), or NONE at top level. */
 static inline uint32_t current_instance(const ts_accel *a, const struct RTCIntersectContext *c)
@@ -114,18 +146,18 @@ static inline uint32_t current_instance(const ts_accel *a, const struct RTCInter
     return id == RTC_INVALID_GEOMETRY_ID || !a ? TS_NONE : (uint32_t)(id - a->n_shapes);
 }
 
-/* An analytic shape of an object as instance k places it: to_world composed in double. */
-static ts_shape placed(const ts_accel *a, uint32_t k, const ts_shape *s)
+/* An analytic shape of an object as an instance places it (x: instance_xform): to_world
+ * composed in double. */
+static ts_shape placed(const ts_xform *x, const ts_shape *s)
 {
     ts_shape t = *s;
-    t.to_world = ts_xform_compose(&a->instances[k].to_world, &s->to_world);
+    t.to_world = ts_xform_compose(x, &s->to_world);
     return t;
 }
 
-/* The world ray in instance k's object space, in double, rounded once. */
-static ts_ray ray_to_object(const ts_accel *a, uint32_t k, const ts_ray *ray)
+/* The world ray in an instance's object space (x: instance_xform), in double, rounded once. */
+static ts_ray ray_to_object(const ts_xform *x, const ts_ray *ray)
 {
-    const ts_xform *x = &a->instances[k].to_world;
     ts_ray r = *ray;
     r.o = ts_dvec3_to_vec3(ts_xform_point_inv(x, ts_dvec3_from(ray->o)));
     r.d = ts_dvec3_to_vec3(ts_xform_vector_inv(x, ts_dvec3_from(ray->d)));
@@ -219,7 +251,11 @@ static void user_intersect(const struct RTCIntersectFunctionNArguments *args)
     const query_ctx *q = (const query_ctx *)args->context;
     uint32_t k = current_instance(q->a, args->context);
     ts_shape inst_s;
-    if (k != TS_NONE) inst_s = placed(q->a, k, s);
+    if (k != TS_NONE) {
+        const ts_xform *x = instance_xform(q, k);
+        if (!x) return;
+        inst_s = placed(x, s);
+    }
     for (unsigned i = 0; i < N; i++) {
         if (!args->valid[i]) continue;
         ts_ray r = ray_from_packet(rh, N, i);
@@ -251,7 +287,11 @@ static void user_occluded(const struct RTCOccludedFunctionNArguments *args)
     const query_ctx *q = (const query_ctx *)args->context;
     uint32_t k = current_instance(q->a, args->context);
     ts_shape inst_s;
-    if (k != TS_NONE) inst_s = placed(q->a, k, s);
+    if (k != TS_NONE) {
+        const ts_xform *x = instance_xform(q, k);
+        if (!x) return;
+        inst_s = placed(x, s);
+    }
     for (unsigned i = 0; i < N; i++) {
         if (!args->valid[i]) continue;
         ts_ray r = ray_from_packet(rn, N, i);
@@ -279,7 +319,14 @@ static void triangle_filter(const struct RTCFilterFunctionNArguments *args)
     /* Through instance k the triangle is in the object's space: so is the ray tested. */
     uint32_t k = current_instance(q->a, args->context), inst = k == TS_NONE ? 0 : k + 1;
     ts_ray r_obj;
-    if (k != TS_NONE) r_obj = ray_to_object(q->a, k, ray);
+    if (k != TS_NONE) {
+        const ts_xform *x = instance_xform(q, k);
+        if (!x) {
+            for (unsigned i = 0; i < N; i++) args->valid[i] = 0;
+            return;
+        }
+        r_obj = ray_to_object(x, ray);
+    }
     for (unsigned i = 0; i < N; i++) {
         if (args->valid[i] != -1) continue;
         unsigned prim = hit[5 * N + i];
@@ -318,7 +365,14 @@ static inline void cutout_filter(const struct RTCFilterFunctionNArguments *args,
     unsigned N = args->N;
     uint32_t k = current_instance(q->a, args->context), inst = k == TS_NONE ? 0 : k + 1;
     ts_ray r_obj;
-    if (ray && k != TS_NONE) r_obj = ray_to_object(q->a, k, ray);
+    if (ray && k != TS_NONE) {
+        const ts_xform *x = instance_xform(q, k);
+        if (!x) {
+            for (unsigned i = 0; i < N; i++) args->valid[i] = 0;
+            return;
+        }
+        r_obj = ray_to_object(x, ray);
+    }
     const ts_ray *r = ray && k != TS_NONE ? &r_obj : ray;
     bool skips = ray && ray->skip_shape != TS_NONE;
     for (unsigned i = 0; i < N; i++) {
@@ -439,6 +493,98 @@ static ts_bounds3 xform_bounds(const ts_xform *x, ts_bounds3 b)
     return w;
 }
 
+/* ---- motion (accel.h) ---- */
+
+/* Whether 4×4 s's 3×3 part is diagonal. */
+static bool diagonal(const ts_mat4 *s)
+{
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            if (i != j && s->m[i][j] != 0) return false;
+    return true;
+}
+
+/* Linear part L = Q·U, Q a rotation, U upper triangular (Gram–Schmidt on L's columns in
+ * double, U's last diagonal entry negative for a mirroring L). */
+static void qr3(const ts_mat4 *m, ts_mat4 *q, double u[3][3])
+{
+    ts_dvec3 c[3], e[3];
+    for (int j = 0; j < 3; j++) c[j] = (ts_dvec3){m->m[0][j], m->m[1][j], m->m[2][j]};
+    memset(u, 0, sizeof(double[3][3]));
+    for (int j = 0; j < 3; j++) {
+        ts_dvec3 v = c[j];
+        for (int i = 0; i < j; i++) {
+            u[i][j] = ts_dvec3_dot(e[i], c[j]);
+            v = ts_dvec3_sub(v, ts_dvec3_scale(e[i], u[i][j]));
+        }
+        u[j][j] = ts_dvec3_length(v);
+        e[j] = u[j][j] > 0 ? ts_dvec3_scale(v, 1 / u[j][j]) : (ts_dvec3){0, 0, 0};
+    }
+    if (ts_dvec3_dot(ts_dvec3_cross(e[0], e[1]), e[2]) < 0) { /* a mirror: into U */
+        e[2] = ts_dvec3_scale(e[2], -1);
+        u[2][2] = -u[2][2];
+    }
+    *q = ts_mat4_identity();
+    for (int j = 0; j < 3; j++) q->m[0][j] = e[j].x, q->m[1][j] = e[j].y, q->m[2][j] = e[j].z;
+}
+
+static void set_step(RTCGeometry g, unsigned step, ts_dvec3 t, ts_quat r, const double u[3][3])
+{
+    struct RTCQuaternionDecomposition qd;
+    rtcInitQuaternionDecomposition(&qd);
+    rtcQuaternionDecompositionSetScale(&qd, (float)u[0][0], (float)u[1][1], (float)u[2][2]);
+    rtcQuaternionDecompositionSetSkew(&qd, (float)u[0][1], (float)u[0][2], (float)u[1][2]);
+    rtcQuaternionDecompositionSetQuaternion(&qd, (float)r.w, (float)r.x, (float)r.y, (float)r.z);
+    rtcQuaternionDecompositionSetTranslation(&qd, (float)t.x, (float)t.y, (float)t.z);
+    rtcSetGeometryTransformQuaternion(g, step, &qd);
+}
+
+/* Embree's time steps for a moving instance (accel.h): pbrt's own T, R, S at the two ends
+ * where Embree's interpolation is pbrt's, else TS_ACCEL_MOTION_STEPS steps of pbrt's
+ * matrix at their times, each re-decomposed as T·Q·U. */
+static void set_motion_steps(ts_accel *a, RTCGeometry g, const ts_anim_xform *m)
+{
+    double t0 = a->time0, t1 = a->time1;
+    bool signs = true;
+    for (int i = 0; i < 3; i++) signs = signs && ((m->s[0].m[i][i] > 0) == (m->s[1].m[i][i] > 0));
+    if (m->start_time == t0 && m->end_time == t1 && diagonal(&m->s[0]) && diagonal(&m->s[1]) && signs) {
+        rtcSetGeometryTimeStepCount(g, 2);
+        for (unsigned k = 0; k < 2; k++) {
+            double u[3][3] = {{m->s[k].m[0][0], 0, 0}, {0, m->s[k].m[1][1], 0}, {0, 0, m->s[k].m[2][2]}};
+            set_step(g, k, m->t[k], m->r[k], u);
+        }
+        return;
+    }
+    rtcSetGeometryTimeStepCount(g, TS_ACCEL_MOTION_STEPS);
+    ts_quat prev = {0, 0, 0, 1};
+    for (unsigned k = 0; k < TS_ACCEL_MOTION_STEPS; k++) {
+        double t = t0 + (t1 - t0) * k / (TS_ACCEL_MOTION_STEPS - 1);
+        ts_mat4 mt = ts_anim_xform_matrix(m, t), q;
+        double u[3][3];
+        qr3(&mt, &q, u);
+        ts_quat r = ts_quat_from_mat4(&q);
+        if (k > 0 && ts_quat_dot(r, prev) < 0) r = (ts_quat){-r.x, -r.y, -r.z, -r.w};
+        prev = r;
+        set_step(g, k, (ts_dvec3){mt.m[0][3], mt.m[1][3], mt.m[2][3]}, r, u);
+    }
+}
+
+/* The scene's motion interval: the union of the moving instances' [start, end]. */
+static void motion_interval(ts_accel *a)
+{
+    double lo = INFINITY, hi = -INFINITY;
+    for (uint32_t k = 0; k < a->n_instances; k++) {
+        const ts_anim_xform *m = a->instances[k].motion;
+        if (!m || !m->animated) continue;
+        lo = fmin(lo, m->start_time);
+        hi = fmax(hi, m->end_time);
+    }
+    a->moving = lo < hi;
+    a->time0 = a->moving ? lo : 0;
+    a->time1 = a->moving ? hi : 1;
+    a->time_scale = a->moving ? 1 / (hi - lo) : 1;
+}
+
 /* One Embree scene per object, then an instance geometry per instance (top-level ID
  * n_shapes + k); object shapes are left out of the top level. */
 static bool build_objects(ts_accel *a)
@@ -480,15 +626,20 @@ static bool build_objects(ts_accel *a)
         RTCGeometry g = rtcNewGeometry(a->device, RTC_GEOMETRY_TYPE_INSTANCE);
         if (!g) goto fail;
         rtcSetGeometryInstancedScene(g, a->obj_scene[in->object]);
-        float xfm[12]; /* 3×4 column-major, for traversal only (hits are redone in double) */
-        for (int c = 0; c < 4; c++)
-            for (int r = 0; r < 3; r++) xfm[3 * c + r] = (float)in->to_world.m.m[r][c];
-        rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, xfm);
+        if (in->motion && in->motion->animated) {
+            set_motion_steps(a, g, in->motion);
+            a->bounds = ts_bounds3_union(a->bounds, ts_anim_xform_motion_bounds(in->motion, ob[in->object]));
+        } else {
+            float xfm[12]; /* 3×4 column-major, for traversal only (hits are redone in double) */
+            for (int c = 0; c < 4; c++)
+                for (int r = 0; r < 3; r++) xfm[3 * c + r] = (float)in->to_world.m.m[r][c];
+            rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, xfm);
+            a->bounds = ts_bounds3_union(a->bounds, xform_bounds(&in->to_world, ob[in->object]));
+        }
         rtcCommitGeometry(g);
         rtcAttachGeometryByID(a->scene, g, a->n_shapes + k);
         rtcReleaseGeometry(g);
         if (a->build_error[0]) goto fail;
-        a->bounds = ts_bounds3_union(a->bounds, xform_bounds(&in->to_world, ob[in->object]));
     }
     free(ob);
     return true;
@@ -542,6 +693,7 @@ ts_accel *ts_accel_create_instanced(const ts_shape *shapes, uint32_t n_shapes, c
     a->instances = instances;
     a->n_objects = n_objects;
     a->n_instances = n_instances;
+    motion_interval(a);
     for (uint32_t i = 0; i < n_shapes; i++) {
         const ts_shape *s = &shapes[i];
         if (s->in_object) continue; /* seen through its instances */
@@ -614,13 +766,17 @@ __attribute__((noinline, cold)) static void log_ray(ts_ray_log *log, const ts_ra
     log->kinds[i] = kind;
 }
 
-static void ray_to_rtc(const ts_ray *ray, struct RTCRay *r)
+static void ray_to_rtc(const ts_accel *a, const ts_ray *ray, struct RTCRay *r)
 {
     r->org_x = ray->o.x, r->org_y = ray->o.y, r->org_z = ray->o.z;
     r->dir_x = ray->d.x, r->dir_y = ray->d.y, r->dir_z = ray->d.z;
     r->tnear = 0;
     r->tfar = ray->tmax;
     r->time = 0;
+    if (a->moving) {
+        double t = (ray->time - a->time0) * a->time_scale;
+        r->time = (float)(t > 0 ? (t < 1 ? t : 1) : 0); /* NaN: 0 */
+    }
     r->mask = 0xffffffffu;
     r->id = 0;
     r->flags = 0;
@@ -641,22 +797,23 @@ static inline bool ray_valid(const ts_ray *r)
 /* A hit on shape `local` of instance k's object (accel.h): analytic shapes solved in world
  * space under the composed transform; triangles in object space from the ray taken there,
  * then mapped to world space. */
-static void instanced_interaction(const ts_accel *a, uint32_t k, uint32_t local, uint32_t prim, const ts_ray *ray,
+static void instanced_interaction(const query_ctx *q, uint32_t k, uint32_t local, uint32_t prim, const ts_ray *ray,
                                   float t, ts_interaction *si)
 {
+    const ts_accel *a = q->a;
     const ts_instance *in = &a->instances[k];
     uint32_t index = a->objects[in->object].first_shape + local;
     const ts_shape *s = &a->shapes[index];
+    const ts_xform *x = instance_xform(q, k); /* not NULL: its callbacks reported the hit */
     if (s->type != TS_SHAPE_MESH) {
-        ts_shape p = placed(a, k, s);
+        ts_shape p = placed(x, s);
         ts_shape_interaction(&p, index, 0, ray, t, si);
         si->inst = k + 1;
         return;
     }
-    ts_ray r = ray_to_object(a, k, ray);
+    ts_ray r = ray_to_object(x, ray);
     ts_interaction o;
     ts_shape_triangle_interaction_cached(s, &a->meshes[index].tri[prim], index, prim, &r, t, &o);
-    const ts_xform *x = &in->to_world;
     const double(*m)[4] = x->m.m;
     /* p and its bound (pbrt-v3's transformed pError): |M|·e plus the double sum's and the
      * final float rounding's share, four half-ulps of the result as in shape.c. */
@@ -698,19 +855,16 @@ static inline bool intersect(const ts_accel *a, const ts_ray *ray, bool shadow, 
     if (!(ray->tmax > 0) || !ray_valid(ray)) return false;
     if (__builtin_expect(a->log != NULL, 0)) log_ray(a->log, ray, TS_RAY_LOG_INTERSECT);
     query_ctx q;
-    rtcInitIntersectContext(&q.rtc);
-    q.ray = ray;
-    q.a = a;
-    q.shadow = shadow;
+    query_init(&q, a, ray, shadow);
     struct RTCRayHit rh;
-    ray_to_rtc(ray, &rh.ray);
+    ray_to_rtc(a, ray, &rh.ray);
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(a->scene, &q.rtc, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
     if (rh.hit.instID[0] != RTC_INVALID_GEOMETRY_ID) {
-        instanced_interaction(a, rh.hit.instID[0] - a->n_shapes, rh.hit.geomID, rh.hit.primID, ray, rh.ray.tfar, si);
+        instanced_interaction(&q, rh.hit.instID[0] - a->n_shapes, rh.hit.geomID, rh.hit.primID, ray, rh.ray.tfar, si);
         return true;
     }
     if (rh.hit.geomID >= a->n_shapes) return false;
@@ -741,12 +895,9 @@ bool ts_accel_occluded(const ts_accel *a, const ts_ray *ray)
     if (!ray_valid(ray)) return true;
     if (__builtin_expect(a->log != NULL, 0)) log_ray(a->log, ray, TS_RAY_LOG_OCCLUDED);
     query_ctx q;
-    rtcInitIntersectContext(&q.rtc);
-    q.ray = ray;
-    q.a = a;
-    q.shadow = true;
+    query_init(&q, a, ray, true);
     struct RTCRay r;
-    ray_to_rtc(ray, &r);
+    ray_to_rtc(a, ray, &r);
     rtcOccluded1(a->scene, &q.rtc, &r);
     return r.tfar == -INFINITY;
 }

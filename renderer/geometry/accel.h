@@ -13,6 +13,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "core/animated_transform.h"
 #include "core/cancel.h"
 #include "core/error.h"
 #include "geometry/interaction.h"
@@ -32,13 +33,30 @@ typedef struct ts_accel ts_accel;
  * k + 1. Analytic shapes are solved directly in world space under the composed transform
  * (bit for bit what the same shape placed directly with that transform gives). Instances
  * do not nest (Embree here is built with one instance level; pbrt-v3 refuses it too). */
+/* Motion (pbrt-v3's TransformedPrimitive with an AnimatedTransform): an instance with a
+ * motion is an Embree instance with time steps, its transform at each step given as
+ * Embree's quaternion decomposition (translation, rotation, upper-triangular scale and
+ * shear), which Embree interpolates between steps as pbrt interpolates its T, R, S.
+ * Where that is pbrt's interpolation exactly — the keyframes' S diagonal with the same
+ * signs and the motion's times the scene's motion interval — two steps are given; else
+ * (shear in S, or a motion over part of the interval, whose clamped ends Embree cannot
+ * follow) TS_ACCEL_MOTION_STEPS steps, and traversal follows pbrt's motion within the
+ * measured bound of tests/test_instance.c. Embree's ray time is the ray's, mapped from the
+ * scene's motion interval (the union of the instances' [start, end]) to [0, 1] and clamped.
+ * Either way Embree only finds the candidate: the hit itself (and every filter's test) is
+ * computed in double under pbrt's transform at the ray's time, ts_anim_xform_at. */
+#define TS_ACCEL_MOTION_STEPS 129
+
 typedef struct ts_object {
     uint32_t first_shape, n_shapes;
 } ts_object;
 
 typedef struct ts_instance {
     uint32_t object;   /* index into the objects */
-    ts_xform to_world; /* object space → world, invertible */
+    ts_xform to_world; /* object space → world, invertible (the motion's start keyframe when moving) */
+    /* NULL, or the instance's motion (core/animated_transform.h; owned by the scene): a ray
+     * of time t sees the object under motion(t). See "Motion" below. */
+    const ts_anim_xform *motion;
 } ts_instance;
 
 /* Builds over shapes[0..n) (the array must outlive the accel). NULL and err filled on

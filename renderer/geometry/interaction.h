@@ -23,6 +23,8 @@ typedef struct ts_ray {
     uint32_t skip_prim;
     uint32_t skip_inst;  /* with skip_shape: 0 for a triangle of the scene itself, k + 1 for
                             one seen through object instance k (accel.h) */
+    float time;          /* the scene time the ray samples (motion blur, accel.h): the camera
+                            ray's, inherited by every ray spawned from its path; 0 without motion */
 } ts_ray;
 
 typedef struct ts_interaction {
@@ -41,13 +43,14 @@ typedef struct ts_interaction {
                           everything above is then in world space all the same */
     bool mesh_normals; /* ns interpolates a mesh's vertex normals: a bump map then uses pbrt-v3's
                           unit shading tangents (materials/material.h, ts_material_bump) */
+    float time;        /* the time of the ray that found it (ts_ray.time): rays spawned here keep it */
 } ts_interaction;
 
 static inline ts_vec3 ts_ray_at(const ts_ray *r, float t) { return ts_vec3_add(r->o, ts_vec3_scale(r->d, t)); }
 
 static inline ts_ray ts_ray_make(ts_vec3 o, ts_vec3 d, float tmax)
 {
-    ts_ray r = {o, d, tmax, TS_NONE, TS_NONE, 0};
+    ts_ray r = {o, d, tmax, TS_NONE, TS_NONE, 0, 0};
     return r;
 }
 
@@ -72,7 +75,7 @@ static inline ts_vec3 ts_offset_ray_origin(ts_vec3 p, ts_vec3 p_error, ts_vec3 n
 static inline ts_ray ts_spawn_ray_ex(ts_vec3 p, ts_vec3 p_error, ts_vec3 n, ts_vec3 d, uint32_t skip_shape,
                                      uint32_t skip_prim, uint32_t skip_inst)
 {
-    ts_ray r = {ts_offset_ray_origin(p, p_error, n, d), d, INFINITY, skip_shape, skip_prim, skip_inst};
+    ts_ray r = {ts_offset_ray_origin(p, p_error, n, d), d, INFINITY, skip_shape, skip_prim, skip_inst, 0};
     return r;
 }
 

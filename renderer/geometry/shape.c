@@ -756,6 +756,7 @@ void ts_shape_interaction(const ts_shape *s, uint32_t shape_index, uint32_t prim
 {
     si->shape = shape_index;
     si->inst = 0;
+    si->time = ray->time;
     if (s->type == TS_SHAPE_MESH) {
         ts_tri_cache c;
         ts_shape_triangle_cache_init(s, prim, &c);
@@ -790,6 +791,7 @@ void ts_shape_triangle_interaction_cached(const ts_shape *s, const ts_tri_cache 
 {
     si->shape = shape_index;
     si->inst = 0;
+    si->time = ray->time;
     triangle_interaction(s, c, prim, ray, t, si);
 }
 
@@ -1020,8 +1022,10 @@ double ts_shape_area(const ts_shape *s, uint32_t prim)
 ts_ray ts_spawn_ray(const ts_interaction *si, const ts_shape *shapes, ts_vec3 d)
 {
     bool mesh = shapes && shapes[si->shape].type == TS_SHAPE_MESH;
-    return ts_spawn_ray_ex(si->p, si->p_error, si->n, d, mesh ? si->shape : TS_NONE, mesh ? si->prim : TS_NONE,
-                           mesh ? si->inst : 0);
+    ts_ray r = ts_spawn_ray_ex(si->p, si->p_error, si->n, d, mesh ? si->shape : TS_NONE, mesh ? si->prim : TS_NONE,
+                               mesh ? si->inst : 0);
+    r.time = si->time;
+    return r;
 }
 
 ts_ray ts_spawn_ray_to(const ts_interaction *si, const ts_shape *shapes, ts_vec3 p_to, ts_vec3 p_to_error,
@@ -1031,6 +1035,6 @@ ts_ray ts_spawn_ray_to(const ts_interaction *si, const ts_shape *shapes, ts_vec3
     ts_vec3 o = ts_offset_ray_origin(si->p, si->p_error, si->n, ts_vec3_sub(p_to, si->p));
     ts_vec3 pt = ts_offset_ray_origin(p_to, p_to_error, n_to, ts_vec3_sub(o, p_to));
     ts_ray r = {o, ts_vec3_sub(pt, o), 1 - TS_SHADOW_EPSILON, mesh ? si->shape : TS_NONE, mesh ? si->prim : TS_NONE,
-                mesh ? si->inst : 0};
+                mesh ? si->inst : 0, si->time};
     return r;
 }

@@ -135,6 +135,23 @@ static uint32_t material_effects(const ts_material *m)
     return fx | constant_material_effects(&c);
 }
 
+/* Whether anything moves while the shutter is open: a keyframe pair that differs over an
+ * interval overlapping (shutter_open, shutter_close). Without it rays carry no time sample. */
+static bool moves_in(const ts_anim_xform *a, float open, float close)
+{
+    return a && a->animated && a->end_time > open && a->start_time < close;
+}
+
+static bool scene_moves(const ts_scene *s)
+{
+    float open = s->camera.shutter_open, close = s->camera.shutter_close;
+    if (!(close > open)) return false;
+    if (s->camera.moving && moves_in(&s->camera.motion, open, close)) return true;
+    for (uint32_t k = 0; k < s->n_instances; k++)
+        if (moves_in(s->instances[k].motion, open, close)) return true;
+    return false;
+}
+
 uint32_t ts_effects_analyse(const ts_scene *s)
 {
     uint32_t fx = 0;
@@ -159,6 +176,7 @@ uint32_t ts_effects_analyse(const ts_scene *s)
         fx |= material_effects(&s->materials[m]);
     }
     if (s->camera.lens_radius > 0) fx |= TS_EFFECT_DEPTH_OF_FIELD;
+    if (scene_moves(s)) fx |= TS_EFFECT_MOTION;
     /* Media: a ray can be in one (the camera's, or behind a shape's medium interface), or
      * a shape has no surface and rays pass through it. */
     if (s->camera_medium != TS_NONE) fx |= TS_EFFECT_MEDIA;

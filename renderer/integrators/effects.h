@@ -32,14 +32,15 @@
     X(TS_EFFECT_DEPTH_OF_FIELD, 8, "depth_of_field", "a thin-lens camera")        \
     X(TS_EFFECT_INDIRECT, 9, "indirect", "light after more than one bounce")       \
     X(TS_EFFECT_LOBE_CHOICE, 10, "lobe_choice", "materials of several lobes, one picked per sample") \
-    X(TS_EFFECT_MEDIA, 11, "media", "participating media, or shapes that only bound one")
+    X(TS_EFFECT_MEDIA, 11, "media", "participating media, or shapes that only bound one") \
+    X(TS_EFFECT_MOTION, 12, "motion", "motion blur: moving shapes, instances or camera during an open shutter")
 
 enum {
 #define TS_EFFECT_ENUM(name, bit, key, text) name = 1u << bit,
     TS_EFFECT_LIST(TS_EFFECT_ENUM)
 #undef TS_EFFECT_ENUM
 };
-#define TS_EFFECT_COUNT 12
+#define TS_EFFECT_COUNT 13
 #define TS_EFFECTS_ALL ((1u << TS_EFFECT_COUNT) - 1)
 /* Lobes that scatter light at all. */
 #define TS_EFFECTS_SCATTERING                                                                          \

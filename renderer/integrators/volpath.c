@@ -137,6 +137,7 @@ static ts_rgb estimate_direct(vp *v, const vertex *x, uint32_t li, ts_vec2 u_lig
     }
     if (ts_rgb_is_black(f) || !(spdf > 0)) return Ld;
     ts_ray r = x->bsdf ? ts_spawn_ray(&x->it, s->shapes, wi) : ts_ray_make(x->it.p, wi, INFINITY);
+    r.time = x->it.time;
     ts_interaction hit;
     ts_rgb tr = ts_rgb_gray(1);
     bool found;
@@ -243,6 +244,7 @@ ts_rgb ts_volpath_li(const ts_scene *s, uint32_t fx, ts_ray ray, const ts_ray_di
             x.it.p = ts_ray_at(&ray, t_medium);
             x.it.wo = ts_vec3_neg(ts_vec3_normalize(ray.d));
             x.it.shape = x.it.prim = TS_NONE;
+            x.it.time = ray.time;
         } else {
             if (bounces == 0 || specular) L = ts_rgb_add(L, ts_rgb_mul(beta, emission(s, fx, found, &si, &ray)));
             if (!found || bounces >= max_depth) break;
@@ -267,6 +269,7 @@ ts_rgb ts_volpath_li(const ts_scene *s, uint32_t fx, ts_ray ray, const ts_ray_di
             float p;
             ts_vec3 wi = ts_hg_sample(ts_vec3_neg(x.it.wo), x.g, u_cont, &p);
             ray = ts_ray_make(x.it.p, wi, INFINITY); /* β·p/p: unchanged */
+            ray.time = x.it.time;
             specular = false;
         } else {
             ts_bsdf bsdf;

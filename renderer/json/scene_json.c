@@ -170,13 +170,15 @@ static ts_status parse_shape_medium(loader *ld, const cJSON *sh, const char *pat
 
 /* ---------------------------------------------------------------- transforms */
 
-static ts_status parse_transform(loader *ld, const cJSON *obj, const char *path, ts_xform *out)
+/* The transform list under key (absent: the identity, or an error when required). */
+static ts_status parse_transform_key(loader *ld, const cJSON *obj, const char *path, const char *key, bool required,
+                                     ts_xform *out)
 {
     *out = ts_xform_identity();
     const cJSON *list;
-    TRY(ts_json_array(obj, path, "transform", false, &list, ld->err));
+    TRY(ts_json_array(obj, path, key, required, &list, ld->err));
     if (!list) return TS_OK;
-    ts_jpath lp = ts_jpath_key(path, "transform");
+    ts_jpath lp = ts_jpath_key(path, key);
     int i = 0;
     for (const cJSON *t = list->child; t; t = t->next, i++) {
         ts_jpath p = ts_jpath_index(lp.s, i);
@@ -249,6 +251,49 @@ static ts_status parse_transform(loader *ld, const cJSON *obj, const char *path,
                                         "an entry of %.3g)",
                                         p.s, isfinite((float)out->m.m[r][c]) ? out->m_inv.m[r][c] : out->m.m[r][c]);
     }
+    return TS_OK;
+}
+
+static ts_status parse_transform(loader *ld, const cJSON *obj, const char *path, ts_xform *out)
+{
+    return parse_transform_key(ld, obj, path, "transform", false, out);
+}
+
+/* A pair of finite numbers [a, b] with a ≤ b under key (absent: *a, *b unchanged). */
+static ts_status parse_interval(loader *ld, const cJSON *obj, const char *path, const char *key, double *a,
+                                double *b)
+{
+    const cJSON *arr;
+    TRY(ts_json_array(obj, path, key, false, &arr, ld->err));
+    if (!arr) return TS_OK;
+    ts_jpath kp = ts_jpath_key(path, key);
+    const cJSON *x = arr->child, *y = x ? x->next : NULL;
+    if (!x || !y || y->next || !cJSON_IsNumber(x) || !cJSON_IsNumber(y) || !isfinite((float)x->valuedouble) ||
+        !isfinite((float)y->valuedouble) || !(x->valuedouble <= y->valuedouble))
+        return ts_error_set(ld->err, TS_ERR_INVALID, "%s: expected [start, end], two finite numbers with start ≤ end",
+                            kp.s);
+    *a = x->valuedouble;
+    *b = y->valuedouble;
+    return TS_OK;
+}
+
+/* A shape's or instance's "motion" (docs/design.md §4): {"times": [t0, t1] (default
+ * [0, 1]), "transform": the transform at t1 (required; "transform" beside it holds at t0)}.
+ * *has false when absent. */
+static ts_status parse_motion(loader *ld, const cJSON *obj, const char *path, bool *has, double *t0, double *t1,
+                              ts_xform *end)
+{
+    *has = false;
+    const cJSON *m;
+    TRY(ts_json_object(obj, path, "motion", false, &m, ld->err));
+    if (!m) return TS_OK;
+    ts_jpath mp = ts_jpath_key(path, "motion");
+    static const char *const keys[] = {"times", "transform", NULL};
+    TRY(ts_json_check_object(m, mp.s, keys, ld->err));
+    *t0 = 0, *t1 = 1;
+    TRY(parse_interval(ld, m, mp.s, "times", t0, t1));
+    TRY(parse_transform_key(ld, m, mp.s, "transform", true, end));
+    *has = true;
     return TS_OK;
 }
 
@@ -342,9 +387,10 @@ static ts_status parse_camera(loader *ld, const cJSON *doc)
     int type = 0;
     TRY(ts_json_enum(cam, "camera", "type", false, types, &type, ld->err));
     static const char *const pkeys[] = {"type", "from", "to", "up", "fov", "lens_radius", "focus_distance",
-                                        "mirror", "screen_window", "medium", NULL};
+                                        "mirror", "screen_window", "medium", "shutter", "motion", NULL};
     static const char *const okeys[] = {"type", "from",         "to",     "up", "height", "lens_radius",
-                                        "focus_distance", "mirror", "screen_window", "medium", NULL};
+                                        "focus_distance", "mirror", "screen_window", "medium", "shutter",
+                                        "motion", NULL};
     TRY(ts_json_check_object(cam, "camera", type == 0 ? pkeys : okeys, ld->err));
     ts_camera_desc d = {0};
     d.type = (ts_camera_type)type;
@@ -383,6 +429,23 @@ static ts_status parse_camera(loader *ld, const cJSON *doc)
     d.lens_radius = (float)lens;
     d.focus_distance = (float)focus;
     d.ortho_height = (float)height;
+    /* Motion blur: the shutter (pbrt-v3's shutteropen/close) and the camera-to-world
+     * keyframes: a ray made by the frame above moves by M(t)·start⁻¹ (camera.h). */
+    double open = 0, close = 1;
+    TRY(parse_interval(ld, cam, "camera", "shutter", &open, &close));
+    d.shutter_open = (float)open;
+    d.shutter_close = (float)close;
+    const cJSON *mo;
+    TRY(ts_json_object(cam, "camera", "motion", false, &mo, ld->err));
+    if (mo) {
+        static const char *const mkeys[] = {"times", "start", "end", NULL};
+        TRY(ts_json_check_object(mo, "camera.motion", mkeys, ld->err));
+        d.motion_t0 = 0, d.motion_t1 = 1;
+        TRY(parse_interval(ld, mo, "camera.motion", "times", &d.motion_t0, &d.motion_t1));
+        TRY(parse_transform_key(ld, mo, "camera.motion", "start", true, &d.motion_start));
+        TRY(parse_transform_key(ld, mo, "camera.motion", "end", true, &d.motion_end));
+        d.moving = true;
+    }
     /* The builder runs ts_camera_init's checks ("camera.up: must not be parallel …"). */
     TRY(ts_scene_builder_set_camera(ld->b, &d, ld->err));
     uint32_t medium = TS_NONE;
@@ -869,13 +932,17 @@ static ts_status parse_cutout(loader *ld, const cJSON *sh, const char *path, con
 }
 
 /* Reads shape sh into *d (a mesh's arrays into *arrays, which the caller frees). */
-static ts_status parse_shape(loader *ld, const cJSON *sh, const char *path, ts_shape_desc *d, ts_mesh_data *arrays)
+/* A shape: *d with to_world = user ∘ place, user the shape's "transform" (*user_out) and
+ * place the shape's own placement (a sphere's centre, a disk's frame, a cylinder's axis; the
+ * identity for a mesh: *place_out), which a moving shape keeps inside its object. */
+static ts_status parse_shape(loader *ld, const cJSON *sh, const char *path, ts_shape_desc *d, ts_mesh_data *arrays,
+                             ts_xform *user_out, ts_xform *place_out)
 {
     static const char *const types[] = {"sphere", "disk", "cylinder", "mesh", "loopsubdiv", NULL};
     if (!cJSON_IsObject(sh)) return ts_json_check_object(sh, path, types, ld->err);
     int type = 0;
     TRY(ts_json_enum(sh, path, "type", true, types, &type, ld->err));
-#define COMMON "type", "material", "transform", "emission", "two_sided", "light_samples", "reverse_orientation", "medium"
+#define COMMON "type", "material", "transform", "motion", "emission", "two_sided", "light_samples", "reverse_orientation", "medium"
     static const char *const k_sphere[] = {COMMON, "center", "radius", "z_min", "z_max", "phi_max", NULL};
     static const char *const k_disk[] = {COMMON, "center", "normal", "radius", "inner_radius", "phi_max", NULL};
     static const char *const k_cyl[] = {COMMON, "p0", "p1", "radius", "phi_max", NULL};
@@ -906,6 +973,8 @@ static ts_status parse_shape(loader *ld, const cJSON *sh, const char *path, ts_s
     TRY(ts_json_bool(sh, path, "reverse_orientation", false, &d->reverse_orientation, ld->err));
     ts_xform user;
     TRY(parse_transform(ld, sh, path, &user));
+    *user_out = user;
+    *place_out = ts_xform_identity();
 
     /* Sizes go through float, as v1 has always stored them. */
     double radius = 1;
@@ -916,6 +985,7 @@ static ts_status parse_shape(loader *ld, const cJSON *sh, const char *path, ts_s
         TRY(ts_json_number(sh, path, "radius", true, TS_J_POSITIVE, &radius, ld->err));
         ts_xform place = ts_xform_translate(ts_dvec3_from(center));
         d->to_world = ts_xform_compose(&user, &place);
+        *place_out = place;
         d->sphere.radius = (float)radius;
         TRY(parse_cut(ld, sh, path, d->sphere.radius, &d->cut));
         break;
@@ -933,6 +1003,7 @@ static ts_status parse_shape(loader *ld, const cJSON *sh, const char *path, ts_s
         }
         ts_xform place = ts_xform_frame(ts_dvec3_from(center), ts_dvec3_from(normal));
         d->to_world = ts_xform_compose(&user, &place);
+        *place_out = place;
         d->disk.radius = (float)radius;
         d->disk.inner_radius = (float)inner;
         TRY(parse_cut(ld, sh, path, 0, &d->cut));
@@ -948,6 +1019,7 @@ static ts_status parse_shape(loader *ld, const cJSON *sh, const char *path, ts_s
         if (!(h > 0)) return ts_error_set(ld->err, TS_ERR_INVALID, "%s.p1: must differ from p0", path);
         ts_xform place = ts_xform_frame(ts_dvec3_from(p0), axis);
         d->to_world = ts_xform_compose(&user, &place);
+        *place_out = place;
         d->cylinder.radius = (float)radius;
         d->cylinder.height = h;
         TRY(parse_cut(ld, sh, path, 0, &d->cut));
@@ -991,8 +1063,17 @@ static ts_status parse_shapes(loader *ld, const cJSON *doc)
         ts_jpath p = ts_jpath_index("shapes", i);
         ts_shape_desc d;
         ts_mesh_data arrays = {0};
-        ts_status st = parse_shape(ld, sh, p.s, &d, &arrays);
-        if (!st) st = at(ts_scene_builder_add_shape(ld->b, &d, NULL, ld->err), p.s, ld->err);
+        ts_xform user, place, end;
+        bool moving = false;
+        double t0 = 0, t1 = 1;
+        ts_status st = parse_shape(ld, sh, p.s, &d, &arrays, &user, &place);
+        if (!st) st = parse_motion(ld, sh, p.s, &moving, &t0, &t1, &end);
+        if (!st && moving) { /* pbrt-v3's animated shape: in its own space, under the motion */
+            d.to_world = place;
+            st = at(ts_scene_builder_add_moving_shape(ld->b, &d, &user, t0, &end, t1, NULL, ld->err), p.s, ld->err);
+        } else if (!st) {
+            st = at(ts_scene_builder_add_shape(ld->b, &d, NULL, ld->err), p.s, ld->err);
+        }
         ts_mesh_data_free(&arrays);
         if (st) return st;
     }
@@ -1018,7 +1099,13 @@ static ts_status parse_objects(loader *ld, const cJSON *doc)
             ts_jpath sp = ts_jpath_index(ts_jpath_key(p.s, "shapes").s, i);
             ts_shape_desc d;
             ts_mesh_data arrays = {0};
-            ts_status st = parse_shape(ld, sh, sp.s, &d, &arrays);
+            ts_xform user, place;
+            ts_status st = parse_shape(ld, sh, sp.s, &d, &arrays, &user, &place);
+            if (!st && cJSON_GetObjectItemCaseSensitive(sh, "motion"))
+                st = ts_error_set(ld->err, TS_ERR_UNSUPPORTED,
+                                  "%s.motion: a shape of an object cannot move (a moving shape is an instance of its "
+                                  "own, and instances do not nest); move the object's instances instead",
+                                  sp.s);
             if (!st) st = at(ts_scene_builder_add_shape(ld->b, &d, NULL, ld->err), sp.s, ld->err);
             ts_mesh_data_free(&arrays);
             if (st) return st;
@@ -1036,7 +1123,7 @@ static ts_status parse_instances(loader *ld, const cJSON *doc)
     int i = 0;
     for (const cJSON *in = list ? list->child : NULL; in; in = in->next, i++) {
         ts_jpath p = ts_jpath_index("instances", i);
-        static const char *const keys[] = {"object", "transform", NULL};
+        static const char *const keys[] = {"object", "transform", "motion", NULL};
         TRY(ts_json_check_object(in, p.s, keys, ld->err));
         const char *name;
         TRY(ts_json_string(in, p.s, "object", true, &name, ld->err));
@@ -1045,9 +1132,15 @@ static ts_status parse_instances(loader *ld, const cJSON *doc)
             ts_jpath op = ts_jpath_key(p.s, "object");
             return ts_error_set(ld->err, TS_ERR_INVALID, "%s: no object named \"%s\" in 'objects'", op.s, name);
         }
-        ts_xform x;
+        ts_xform x, end;
+        bool moving;
+        double t0, t1;
         TRY(parse_transform(ld, in, p.s, &x));
-        TRY(at(ts_scene_builder_add_instance(ld->b, id, &x, ld->err), p.s, ld->err));
+        TRY(parse_motion(ld, in, p.s, &moving, &t0, &t1, &end));
+        if (moving)
+            TRY(at(ts_scene_builder_add_moving_instance(ld->b, id, &x, t0, &end, t1, ld->err), p.s, ld->err));
+        else
+            TRY(at(ts_scene_builder_add_instance(ld->b, id, &x, ld->err), p.s, ld->err));
     }
     return TS_OK;
 }

@@ -323,6 +323,58 @@ static bool user_xform(const ts_mat4 *m, ts_xform *out)
     return true;
 }
 
+/* ---------------------------------------------------------------- motion */
+
+static bool mirrors(const ts_mat4 *m)
+{
+    const double(*a)[4] = m->m;
+    return a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
+               a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]) <
+           0;
+}
+
+/* The end keyframe of an entity whose CTM is animated (pbrt-v3's two CTMs differ): its
+ * transform, after the checks pbrt-v3's AnimatedTransform needs — an interval
+ * (TransformTimes' end after its start) and affine, invertible matrices — and the
+ * warning for a mirroring keyframe (core/animated_transform.h's Decision). */
+static ts_status motion_end(imp *im, const ts_pbrt_params *ps, ts_pbrt_loc loc, const ts_mat4 *start,
+                            const ts_mat4 *end, ts_xform *out)
+{
+    const ts_pbrt_scene *s = im->s;
+    if (!(s->transform_end_time > s->transform_start_time))
+        return derr(im, ps, loc, TS_ERR_INVALID,
+                    "the transformation is animated (ActiveTransform) but TransformTimes gives no interval "
+                    "(start and end time %g)",
+                    s->transform_start_time);
+    if (!user_xform(end, out))
+        return derr(im, ps, loc, TS_ERR_INVALID, "the transformation matrix at the end time is singular");
+    ts_dvec3 t;
+    ts_quat q;
+    ts_mat4 sc;
+    if (!ts_mat4_decompose(start, &t, &q, &sc) || !ts_mat4_decompose(end, &t, &q, &sc))
+        return derr(im, ps, loc, TS_ERR_INVALID,
+                    "an animated transformation must be affine (no projective row) to be interpolated");
+    if (mirrors(start) || mirrors(end))
+        dwarn(im, ps, loc,
+              "the animated transformation mirrors: it is interpolated with the mirror kept apart from the "
+              "rotation, where pbrt-v3 interpolates a mirroring matrix through one that is no rotation (its "
+              "image differs during the shutter; docs/design.md §9)");
+    return TS_OK;
+}
+
+/* "motion": {"times": [t0, t1], "transform": [end]} for the JSON document. */
+static bool jmotion(imp *im, cJSON *j, const ts_mat4 *end)
+{
+    double times[2] = {im->s->transform_start_time, im->s->transform_end_time};
+    cJSON *m = cJSON_CreateObject();
+    bool ok = m && ts_jw_add(m, "times", ts_jw_doubles(times, 2)) && ts_jw_add(m, "transform", ts_jw_transform(end));
+    if (!ok || !ts_jw_add(j, "motion", m)) {
+        if (!ok) cJSON_Delete(m);
+        return false;
+    }
+    return true;
+}
+
 /* ---------------------------------------------------------------- film, camera, sampler, integrator */
 
 static ts_status map_film(imp *im, uint32_t *width, uint32_t *height)
@@ -518,9 +570,29 @@ static ts_status map_camera(imp *im, uint32_t width, uint32_t height)
             return derr(im, ps, o->loc, TS_ERR_INVALID, "\"float fov\" must be in (0, 180) degrees, got %g",
                         fov);
     }
-    float shutter;
-    TRY(ts_pbrt_find_float(ps, "shutteropen", 0, &shutter, im->err));
-    TRY(ts_pbrt_find_float(ps, "shutterclose", 1, &shutter, im->err));
+    /* pbrt-v3's shutter (camera.cpp): a ray's time is lerp(u, open, close); a close before
+     * the open is swapped with its error message. */
+    float open, close;
+    TRY(ts_pbrt_find_float(ps, "shutteropen", 0, &open, im->err));
+    TRY(ts_pbrt_find_float(ps, "shutterclose", 1, &close, im->err));
+    if (close < open) {
+        pwarn(im, ps, ts_pbrt_params_get(ps, "shutterclose"),
+              "%g is before shutteropen %g: the two are swapped, as pbrt-v3 does", close, open);
+        float tmp = open;
+        open = close, close = tmp;
+    }
+    d.shutter_open = open;
+    d.shutter_close = close;
+    if (im->s->camera_animated) {
+        ts_xform start, end;
+        if (!user_xform(c2w, &start)) return derr(im, ps, o->loc, TS_ERR_INVALID, "the camera transform is singular");
+        TRY(motion_end(im, ps, o->loc, c2w, &im->s->camera_to_world_end, &end));
+        d.moving = true;
+        d.motion_start = start;
+        d.motion_end = end;
+        d.motion_t0 = im->s->transform_start_time;
+        d.motion_t1 = im->s->transform_end_time;
+    }
     warn_unused(im, ps);
     /* Camera-space lengths to world units: the window's axes against the view axis, the
      * lens along x and the focus along z. */
@@ -545,6 +617,20 @@ static ts_status map_camera(imp *im, uint32_t width, uint32_t height)
         if (ok && d.has_window) {
             double w[4] = {d.screen_window[0], d.screen_window[1], d.screen_window[2], d.screen_window[3]};
             ok = ts_jw_add(cam, "screen_window", ts_jw_doubles(w, 4));
+        }
+        if (ok && (d.shutter_open != 0 || d.shutter_close != 1)) { /* JSON's default is pbrt-v3's [0, 1] */
+            double sh[2] = {d.shutter_open, d.shutter_close};
+            ok = ts_jw_add(cam, "shutter", ts_jw_doubles(sh, 2));
+        }
+        if (ok && d.moving) {
+            double times[2] = {d.motion_t0, d.motion_t1};
+            cJSON *m = cJSON_CreateObject();
+            ok = m && ts_jw_add(m, "times", ts_jw_doubles(times, 2)) && ts_jw_add(m, "start", ts_jw_transform(c2w)) &&
+                 ts_jw_add(m, "end", ts_jw_transform(&im->s->camera_to_world_end));
+            if (!ok || !ts_jw_add(cam, "motion", m)) {
+                if (!ok) cJSON_Delete(m);
+                ok = false;
+            }
         }
         if (!ok || !ts_jw_add(im->doc, "camera", cam)) {
             if (!ok) cJSON_Delete(cam);
@@ -1236,6 +1322,23 @@ static ts_status map_shape(imp *im, size_t si)
     d.material = mat;
     d.emission = ts_rgb_gray(0);
     ts_pbrt_area_light *al = sh->area_light >= 0 ? &im->s->area_lights[sh->area_light] : NULL;
+    /* pbrt-v3's animated shape (api.cpp pbrtShape): a TransformedPrimitive of the shape made
+     * in its own space; inside an object definition that would be an instance in an
+     * instance, which Embree here cannot nest. */
+    const ts_mat4 *end_m = sh->object_to_world_end;
+    if (end_m && sh->object >= 0) {
+        dwarn(im, ps, sh->loc,
+              "is animated inside an object definition, which is not supported (instances do not nest): it keeps "
+              "its start-time transform");
+        end_m = NULL;
+    }
+    if (al && end_m) {
+        dwarn(im, ps, sh->loc, "is animated: its area light is ignored (as pbrt-v3 does: \"Ignoring currently set "
+                               "area light when creating animated shape\")");
+        /* pbrt-v3 never makes it, so never reports its parameters: nor does this. */
+        for (size_t k = 0; k < al->params.count; k++) al->params.items[k].used = true;
+        al = NULL;
+    }
     if (al) {
         if (strcmp(al->type, "diffuse") != 0 && strcmp(al->type, "area") != 0)
             return derr(im, &al->params, al->loc, TS_ERR_UNSUPPORTED,
@@ -1279,9 +1382,11 @@ static ts_status map_shape(imp *im, size_t si)
         d.shadow_alpha = salpha.tex;
     }
 
-    ts_xform user;
+    ts_xform user, user_end;
     if (!user_xform(sh->object_to_world, &user))
         return derr(im, ps, sh->loc, TS_ERR_INVALID, "the transformation matrix is singular");
+    if (end_m) TRY(motion_end(im, ps, sh->loc, sh->object_to_world, end_m, &user_end));
+    ts_xform place = ts_xform_identity(); /* the shape in its own space (a mesh: the identity) */
     cJSON *j = NULL;
     if (im->doc) {
         j = cJSON_CreateObject();
@@ -1309,7 +1414,6 @@ static ts_status map_shape(imp *im, size_t si)
             goto fail;
         }
         d.reverse_orientation = sh->reverse_orientation;
-        ts_xform place;
         if (t[0] == 's') {
             float zmin, zmax;
             if ((st = ts_pbrt_find_float(ps, "zmin", -radius, &zmin, im->err)) ||
@@ -1405,7 +1509,15 @@ static ts_status map_shape(imp *im, size_t si)
     if (!st) st = shape_media(im, sh, &d, j);
     if (!st) {
         warn_unused(im, ps);
-        st = at(im, ts_scene_builder_add_shape(im->b, &d, NULL, im->err), ps, sh->loc);
+        if (end_m) {
+            d.to_world = d.type == TS_SHAPE_MESH ? ts_xform_identity() : place;
+            st = at(im,
+                    ts_scene_builder_add_moving_shape(im->b, &d, &user, im->s->transform_start_time, &user_end,
+                                                      im->s->transform_end_time, NULL, im->err),
+                    ps, sh->loc);
+        } else {
+            st = at(im, ts_scene_builder_add_shape(im->b, &d, NULL, im->err), ps, sh->loc);
+        }
     }
     if (!st && j) {
         const char *mname = NULL;
@@ -1421,6 +1533,7 @@ static ts_status map_shape(imp *im, size_t si)
         mname = name;
         jok = jok && (no_surface ? cJSON_AddNullToObject(j, "material") != NULL : ts_jw_string(j, "material", mname)) &&
               ts_jw_add(j, "transform", ts_jw_transform(sh->object_to_world));
+        if (jok && end_m) jok = jmotion(im, j, end_m);
         if (jok && emits)
             jok = ts_jw_rgb(j, "emission", d.emission) && (!d.two_sided || ts_jw_bool(j, "two_sided", true)) &&
                   (!d.light_samples || ts_jw_number(j, "light_samples", d.light_samples));
@@ -1593,18 +1706,27 @@ static ts_status map_objects(imp *im)
     for (size_t i = 0; i < s->instance_count && !st; i++) {
         ts_pbrt_instance *in = &s->instances[i];
         ts_pbrt_params ps = {.directive = "ObjectInstance", .directive_arg = s->objects[in->object].name};
-        ts_xform x;
+        ts_xform x, x_end;
         if (!user_xform(in->instance_to_world, &x)) {
             st = derr(im, &ps, in->loc, TS_ERR_INVALID, "the transformation matrix is singular");
             break;
         }
-        st = at(im, ts_scene_builder_add_instance(im->b, ids[in->object], &x, im->err), &ps, in->loc);
+        if (in->instance_to_world_end) {
+            if ((st = motion_end(im, &ps, in->loc, in->instance_to_world, in->instance_to_world_end, &x_end))) break;
+            st = at(im,
+                    ts_scene_builder_add_moving_instance(im->b, ids[in->object], &x, s->transform_start_time, &x_end,
+                                                         s->transform_end_time, im->err),
+                    &ps, in->loc);
+        } else {
+            st = at(im, ts_scene_builder_add_instance(im->b, ids[in->object], &x, im->err), &ps, in->loc);
+        }
         if (!st && im->doc) {
             char name[300];
             snprintf(name, sizeof name, "%.200s#%d", s->objects[in->object].name, (int)in->object);
             cJSON *j = cJSON_CreateObject();
             if (!j || !ts_jw_string(j, "object", name) ||
                 !ts_jw_add(j, "transform", ts_jw_transform(in->instance_to_world)) ||
+                (in->instance_to_world_end && !jmotion(im, j, in->instance_to_world_end)) ||
                 !cJSON_AddItemToArray(im->jinstances, j)) {
                 cJSON_Delete(j);
                 st = nomem(im);

@@ -67,8 +67,8 @@ typedef struct block {
     int kind;
     ts_pbrt_loc loc;
     const char *object_name; /* BLOCK_OBJECT */
-    ts_mat4 ctm;
-    const ts_mat4 *ctm_ptr;
+    ts_mat4 ctm, ctm_end;
+    const ts_mat4 *ctm_ptr, *ctm_end_ptr;
     unsigned active;
     gstate gs;
     size_t undo_mark;
@@ -81,6 +81,11 @@ typedef struct file_frame {
 } file_frame;
 
 enum { ACTIVE_START = 1, ACTIVE_END = 2, ACTIVE_ALL = 3 };
+
+/* A named coordinate system: both CTMs, as pbrt-v3's TransformSet. */
+typedef struct coordsys {
+    ts_mat4 start, end;
+} coordsys;
 
 struct parser {
     ts_pbrt_scene *s;
@@ -96,8 +101,10 @@ struct parser {
 
     /* state */
     enum { PHASE_OPTIONS, PHASE_WORLD, PHASE_ENDED } phase;
-    ts_mat4 ctm;
-    const ts_mat4 *ctm_ptr; /* arena copy of ctm, or NULL until one is needed */
+    /* pbrt-v3's two CTMs (curTransform[0], [1]): at the start and the end time; the
+     * transform directives change those ActiveTransform selects. */
+    ts_mat4 ctm, ctm_end;
+    const ts_mat4 *ctm_ptr, *ctm_end_ptr; /* arena copies, or NULL until one is needed */
     unsigned active;
     gstate gs;
     int32_t current_object;
@@ -107,7 +114,7 @@ struct parser {
     size_t table_cap, table_n;
     vec undo;   /* undo_entry */
     vec blocks; /* block */
-    vec coordsys; /* ts_mat4 */
+    vec coordsys; /* coordsys */
 
     /* entities */
     vec textures, materials, area_lights, lights, shapes, objects, instances, media, warnings;
@@ -706,17 +713,56 @@ static const ts_mat4 *ctm_ptr(parser *p)
     return p->ctm_ptr;
 }
 
-static void ctm_set(parser *p, const ts_mat4 *m)
+/* Whether the two CTMs differ (pbrt-v3's IsAnimated of the CTM pair). */
+static bool ctm_animated(const parser *p) { return memcmp(&p->ctm, &p->ctm_end, sizeof p->ctm) != 0; }
+
+/* The end CTM's arena copy when it differs from the start one; *out NULL when not. */
+static ts_status ctm_end_ptr(parser *p, const ts_mat4 **out)
 {
-    if (!(p->active & ACTIVE_START)) return; /* ActiveTransform EndTime: motion is dropped */
-    p->ctm = *m;
-    p->ctm_ptr = NULL;
+    *out = NULL;
+    if (!ctm_animated(p)) return TS_OK;
+    if (!p->ctm_end_ptr) {
+        ts_mat4 *m = ts_arena_alloc(&p->s->arena, sizeof *m, 16);
+        if (!m) return nomem(p);
+        *m = p->ctm_end;
+        p->ctm_end_ptr = m;
+    }
+    *out = p->ctm_end_ptr;
+    return TS_OK;
 }
 
+/* Sets the active CTMs to m (ActiveTransform's selection, as pbrt-v3's transform directives). */
+static void ctm_set(parser *p, const ts_mat4 *m)
+{
+    if (p->active & ACTIVE_START) {
+        p->ctm = *m;
+        p->ctm_ptr = NULL;
+    }
+    if (p->active & ACTIVE_END) {
+        p->ctm_end = *m;
+        p->ctm_end_ptr = NULL;
+    }
+}
+
+/* Sets both CTMs whatever is active (CoordSysTransform, as pbrt-v3's). */
+static void ctm_set_both(parser *p, const ts_mat4 *start, const ts_mat4 *end)
+{
+    p->ctm = *start;
+    p->ctm_end = *end;
+    p->ctm_ptr = p->ctm_end_ptr = NULL;
+}
+
+/* Post-multiplies the active CTMs by m. */
 static void ctm_concat(parser *p, const ts_mat4 *m)
 {
-    ts_mat4 r = ts_mat4_mul(&p->ctm, m);
-    ctm_set(p, &r);
+    if (p->active & ACTIVE_START) {
+        p->ctm = ts_mat4_mul(&p->ctm, m);
+        p->ctm_ptr = NULL;
+    }
+    if (p->active & ACTIVE_END) {
+        p->ctm_end = ts_mat4_mul(&p->ctm_end, m);
+        p->ctm_end_ptr = NULL;
+    }
 }
 
 /* pbrt-v3's LookAt: the world-to-camera matrix of a camera at eye looking at look. */
@@ -782,7 +828,9 @@ static ts_status push_block(parser *p, int kind, ts_pbrt_loc loc, const char *ob
     b->loc = loc;
     b->object_name = object_name;
     b->ctm = p->ctm;
+    b->ctm_end = p->ctm_end;
     b->ctm_ptr = p->ctm_ptr;
+    b->ctm_end_ptr = p->ctm_end_ptr;
     b->active = p->active;
     b->gs = p->gs;
     b->undo_mark = p->undo.n;
@@ -809,7 +857,9 @@ static ts_status pop_block(parser *p, int kind, ts_pbrt_loc loc)
         return perr(p, loc, TS_ERR_INVALID, "%s, but the innermost open block is the %s at %s:%u:%u", block_end_name(kind),
                     block_name(b->kind), b->loc.file, b->loc.line, b->loc.column);
     p->ctm = b->ctm;
+    p->ctm_end = b->ctm_end;
     p->ctm_ptr = b->ctm_ptr;
+    p->ctm_end_ptr = b->ctm_end_ptr;
     p->active = b->active;
     if (kind != BLOCK_TRANSFORM) {
         p->gs = b->gs;
@@ -1054,20 +1104,20 @@ static ts_status directive(parser *p)
         int32_t idx = name_lookup(p, NS_COORDSYS, cs);
         if (id == DIR_COORDINATE_SYSTEM) {
             if (idx < 0) {
-                ts_mat4 *m = vec_push(p, &p->coordsys, sizeof *m);
+                coordsys *m = vec_push(p, &p->coordsys, sizeof *m);
                 if (!m) return nomem(p);
                 idx = (int32_t)(p->coordsys.n - 1);
                 if ((st = name_define(p, NS_COORDSYS, cs, idx, false, NULL))) return st;
             }
-            VEC_AT(p->coordsys, ts_mat4, idx) = p->ctm;
+            VEC_AT(p->coordsys, coordsys, idx) = (coordsys){p->ctm, p->ctm_end};
             return TS_OK;
         }
         if (idx < 0)
             return warn(p, loc, "CoordSysTransform: no coordinate system is named \"%s\"%s; the transform is left "
                                 "unchanged, as pbrt-v3 does",
                         cs, strcmp(cs, "camera") == 0 ? " (\"camera\" is named by Camera)" : "");
-        ts_mat4 m = VEC_AT(p->coordsys, ts_mat4, idx);
-        ctm_set(p, &m);
+        coordsys c = VEC_AT(p->coordsys, coordsys, idx);
+        ctm_set_both(p, &c.start, &c.end);
         return TS_OK;
     }
     case DIR_ACTIVE_TRANSFORM: {
@@ -1077,37 +1127,44 @@ static ts_status directive(parser *p)
                         describe(p, d, sizeof d));
         char which = p->tok.text[0];
         p->active = which == 'A' ? ACTIVE_ALL : which == 'S' ? ACTIVE_START : ACTIVE_END;
-        if ((st = advance(p))) return st;
-        if (which != 'A')
-            return warn(p, loc, "ActiveTransform %s: motion blur is not supported; every entity keeps its "
-                                "start-time transform",
-                        which == 'S' ? "StartTime" : "EndTime");
-        return TS_OK;
+        return advance(p);
     }
     case DIR_TRANSFORM_TIMES: {
         double v[2] = {0};
         if ((st = expect_numbers(p, name, v, 2))) return st;
+        /* pbrt-v3 takes any pair; an end before the start makes its AnimatedTransform a jump
+         * from the start to the end transform at the start time — refused here. */
+        if (v[1] < v[0])
+            return perr(p, loc, TS_ERR_INVALID, "TransformTimes: the end time %g is before the start time %g", v[1],
+                        v[0]);
         p->s->transform_start_time = v[0];
         p->s->transform_end_time = v[1];
+        p->s->transform_times_loc = loc;
         return TS_OK;
     }
     /* --- options --- */
     case DIR_CAMERA: {
-        ts_mat4 inv;
+        ts_mat4 inv, inv_end;
         if (!ts_mat4_invert(&p->ctm, &inv))
             return perr(p, loc, TS_ERR_INVALID, "Camera: the current transformation is singular (it has no inverse)");
+        if (!ts_mat4_invert(&p->ctm_end, &inv_end))
+            return perr(p, loc, TS_ERR_INVALID,
+                        "Camera: the current transformation at the end time (ActiveTransform EndTime) is singular");
         if ((st = option_directive(p, name, loc, &p->s->camera))) return st;
         p->s->world_to_camera = p->ctm;
         p->s->camera_to_world = inv;
+        p->s->world_to_camera_end = p->ctm_end;
+        p->s->camera_to_world_end = inv_end;
+        p->s->camera_animated = ctm_animated(p);
         p->s->camera_medium = p->gs.outside_medium;
         p->camera_given = true;
         int32_t idx = name_lookup(p, NS_COORDSYS, "camera");
         if (idx < 0) {
-            if (!vec_push(p, &p->coordsys, sizeof(ts_mat4))) return nomem(p);
+            if (!vec_push(p, &p->coordsys, sizeof(coordsys))) return nomem(p);
             idx = (int32_t)(p->coordsys.n - 1);
             if ((st = name_define(p, NS_COORDSYS, "camera", idx, false, NULL))) return st;
         }
-        VEC_AT(p->coordsys, ts_mat4, idx) = inv;
+        VEC_AT(p->coordsys, coordsys, idx) = (coordsys){inv, inv_end};
         return TS_OK;
     }
     case DIR_FILM: return option_directive(p, name, loc, &p->s->film);
@@ -1118,16 +1175,15 @@ static ts_status directive(parser *p)
     case DIR_WORLD_BEGIN: {
         p->phase = PHASE_WORLD;
         ts_mat4 i = ts_mat4_identity();
-        p->ctm = i;
-        p->ctm_ptr = NULL;
+        ctm_set_both(p, &i, &i);
         p->active = ACTIVE_ALL;
         int32_t idx = name_lookup(p, NS_COORDSYS, "world");
         if (idx < 0) {
-            if (!vec_push(p, &p->coordsys, sizeof(ts_mat4))) return nomem(p);
+            if (!vec_push(p, &p->coordsys, sizeof(coordsys))) return nomem(p);
             idx = (int32_t)(p->coordsys.n - 1);
             if ((st = name_define(p, NS_COORDSYS, "world", idx, false, NULL))) return st;
         }
-        VEC_AT(p->coordsys, ts_mat4, idx) = i;
+        VEC_AT(p->coordsys, coordsys, idx) = (coordsys){i, i};
         return TS_OK;
     }
     case DIR_WORLD_END: {
@@ -1183,11 +1239,13 @@ static ts_status directive(parser *p)
                         VEC_AT(p->objects, ts_pbrt_object, p->current_object).name);
         int32_t idx = name_lookup(p, NS_OBJECT, on);
         if (idx < 0) return perr(p, loc, TS_ERR_INVALID, "ObjectInstance \"%s\": no object of that name is defined", on);
-        const ts_mat4 *m = ctm_ptr(p);
+        const ts_mat4 *m = ctm_ptr(p), *m_end;
+        if ((st = ctm_end_ptr(p, &m_end))) return st;
         ts_pbrt_instance *in = vec_push(p, &p->instances, sizeof *in);
         if (!m || !in) return nomem(p);
         in->object = idx;
         in->instance_to_world = m;
+        in->instance_to_world_end = m_end;
         in->loc = loc;
         VEC_AT(p->objects, ts_pbrt_object, idx).instance_count++;
         return TS_OK;
@@ -1286,6 +1344,7 @@ static ts_status directive(parser *p)
         if ((st = read_params(p, name, sh.type, &sh.params))) return st;
         sh.object_to_world = ctm_ptr(p);
         if (!sh.object_to_world) return nomem(p);
+        if ((st = ctm_end_ptr(p, &sh.object_to_world_end))) return st;
         sh.reverse_orientation = p->gs.reverse_orientation;
         sh.material = p->gs.material;
         if (p->gs.area_light >= 0) {
@@ -1447,7 +1506,7 @@ static ts_status parse(const char *path, const char *text, size_t len, const cha
         ts_pbrt_limits_default(&p->lim);
     if (p->lim.max_include_depth < 1) p->lim.max_include_depth = 1;
     ts_arena_init(&s->arena, p->lim.max_memory);
-    p->ctm = ts_mat4_identity();
+    p->ctm = p->ctm_end = ts_mat4_identity();
     p->active = ACTIVE_ALL;
     p->gs.material = -1;
     p->gs.area_light = -1;

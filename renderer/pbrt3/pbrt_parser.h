@@ -37,9 +37,13 @@
  *    between `WorldBegin` and `WorldEnd`. pbrt-v3 prints an error and ignores a
  *    directive in the wrong block; here it is an error. Transform directives, `Include`
  *    and the media directives are allowed anywhere. Nothing may follow `WorldEnd`.
- *  - Motion blur is dropped: after `ActiveTransform EndTime` transform directives are
- *    ignored, so every entity keeps its start-time transform (one warning per
- *    `ActiveTransform` other than All). Media are recorded (MakeNamedMedium with its CTM,
+ *  - Motion blur as pbrt-v3: two CTMs, at TransformTimes' start and end time (default 0,
+ *    1; an end before the start is refused); `ActiveTransform StartTime/EndTime/All`
+ *    selects which of them the transform directives change (saved by TransformBegin and
+ *    AttributeBegin), CoordinateSystem names both, CoordSysTransform sets both. A shape
+ *    and an ObjectInstance carry the end CTM where it differs from the start one (NULL
+ *    otherwise), the camera both; lights, textures and media take the start CTM, as
+ *    pbrt-v3's. Media are recorded (MakeNamedMedium with its CTM,
  *    the MediumInterface names in force at each shape, light and the camera). An area light inside an object definition
  *    is dropped with a warning, as pbrt-v3 does.
  *
@@ -119,6 +123,7 @@ typedef struct ts_pbrt_shape {
     /* The CTM at Shape: object to world, or, for a shape of an object definition, object
      * to the instance's space (an instance places it with its instance_to_world). */
     const ts_mat4 *object_to_world;
+    const ts_mat4 *object_to_world_end; /* the CTM at the end time where it differs (animated), else NULL */
     bool reverse_orientation; /* ReverseOrientation in force (pbrt-v3 also flips normals when
                                  object_to_world swaps handedness; the importer applies both) */
     int32_t material;   /* index into materials; -1: pbrt-v3's default "matte" */
@@ -139,6 +144,7 @@ typedef struct ts_pbrt_object {
 typedef struct ts_pbrt_instance {
     int32_t object; /* index into objects */
     const ts_mat4 *instance_to_world;
+    const ts_mat4 *instance_to_world_end; /* the end-time CTM where it differs, else NULL */
     ts_pbrt_loc loc;
 } ts_pbrt_instance;
 
@@ -162,8 +168,11 @@ typedef struct ts_pbrt_scene {
     ts_pbrt_option camera, film, sampler, filter, integrator, accelerator;
     ts_mat4 world_to_camera; /* the CTM at Camera (identity if there was none) */
     ts_mat4 camera_to_world; /* its inverse */
+    ts_mat4 world_to_camera_end, camera_to_world_end; /* the same at the end time */
+    bool camera_animated;    /* the two differ */
     const char *camera_medium; /* outside medium at Camera ("" none) */
-    double transform_start_time, transform_end_time; /* TransformTimes (0, 1) */
+    double transform_start_time, transform_end_time; /* TransformTimes (0, 1); end ≥ start */
+    ts_pbrt_loc transform_times_loc; /* where TransformTimes was given (file NULL: not) */
 
     ts_pbrt_texture *textures;
     size_t texture_count;

@@ -78,6 +78,9 @@ bool ts_render_tile(const ts_render_request *req, int x0, int y0, int w, int h, 
     ts_camera cam = s->camera;
     if (!(fx & TS_EFFECT_DEPTH_OF_FIELD)) cam.lens_radius = 0; /* the lens sample is still drawn */
     const float diff_scale = 1 / sqrtf((float)s->spp); /* pbrt-v3's ScaleDifferentials(1/√spp) */
+    /* The scene's motion, not the specialisation's flags: the time dimension is there or not
+     * whatever the effects analysis skips (a generic render of a static scene keeps its pixels). */
+    const bool motion = (s->effects & TS_EFFECT_MOTION) != 0;
     for (int y = y0; y < y0 + h; y++)
         for (int x = x0; x < x0 + w; x++) {
             ts_sampler_pixel pixel; /* the pixel's scramble seeds, shared by its samples */
@@ -95,10 +98,24 @@ bool ts_render_tile(const ts_render_request *req, int x0, int y0, int w, int h, 
                 float weight;
                 ts_vec2 off = ts_filter_sample(&s->filter, u_film, &weight);
                 ts_vec2 p_raster = {(float)x + 0.5f + off.x, (float)y + 0.5f + off.y};
+                /* The shutter sample: a dimension only in a scene with motion (effects.h), so
+                 * every other scene keeps its dimensions and pixels. */
+                float time = cam.shutter_open;
+                if (motion) time = ts_camera_time(&cam, ts_sample_1d(&st));
                 ts_ray ray = ts_camera_ray(&cam, p_raster, u_lens);
                 /* Differentials only where a texture reads them (differential.h). */
                 ts_ray_differential rd;
                 if (s->textured) ts_ray_differential_camera(&cam, p_raster, u_lens, &ray, diff_scale, &rd);
+                if (cam.moving) {
+                    ts_camera_move_ray(&cam, &ray, time);
+                    if (s->textured) {
+                        ts_vec3 o[2] = {rd.rx_o, rd.ry_o}, d[2] = {rd.rx_d, rd.ry_d};
+                        ts_camera_move_points(&cam, time, o, d, 2);
+                        rd.rx_o = o[0], rd.ry_o = o[1], rd.rx_d = d[0], rd.ry_d = d[1];
+                    }
+                } else {
+                    ray.time = time;
+                }
                 ts_rgb L = ts_integrator_li(s, req->integrator, fx, &ray, s->textured ? &rd : NULL, &st, c);
                 c->samples++;
                 if (!ts_rgb_is_finite(L) || L.r < 0 || L.g < 0 || L.b < 0 || L.r > TS_FILM_SAMPLE_MAX ||

@@ -77,7 +77,7 @@ const fmtPct = (e) => (e == null || !isFinite(e) ? 'n/a' : (100 * e).toPrecision
 const EFFECT_TEXT = { delta_lights: 'point and spot lights', area_lights: 'area lights', environment: 'environment light',
   diffuse: 'diffuse', glossy: 'glossy', specular_reflection: 'mirror reflection', specular_transmission: 'refraction',
   fourier: 'Fourier BSDFs', depth_of_field: 'depth of field', indirect: 'indirect light', lobe_choice: 'layered materials',
-  media: 'participating media' };
+  media: 'participating media', motion: 'motion blur' };
 const effectText = (e) => EFFECT_TEXT[e] || e.replace(/_/g, ' ');
 const finished = (st) => st === 'done' || st === 'cancelled' || st === 'failed';
 const jobLabel = (j) => (j.name ? j.name + ' ' : '') + '(' + j.id + ')';
