@@ -21,6 +21,7 @@
 
 #include "build/light_desc.h"
 #include "build/scene_builder.h"
+#include "doc_rows.h"
 #include "json/scene_json.h"
 #include "scene/scene.h"
 
@@ -198,12 +199,31 @@ static void test_ranges_refused(void **state)
     ts_scene_builder_destroy(b);
 }
 
+/* docs/pbrt-v3.md's Lights table names every pbrt-v3 parameter each type reads. */
+static void test_docs_name_every_parameter(void **state)
+{
+    (void)state;
+    char *doc = doc_rows_load();
+    if (!doc) fail_msg("cannot read docs/pbrt-v3.md (TS_SOURCE_DIR)");
+    char row[8192];
+    for (int t = 0; t < TS_LIGHT_DESC_COUNT; t++) {
+        const ts_light_type_desc *d = &ts_light_descs[t];
+        if (!doc_rows_find(doc, "## Lights", d->pbrt3, row, sizeof row)) fail_msg("docs/pbrt-v3.md has no row for %s", d->pbrt3);
+        for (int i = 0; i < d->n_params; i++)
+            if (!doc_rows_names(row, d->params[i].pbrt3))
+                fail_msg("docs/pbrt-v3.md's %s row does not name `%s`", d->pbrt3, d->params[i].pbrt3);
+        if (!doc_rows_names(row, "scale")) fail_msg("docs/pbrt-v3.md's %s row does not name `scale`", d->pbrt3);
+    }
+    free(doc);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_schema_agrees),
         cmocka_unit_test(test_pbrt3_defaults),
         cmocka_unit_test(test_ranges_refused),
+        cmocka_unit_test(test_docs_name_every_parameter),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -24,6 +24,7 @@
 #include <cjson/cJSON.h>
 
 #include "build/scene_builder.h"
+#include "doc_rows.h"
 #include "json/scene_json.h"
 #include "materials/bsdf.h"
 #include "materials/material_desc.h"
@@ -355,6 +356,31 @@ static void test_max_lobes(void **state)
     }
 }
 
+/* docs/pbrt-v3.md's Materials table names every pbrt-v3 parameter each type reads. */
+static void test_docs_name_every_parameter(void **state)
+{
+    (void)state;
+    char *doc = doc_rows_load();
+    if (!doc) fail_msg("cannot read docs/pbrt-v3.md (TS_SOURCE_DIR)");
+    char row[8192];
+    for (int t = 0; t < TS_MATERIAL_TYPE_COUNT; t++) {
+        const ts_material_desc *d = &ts_material_descs[t];
+        if (!d->pbrt3) continue;
+        if (!doc_rows_find(doc, "## Materials", d->pbrt3, row, sizeof row)) fail_msg("docs/pbrt-v3.md has no row for %s", d->pbrt3);
+        for (int i = 0; i < d->n_params; i++)
+            if (d->params[i].pbrt3 && !doc_rows_names(row, d->params[i].pbrt3))
+                fail_msg("docs/pbrt-v3.md's %s row does not name `%s`", d->pbrt3, d->params[i].pbrt3);
+        if ((d->flags & TS_MDESC_PBRT3_ROUGH) && !doc_rows_names(row, "roughness"))
+            fail_msg("docs/pbrt-v3.md's %s row does not name `roughness`", d->pbrt3);
+        if ((d->flags & TS_MDESC_ANISO) && !(doc_rows_names(row, "uroughness") && doc_rows_names(row, "vroughness")))
+            fail_msg("docs/pbrt-v3.md's %s row does not name `uroughness` and `vroughness`", d->pbrt3);
+        if ((d->flags & TS_MDESC_FILE) && !doc_rows_names(row, "bsdffile")) fail_msg("fourier: `bsdffile` undocumented");
+        if ((d->flags & TS_MDESC_MIX) && !(doc_rows_names(row, "namedmaterial1") && doc_rows_names(row, "namedmaterial2")))
+            fail_msg("mix: `namedmaterial1/2` undocumented");
+    }
+    free(doc);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -363,6 +389,7 @@ int main(void)
         cmocka_unit_test(test_rows_through_the_front_end),
         cmocka_unit_test(test_rows_through_the_builder),
         cmocka_unit_test(test_max_lobes),
+        cmocka_unit_test(test_docs_name_every_parameter),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -17,6 +17,7 @@
 #include <cjson/cJSON.h>
 
 #include "build/medium_desc.h"
+#include "doc_rows.h"
 
 static cJSON *load_schema(void)
 {
@@ -108,11 +109,30 @@ static void test_pbrt3_names_and_defaults(void **state)
     }
 }
 
+/* docs/pbrt-v3.md's MakeNamedMedium row names every parameter of both types. */
+static void test_docs_name_every_parameter(void **state)
+{
+    (void)state;
+    char *doc = doc_rows_load();
+    if (!doc) fail_msg("cannot read docs/pbrt-v3.md (TS_SOURCE_DIR)");
+    char row[8192];
+    if (!doc_rows_find(doc, "## Directives", "MakeNamedMedium", row, sizeof row)) fail_msg("no MakeNamedMedium row");
+    for (int t = 0; t < TS_MEDIUM_DESC_COUNT; t++) {
+        const ts_medium_type_desc *d = &ts_medium_descs[t];
+        if (!doc_rows_names(row, d->pbrt3)) fail_msg("the MakeNamedMedium row does not name `%s`", d->pbrt3);
+        for (int i = 0; i < d->n_params; i++)
+            if (!doc_rows_names(row, d->params[i].key))
+                fail_msg("the MakeNamedMedium row does not name `%s` (%s)", d->params[i].key, d->pbrt3);
+    }
+    free(doc);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_schema_agrees),
         cmocka_unit_test(test_pbrt3_names_and_defaults),
+        cmocka_unit_test(test_docs_name_every_parameter),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

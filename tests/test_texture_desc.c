@@ -16,6 +16,7 @@
 
 #include <cjson/cJSON.h>
 
+#include "doc_rows.h"
 #include "textures/texture_desc.h"
 
 static cJSON *load_schema(void)
@@ -146,11 +147,37 @@ static void test_pbrt3_names_and_defaults(void **state)
     }
 }
 
+/* docs/pbrt-v3.md's Textures table names every pbrt-v3 parameter each class reads. */
+static void test_docs_name_every_parameter(void **state)
+{
+    (void)state;
+    char *doc = doc_rows_load();
+    if (!doc) fail_msg("cannot read docs/pbrt-v3.md (TS_SOURCE_DIR)");
+    char row[8192];
+    for (int t = 0; t < TS_TEXTURE_TYPE_COUNT; t++) {
+        const ts_texture_desc *d = &ts_texture_descs[t];
+        if (!doc_rows_find(doc, "## Textures", d->pbrt3, row, sizeof row)) fail_msg("docs/pbrt-v3.md has no row for %s", d->pbrt3);
+        for (int i = 0; i < d->n_params; i++) {
+            if (!doc_rows_names(row, d->params[i].pbrt3))
+                fail_msg("docs/pbrt-v3.md's %s row does not name `%s`", d->pbrt3, d->params[i].pbrt3);
+            if (d->params[i].kind == TS_TPARAM_OCTAVES && !doc_rows_names(row, "roughness"))
+                fail_msg("docs/pbrt-v3.md's %s row does not name `roughness`", d->pbrt3);
+        }
+        if (d->dimension && !doc_rows_names(row, "dimension")) fail_msg("checkerboard: `dimension` undocumented");
+        if ((d->flags & TS_TDESC_AAMODE) && !doc_rows_names(row, "aamode")) fail_msg("checkerboard: `aamode` undocumented");
+        static const char *const image[] = {"filename", "maxanisotropy", "trilinear", "wrap", "scale", "gamma", "invert"};
+        for (size_t i = 0; (d->flags & TS_TDESC_IMAGE) && i < sizeof image / sizeof *image; i++)
+            if (!doc_rows_names(row, image[i])) fail_msg("imagemap: `%s` undocumented", image[i]);
+    }
+    free(doc);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_schema_agrees),
         cmocka_unit_test(test_pbrt3_names_and_defaults),
+        cmocka_unit_test(test_docs_name_every_parameter),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

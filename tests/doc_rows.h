@@ -1,0 +1,68 @@
+/* doc_rows.h — the rows of docs/pbrt-v3.md's tables, for the tests that hold a type's
+ * description (test_*_desc.c) to what the user reads: the row whose first cell names a
+ * pbrt-v3 type in backquotes must name each parameter the table reads, in backquotes. */
+#ifndef TS_TEST_DOC_ROWS_H
+#define TS_TEST_DOC_ROWS_H
+
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* docs/pbrt-v3.md as one string (malloc'd), or NULL. */
+static inline char *doc_rows_load(void)
+{
+    const char *src = getenv("TS_SOURCE_DIR");
+    if (!src) return NULL;
+    char path[4096];
+    snprintf(path, sizeof path, "%s/docs/pbrt-v3.md", src);
+    FILE *f = fopen(path, "rb");
+    if (!f) return NULL;
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *buf = malloc((size_t)n + 1);
+    if (buf && fread(buf, 1, (size_t)n, f) != (size_t)n) {
+        free(buf);
+        buf = NULL;
+    }
+    if (buf) buf[n] = 0;
+    fclose(f);
+    return buf;
+}
+
+/* The table row (a line starting "| ") whose first cell holds `type` in backquotes, copied
+ * into row (false when there is none). `after`: a heading the row must follow ("## Lights"),
+ * so that a name two tables share is looked up in the right one. */
+static inline bool doc_rows_find(const char *doc, const char *after, const char *type, char *row, size_t n)
+{
+    const char *p = after ? strstr(doc, after) : doc;
+    if (!p) return false;
+    char want[128];
+    snprintf(want, sizeof want, "`%s`", type);
+    for (const char *line = p; line && *line; line = strchr(line, '\n') ? strchr(line, '\n') + 1 : NULL) {
+        if (strncmp(line, "## ", 3) == 0 && line != p) return false; /* the section ended */
+        if (strncmp(line, "| ", 2) != 0) continue;
+        const char *end = strchr(line + 2, '|'), *eol = strchr(line, '\n');
+        if (!end) continue;
+        const char *hit = strstr(line, want);
+        if (hit && hit < end) {
+            size_t len = eol ? (size_t)(eol - line) : strlen(line);
+            if (len >= n) len = n - 1;
+            memcpy(row, line, len);
+            row[len] = 0;
+            return true;
+        }
+    }
+    return false;
+}
+
+/* Whether row names `param` in backquotes. */
+static inline bool doc_rows_names(const char *row, const char *param)
+{
+    char want[128];
+    snprintf(want, sizeof want, "`%s`", param);
+    return strstr(row, want) != NULL;
+}
+
+#endif
