@@ -61,6 +61,9 @@ static void render_usage(FILE *f)
             "                            job.time_limit_s, else none)\n"
             "  --target-error E          stop at this relative error estimate, as 0.01 or 1%%, below 1\n"
             "                            (default: the scene's job.target_error, else none)\n"
+            "  --adaptive                after the first 16 spp, only the pixels still short of their share\n"
+            "                            of the target error (else 1%%) take samples (default: the scene's\n"
+            "                            job.adaptive); not with --shard or --checkpoint\n"
             "  --threads N               render threads, 1 to 1024 (default: one per core)\n"
             "  --seed N                  the sampler's seed, 0 to 4294967295 (default: the scene's)\n"
             "  --quiet                   no progress bar and no summary\n"
@@ -119,18 +122,33 @@ static bool parse_positive(const char *s, double *out)
 typedef struct render_opts {
     cli_outputs outputs;
     unsigned long long spp, threads, seed, shard_count;
-    bool have_seed, quiet;
+    bool have_seed, quiet, adaptive;
     double time_limit, target_error, checkpoint_interval;
     const char *scene_path, *shard_text, *checkpoint;
     const char *display_server; /* --display-server HOST:PORT, or NULL */
 } render_opts;
+
+/* Why an adaptive render cannot take o's --shard or --checkpoint, or NULL. A shard must hold
+ * one sample range in every pixel (tessera merge adds them exactly) and so must the
+ * checkpoint EXR (it resumes at one sample index); an adaptive render's pixels stop at
+ * different counts, chosen from the whole image. */
+static const char *adaptive_refusal(const render_opts *o)
+{
+    if (o->shard_text)
+        return "goes without --shard: an adaptive render's pixels stop at different sample counts, chosen from the "
+               "whole image, and shards that did so could not be merged exactly; render it in one piece";
+    if (o->checkpoint)
+        return "goes without --checkpoint: a checkpoint resumes every pixel at one sample index, and an adaptive "
+               "render's pixels stop at different counts (tessera serve --data resumes adaptive jobs)";
+    return NULL;
+}
 
 /* Fills o from the command line; -1 when the render should go ahead, else the exit status
  * (usage errors, --help). */
 static int parse_render_options(int argc, char **argv, render_opts *o)
 {
     enum { OPT_SPP = 256, OPT_THREADS, OPT_SEED, OPT_TIME, OPT_TARGET, OPT_QUIET, OPT_HELP, OPT_SHARD, OPT_SHARD_COUNT,
-           OPT_CHECKPOINT, OPT_CHECKPOINT_INTERVAL, OPT_DISPLAY };
+           OPT_CHECKPOINT, OPT_CHECKPOINT_INTERVAL, OPT_DISPLAY, OPT_ADAPTIVE };
     static const struct option opts[] = {
         {"output", required_argument, NULL, 'o'},    {"spp", required_argument, NULL, OPT_SPP},
         {"threads", required_argument, NULL, OPT_THREADS}, {"seed", required_argument, NULL, OPT_SEED},
@@ -140,6 +158,7 @@ static int parse_render_options(int argc, char **argv, render_opts *o)
         {"checkpoint", required_argument, NULL, OPT_CHECKPOINT},
         {"checkpoint-interval", required_argument, NULL, OPT_CHECKPOINT_INTERVAL},
         {"display-server", required_argument, NULL, OPT_DISPLAY},
+        {"adaptive", no_argument, NULL, OPT_ADAPTIVE},
         {NULL, 0, NULL, 0}};
     memset(o, 0, sizeof *o);
     o->checkpoint_interval = 60;
@@ -174,6 +193,7 @@ static int parse_render_options(int argc, char **argv, render_opts *o)
                                           "got '%s'", optarg);
             break;
         case OPT_QUIET: o->quiet = true; break;
+        case OPT_ADAPTIVE: o->adaptive = true; break;
         case OPT_HELP: render_usage(stdout); return 0;
         case OPT_SHARD: o->shard_text = optarg; break;
         case OPT_SHARD_COUNT:
@@ -207,6 +227,10 @@ static int parse_render_options(int argc, char **argv, render_opts *o)
         if (!exr)
             return render_usage_error("--shard: a shard is merged from its EXR; add -o %s.exr (a PNG alone cannot be "
                                       "merged)", "SHARD");
+    }
+    if (o->adaptive) {
+        const char *why = adaptive_refusal(o);
+        if (why) return render_usage_error("--adaptive %s", why);
     }
     if (o->checkpoint && !cli_output_is_exr(o->checkpoint))
         return render_usage_error("--checkpoint %s: the checkpoint is an EXR file; give it the .exr extension", o->checkpoint);
@@ -413,6 +437,12 @@ static int prepare_render(const render_opts *o, ts_scene **scene_out, ts_job_set
     if (o->spp) js->spp = (uint32_t)o->spp;
     if (o->time_limit) js->time_limit_s = o->time_limit;
     if (o->target_error) js->target_error = o->target_error;
+    if (o->adaptive) js->adaptive = true;
+    if (js->adaptive && adaptive_refusal(o)) {
+        srv_usage_error("tessera render", NULL, "the scene's job.adaptive %s", adaptive_refusal(o));
+        ts_scene_destroy(scene);
+        return SRV_USAGE_EXIT;
+    }
     if (shard_n > js->spp) {
         fprintf(stderr, "tessera: %u shards of a %u-spp render would leave some without samples; use at most %u shards\n",
                 shard_n, js->spp, js->spp);

@@ -16,6 +16,7 @@
 #include "image/image.h"
 #include "image/png_encode.h"
 #include "integrators/effects.h"
+#include "render/adaptive.h"
 #include "render/render.h"
 #include "render/scheduler.h"
 #include "render/shard.h"

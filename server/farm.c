@@ -1045,10 +1045,19 @@ srv_job *srv_farm_submit(srv_farm *f, srv_store *st, const char *text, size_t le
     }
     srv_job *j = srv_store_submit_external(st, text, len, files, cancel, http_status, err);
     if (!j) return NULL;
-    if (shards > j->settings.spp) {
-        /* Every task must render at least one sample. The job was listed: it fails. */
-        ts_error_set(err, TS_ERR_INVALID, "job.farm.shards: %u tasks of %u samples per pixel would leave tasks without samples",
-                     shards, j->settings.spp);
+    if (shards > j->settings.spp || j->settings.adaptive) {
+        /* Every task must render at least one sample, and the same samples in every pixel
+         * (the merge adds them exactly): an adaptive job's pixels stop at counts chosen from
+         * the whole image. The job was listed: it fails. */
+        if (j->settings.adaptive)
+            ts_error_set(err, TS_ERR_INVALID,
+                         "job.adaptive: a farm job's tasks each render one sample range of every pixel, which the "
+                         "merge adds exactly; an adaptive job's pixels stop at different counts chosen from the whole "
+                         "image, so it is rendered here, without job.farm or ?shards");
+        else
+            ts_error_set(err, TS_ERR_INVALID,
+                         "job.farm.shards: %u tasks of %u samples per pixel would leave tasks without samples", shards,
+                         j->settings.spp);
         ts_sched_job_finish(j->sj, TS_JOB_FAILED, TS_HALT_NONE);
         srv_store_remove(st, j);
         if (j->files_dir) { /* a bundle's folder, ROOT/jobs/<id>/files: the job's folder goes */

@@ -758,6 +758,8 @@ srv_job *srv_store_restore(srv_store *st, const srv_restore *r, ts_error *err)
     d.callbacks = (ts_job_callbacks){on_tile, on_pass, on_done, j};
     d.film = r->film;
     d.tile_spp = r->tile_spp;
+    d.active = r->active;
+    d.active_spp = r->active_spp;
     d.elapsed_s = r->elapsed_s;
     d.samples = samples;
     d.nonfinite = r->nonfinite;
@@ -871,6 +873,7 @@ cJSON *srv_job_status_json(srv_job *j)
     cJSON_AddStringToObject(o, "halt_reason", ts_halt_reason_name(p.halt));
     add_number_or_null(o, "time_limit_s", j->settings.time_limit_s, j->settings.time_limit_s > 0);
     add_number_or_null(o, "target_error", j->settings.target_error, j->settings.target_error > 0);
+    cJSON_AddBoolToObject(o, "adaptive", j->settings.adaptive);
     cJSON_AddStringToObject(o, "integrator", j->integrator);
     cJSON *warn = cJSON_AddArrayToObject(o, "warnings");
     for (int i = 0; warn && i < j->warnings.n; i++) cJSON_AddItemToArray(warn, cJSON_CreateString(j->warnings.items[i]));

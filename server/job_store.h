@@ -163,6 +163,8 @@ typedef struct srv_restore {
     ts_scene *scene;
     ts_film *film;               /* may be NULL: start from scratch */
     const uint32_t *tile_spp;
+    const uint8_t *active;       /* an adaptive job's active pixels with the film, or NULL (ts_sched_job_desc) */
+    uint32_t active_spp;
     ts_job_settings settings;    /* integrator: the scene's, or AO when there is none */
     const char *failure;         /* non-NULL: register as failed with this message */
     const cJSON *history;        /* the checkpoint's "history" array, or NULL */

@@ -15,7 +15,9 @@
 #include "bundle.h"
 #include "tessera.h"
 
-/* film.bin: the header, the tiles' spp (uint32 each), the pixels (ts_film_pixel each). The
+/* film.bin: the header, the tiles' spp (uint32 each), the pixels (ts_film_pixel each), and
+ * for an adaptive job (render/adaptive.h) the check point its active pixels were chosen at
+ * (uint32) and one byte per pixel, 1 where it takes samples. The
  * header's sha256 is the SHA-256 of every other byte of the file (the header up to it and
  * all that follows), so a file damaged anywhere is refused. "TSFILM01" files (no digest)
  * are refused as damaged: their jobs render again from their scenes. */
@@ -137,18 +139,27 @@ static ts_status save_files(const char *dir, srv_job *j, bool with_film, ts_erro
     ts_sched_job_progress(j->sj, &p);
     size_t n_tiles = (size_t)j->nx * (size_t)j->ny;
     uint32_t *tile_spp = calloc(n_tiles ? n_tiles : 1, sizeof *tile_spp);
-    ts_film *f = tile_spp ? ts_sched_job_film(j->sj, tile_spp, err) : NULL;
+    bool adaptive = ts_sched_job_adaptive(j->sj);
+    size_t window = (size_t)j->w * (size_t)j->h;
+    uint8_t *active = adaptive ? malloc(window ? window : 1) : NULL;
+    uint32_t active_spp = 0;
+    ts_film *f = tile_spp && (active || !adaptive)
+                     ? ts_sched_job_film_adaptive(j->sj, tile_spp, active, &active_spp, err)
+                     : NULL;
     if (!f) {
         free(tile_spp);
+        free(active);
         cJSON_Delete(o);
         return err->status ? err->status : ts_error_set(err, TS_ERR_NOMEM, "out of memory for a checkpoint");
     }
     size_t n_px = (size_t)f->width * (size_t)f->height;
-    size_t bytes = sizeof(film_header) + n_tiles * sizeof(uint32_t) + n_px * sizeof(ts_film_pixel);
+    size_t bytes = sizeof(film_header) + n_tiles * sizeof(uint32_t) + n_px * sizeof(ts_film_pixel) +
+                   (adaptive ? sizeof(uint32_t) + n_px : 0);
     unsigned char *buf = malloc(bytes);
     if (!buf) {
         ts_film_destroy(f);
         free(tile_spp);
+        free(active);
         cJSON_Delete(o);
         return ts_error_set(err, TS_ERR_NOMEM, "out of memory for a checkpoint of %zu bytes", bytes);
     }
@@ -156,6 +167,12 @@ static ts_status save_files(const char *dir, srv_job *j, bool with_film, ts_erro
     memcpy(h.magic, FILM_MAGIC, 8);
     memcpy(buf + sizeof h, tile_spp, n_tiles * sizeof(uint32_t));
     memcpy(buf + sizeof h + n_tiles * sizeof(uint32_t), f->pixels, n_px * sizeof(ts_film_pixel));
+    if (adaptive) {
+        unsigned char *tail = buf + sizeof h + n_tiles * sizeof(uint32_t) + n_px * sizeof(ts_film_pixel);
+        memcpy(tail, &active_spp, sizeof active_spp);
+        memcpy(tail + sizeof active_spp, active, n_px);
+    }
+    free(active);
     memcpy(buf, &h, sizeof h);
     film_digest(buf, bytes, h.sha256);
     memcpy(buf + FILM_DIGEST_AT, h.sha256, sizeof h.sha256);
@@ -322,7 +339,7 @@ static bool film_finite(const ts_film *f)
 /* Reads film.bin for a scene of that crop window and tile grid. NULL when there is none
  * (*missing) or it is damaged (err says how, naming the file relative to --data). */
 static ts_film *read_film(const char *path, const char *rel, const ts_scene *s, int nx, int ny, uint32_t **tile_spp,
-                          bool *missing, ts_error *err)
+                          uint8_t **active, uint32_t *active_spp, bool *missing, ts_error *err)
 {
     size_t len = 0;
     const char *why;
@@ -348,7 +365,9 @@ static ts_film *read_film(const char *path, const char *rel, const ts_scene *s, 
         h.y0 != s->crop_y0 || h.w != s->crop_x1 - s->crop_x0 || h.h != s->crop_y1 - s->crop_y0)
         goto bad;
     n_px = (size_t)h.w * (size_t)h.h;
-    if (len != sizeof h + n_tiles * 4 + n_px * sizeof(ts_film_pixel)) goto bad;
+    size_t base = sizeof h + n_tiles * 4 + n_px * sizeof(ts_film_pixel);
+    bool with_active = len == base + 4 + n_px; /* an adaptive job's active pixels follow */
+    if (len != base && !with_active) goto bad;
     film_digest(buf, len, digest);
     if (memcmp(digest, h.sha256, sizeof digest) != 0) {
         bad = "fails its checksum (damaged)";
@@ -368,6 +387,16 @@ static ts_film *read_film(const char *path, const char *rel, const ts_scene *s, 
         *tile_spp = NULL;
         bad = "holds sums that are not finite";
         goto bad;
+    }
+    if (with_active) {
+        if (!(*active = malloc(n_px ? n_px : 1))) {
+            free(*tile_spp);
+            *tile_spp = NULL;
+            ts_error_set(err, TS_ERR_NOMEM, "%s does not fit in memory", rel);
+            goto fail;
+        }
+        memcpy(active_spp, buf + base, 4);
+        memcpy(*active, buf + base + 4, n_px);
     }
     free(buf);
     return f;
@@ -435,7 +464,8 @@ static void restore_one(const char *dir, const char *id, srv_store *st, const ts
     r.external = lstat(path, &fsb) == 0;
     ts_scene *scene = NULL;
     ts_film *film = NULL;
-    uint32_t *tile_spp = NULL;
+    uint32_t *tile_spp = NULL, active_spp = 0;
+    uint8_t *active = NULL;
     char failure[600] = "", damaged[600] = "";
     if (!stext) {
         snprintf(failure, sizeof failure, "the checkpoint of job %s is unusable: jobs/%s/%s %s", id, id, sname_rel, swhy);
@@ -472,6 +502,7 @@ static void restore_one(const char *dir, const char *id, srv_store *st, const ts
         goto add;
     }
     r.settings.integrator = scene->integrator.type;
+    r.settings.adaptive = scene->job.adaptive; /* only the scene asks for it */
     if (!meta) ts_job_settings_from_scene(scene, &r.settings);
     if (r.state == TS_JOB_FAILED) goto add;
     int nx, ny;
@@ -480,14 +511,20 @@ static void restore_one(const char *dir, const char *id, srv_store *st, const ts
     snprintf(rel, sizeof rel, "jobs/%s/film.bin", id);
     bool missing = false;
     if (!damaged[0]) {
-        film = read_film(path, rel, scene, nx, ny, &tile_spp, &missing, &err);
+        film = read_film(path, rel, scene, nx, ny, &tile_spp, &active, &active_spp, &missing, &err);
         if (!film && (!missing || ts_job_state_finished(r.state))) snprintf(damaged, sizeof damaged, "%s", err.message);
+        /* An adaptive job past its first check needs the pixels it chose (render/adaptive.h). */
+        bool past_first = false;
+        for (int i = 0; film && i < nx * ny; i++) past_first = past_first || tile_spp[i] > TS_ADAPTIVE_MIN_SPP;
+        if (film && r.settings.adaptive && !ts_job_state_finished(r.state) && !active && past_first)
+            snprintf(damaged, sizeof damaged, "%s holds no active pixels for the adaptive job", rel);
     }
     if (damaged[0]) {
         /* From the scene, as if just submitted: no samples, counters or series kept. */
         ts_film_destroy(film);
         free(tile_spp);
-        film = NULL, tile_spp = NULL;
+        free(active);
+        film = NULL, tile_spp = NULL, active = NULL;
         r.state = TS_JOB_QUEUED;
         r.elapsed_s = 0, r.nonfinite = 0, r.medium_steps = 0, r.walks_truncated = 0, r.history = NULL;
         if (stats) atomic_fetch_add(&stats->damaged, 1);
@@ -497,6 +534,8 @@ add:
     r.scene = scene;
     r.film = film;
     r.tile_spp = tile_spp;
+    r.active = active;
+    r.active_spp = active_spp;
     srv_job *j = srv_store_restore(st, &r, &err);
     if (j && j->sj) scene = NULL, film = NULL; /* the job owns them now */
     if (j) {
@@ -516,6 +555,7 @@ add:
     ts_scene_destroy(scene);
     ts_film_destroy(film);
     free(tile_spp);
+    free(active);
     cJSON_Delete(meta);
     free(jtext);
     free(stext);

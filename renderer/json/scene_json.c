@@ -556,8 +556,8 @@ static ts_status parse_job(loader *ld, const cJSON *doc)
     const cJSON *job;
     TRY(ts_json_object(doc, "", "job", false, &job, ld->err));
     if (!job) return TS_OK;
-    static const char *const keys[] = {"name",   "priority", "spp", "time_limit_s", "target_error",
-                                       "effects", "display_server", NULL};
+    static const char *const keys[] = {"name",    "priority",       "spp",      "time_limit_s", "target_error",
+                                       "effects", "display_server", "adaptive", NULL};
     TRY(ts_json_check_object(job, "job", keys, ld->err));
     const cJSON *fx;
     TRY(ts_json_object(job, "job", "effects", false, &fx, ld->err));
@@ -592,6 +592,7 @@ static ts_status parse_job(loader *ld, const cJSON *doc)
     j->spp = (uint32_t)v;
     TRY(ts_json_number(job, "job", "time_limit_s", false, TS_J_POSITIVE, &j->time_limit_s, ld->err));
     TRY(ts_json_number(job, "job", "target_error", false, TS_J_POSITIVE, &j->target_error, ld->err));
+    TRY(ts_json_bool(job, "job", "adaptive", false, &j->adaptive, ld->err));
     TRY(ts_json_string(job, "job", "display_server", false, &j->display_server, ld->err)); /* checked and copied by the builder */
     return ts_scene_builder_set_job(ld->b, j, ld->err);
 }

@@ -3,6 +3,8 @@
 
 #include <math.h>
 
+#include "render/adaptive.h"
+
 void ts_job_settings_from_scene(const ts_scene *s, ts_job_settings *out)
 {
     out->integrator = s->integrator.type;
@@ -10,6 +12,12 @@ void ts_job_settings_from_scene(const ts_scene *s, ts_job_settings *out)
     out->priority = s->job.priority;
     out->time_limit_s = s->job.time_limit_s;
     out->target_error = s->job.target_error;
+    out->adaptive = s->job.adaptive;
+}
+
+double ts_job_adaptive_target(const ts_job_settings *js)
+{
+    return js->target_error > 0 ? js->target_error : TS_ADAPTIVE_DEFAULT_ERROR;
 }
 
 const char *ts_job_name(const ts_scene *s) { return s->job.name ? s->job.name : s->name; }
@@ -44,7 +52,10 @@ ts_halt_reason ts_progressive_halt(const ts_job_settings *js, const ts_pass_stat
 {
     if (st->cancelled) return TS_HALT_CANCELLED;
     if (st->done >= js->spp) return TS_HALT_SPP;
-    if (js->target_error > 0 && st->done >= TS_PROGRESSIVE_ERROR_MIN_SPP && st->error >= 0 &&
+    /* An adaptive job halts on its error at check points only (adaptive.h), so where it
+     * halts does not depend on how its passes were split. */
+    bool at_check = !js->adaptive || st->done < TS_ADAPTIVE_MIN_SPP || ts_adaptive_is_check(st->done);
+    if (js->target_error > 0 && st->done >= TS_PROGRESSIVE_ERROR_MIN_SPP && st->error >= 0 && at_check &&
         st->error <= js->target_error)
         return TS_HALT_ERROR;
     if (js->time_limit_s > 0 && (st->out_of_time || (st->done > 0 && st->elapsed_s >= js->time_limit_s)))
@@ -56,6 +67,7 @@ uint32_t ts_progressive_next_pass_end(const ts_job_settings *js, const ts_pass_s
 {
     uint32_t done = st->done;
     uint64_t end = done == 0 ? 1 : 2ull * done;
+    if (js->adaptive && end > ts_adaptive_next_check(done)) end = ts_adaptive_next_check(done);
     if (end > js->spp) end = js->spp;
     /* This process's own speed: samples it rendered over the time it took. */
     uint32_t here = done > st->done_before ? done - st->done_before : 0;

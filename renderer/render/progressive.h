@@ -10,7 +10,8 @@
  * the measured speed says still fits, and a pass may be bounded in time (a checkpoint
  * interval). At every pass end the render halts on, in this order: cancellation, the
  * sample target, the target error (checked from TS_PROGRESSIVE_ERROR_MIN_SPP on, since an
- * estimate of a few samples is noise), the time limit. The scheduler (scheduler.h) is the
+ * estimate of a few samples is noise; for an adaptive job from TS_ADAPTIVE_MIN_SPP on only
+ * at check points, adaptive.h), the time limit. The scheduler (scheduler.h) is the
  * one caller of the policy; these functions are pure and thread-safe. */
 #ifndef TS_PROGRESSIVE_H
 #define TS_PROGRESSIVE_H
@@ -29,7 +30,13 @@ typedef struct ts_job_settings {
     int priority;        /* higher first, in a shared scheduler */
     double time_limit_s; /* rendering wall time; 0 = none */
     double target_error; /* relative error estimate (ts_film_relative_error) to reach; 0 = none */
+    bool adaptive;       /* adaptive sampling (adaptive.h): passes after the first few go to the
+                          * pixels still short of their share of the target */
 } ts_job_settings;
+
+/* The error an adaptive job's choice of pixels aims at: its target error, else
+ * TS_ADAPTIVE_DEFAULT_ERROR (adaptive.h). */
+double ts_job_adaptive_target(const ts_job_settings *js);
 
 /* The settings a scene document asks for: its integrator, its "job" block's spp (else the
  * sampler's), priority, time limit and target error. */
@@ -70,7 +77,9 @@ typedef struct ts_pass_state {
 ts_halt_reason ts_progressive_halt(const ts_job_settings *js, const ts_pass_state *st);
 
 /* The end (samples per pixel) of the pass after st->done, for a render that does not
- * halt: double the samples (1 after 0), capped at js->spp; shrunk, once this process has
+ * halt: double the samples (1 after 0), capped at js->spp, and for an adaptive job at the
+ * next check point (adaptive.h: so from TS_ADAPTIVE_MIN_SPP on a pass runs from one check
+ * point to the next); shrunk, once this process has
  * a measured speed, to what fits in the time limit's remainder and in max_pass_s (0 = no
  * bound), but always at least one more sample. */
 uint32_t ts_progressive_next_pass_end(const ts_job_settings *js, const ts_pass_state *st, double max_pass_s);

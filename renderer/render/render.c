@@ -83,6 +83,9 @@ bool ts_render_tile(const ts_render_request *req, int x0, int y0, int w, int h, 
     const bool motion = (s->effects & TS_EFFECT_MOTION) != 0;
     for (int y = y0; y < y0 + h; y++)
         for (int x = x0; x < x0 + w; x++) {
+            if (req->active &&
+                !req->active[(size_t)(x - req->film->x0) + (size_t)(y - req->film->y0) * (size_t)req->film->width])
+                continue;
             ts_sampler_pixel pixel; /* the pixel's scramble seeds, shared by its samples */
             ts_sampler_pixel_init(&s->sampler, (uint32_t)x, (uint32_t)y, &pixel);
             for (uint32_t i = req->sample_begin; i < req->sample_end; i++) {
@@ -203,14 +206,19 @@ double ts_film_relative_error(const ts_film *f)
     uint64_t n = 0;
     for (int y = f->y0; y < f->y0 + f->height; y++)
         for (int x = f->x0; x < f->x0 + f->width; x++) {
-            ts_rgb m = ts_film_pixel_rgb(f, x, y);
-            ts_rgb v = ts_film_pixel_variance(f, x, y);
-            double lum = ts_rgb_luminance(m);
-            /* Var[Y] of a linear combination, ignoring channel covariance (an upper bound for
-             * positively correlated channels is within a factor of 3 of it). */
-            double var = 0.2126 * 0.2126 * v.r + 0.7152 * 0.7152 * v.g + 0.0722 * 0.0722 * v.b;
-            sum += var / (lum * lum + 1e-3);
+            sum += ts_film_pixel_relative_variance(f, x, y);
             n++;
         }
     return n ? sqrt(sum / (double)n) : 0;
+}
+
+double ts_film_pixel_relative_variance(const ts_film *f, int x, int y)
+{
+    ts_rgb m = ts_film_pixel_rgb(f, x, y);
+    ts_rgb v = ts_film_pixel_variance(f, x, y);
+    double lum = ts_rgb_luminance(m);
+    /* Var[Y] of a linear combination, ignoring channel covariance (an upper bound for
+     * positively correlated channels is within a factor of 3 of it). */
+    double var = 0.2126 * 0.2126 * v.r + 0.7152 * 0.7152 * v.g + 0.0722 * 0.0722 * v.b;
+    return var / (lum * lum + 1e-3);
 }

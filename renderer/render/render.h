@@ -52,6 +52,10 @@ typedef struct ts_render_request {
      * holds part of its samples and the caller must restore it (the scheduler does).
      * ts_render leaves such tiles as they are. */
     const atomic_bool *stop;
+    /* Optional (adaptive sampling, render/adaptive.h): film->width · film->height bytes,
+     * row-major over the film's window; pixels whose byte is 0 take no samples. NULL: all
+     * pixels do. Read only. */
+    const uint8_t *active;
 } ts_render_request;
 
 typedef struct ts_render_stats {
@@ -77,6 +81,10 @@ bool ts_render_tile(const ts_render_request *req, int x0, int y0, int w, int h, 
  * Var[Y] / (Y² + 1e-3)) on luminance Y, from the per-pixel sample variance (definition:
  * proto/error-estimate.md). */
 double ts_film_relative_error(const ts_film *f);
+
+/* One pixel's term of it: Var[Y] / (Y² + 1e-3), the relative variance of the pixel's mean
+ * (0 with fewer than two effective samples). */
+double ts_film_pixel_relative_variance(const ts_film *f, int x, int y);
 
 /* Seconds on a monotonic clock. */
 double ts_now_seconds(void);

@@ -16,6 +16,8 @@
  * checkpoint and image, only ever hold whole tile passes. */
 #include "render/scheduler.h"
 
+#include "render/adaptive.h"
+
 #include <math.h>
 #include <pthread.h>
 #include <stdlib.h>
@@ -68,6 +70,14 @@ struct ts_sched_job {
     double prev_error;          /* the one before, at prev_error_spp (the convergence slope) */
     uint32_t prev_error_spp;
     double spp_before;          /* pixel-samples ÷ pixels held at submission */
+    /* Adaptive jobs (render/adaptive.h; NULL otherwise): the pixels that take samples
+     * (w·h bytes, row-major over the window), chosen at check point active_spp (0: every
+     * pixel, before the first check). The pointer and active_spp are guarded; the bytes
+     * are written only while closing a pass (no tile in flight), by swapping in
+     * active_next, which with adaptive_scratch belongs to the closing worker. */
+    uint8_t *active, *active_next;
+    float *adaptive_scratch;
+    uint32_t active_spp;
     struct ts_sched_job *next;  /* s->jobs list (unfinished jobs, in priority order) */
 };
 
@@ -126,6 +136,9 @@ static void job_free(ts_sched_job *j)
     for (int i = 0; j->tiles && i < j->n_tiles; i++) ts_tile_snapshot_release(j->tiles[i].snap);
     free(j->tiles);
     free(j->order);
+    free(j->active);
+    free(j->active_next);
+    free(j->adaptive_scratch);
     ts_film_destroy(j->film);
     ts_scene_destroy(j->scene);
     if (j->s) scheduler_unref(j->s);
@@ -247,10 +260,23 @@ static ts_tile_snapshot *snapshot_from_film(const ts_film *f, const tile_state *
 static void close_pass(ts_scheduler *s, ts_sched_job *j)
 {
     uint32_t done = job_spp_done(j);
+    /* An adaptive job at a check point it has not chosen at yet: choose the pixels that go
+     * on (every tile holds `done` then: passes end at check points, adaptive.h). */
+    bool choose = j->active && !j->cancel && !j->out_of_time && done < j->settings.spp && ts_adaptive_is_check(done) &&
+                  j->active_spp < done;
     pthread_mutex_unlock(&s->mu);
     /* One sample gives no variance: the estimate means something from two on. */
     double error = done >= 2 && j->film ? ts_film_relative_error(j->film) : -1;
+    if (choose) {
+        memcpy(j->active_next, j->active, (size_t)j->w * (size_t)j->h);
+        ts_adaptive_select(j->film, ts_job_adaptive_target(&j->settings), j->active_next, j->adaptive_scratch);
+    }
     pthread_mutex_lock(&s->mu);
+    if (choose) {
+        uint8_t *t = j->active;
+        j->active = j->active_next, j->active_next = t;
+        j->active_spp = done;
+    }
     if (error >= 0 && done != j->error_spp) {
         j->prev_error = j->error, j->prev_error_spp = j->error_spp;
         j->error = error, j->error_spp = done;
@@ -355,6 +381,7 @@ static void *worker_main(void *arg)
         tile_state *t = &j->tiles[ti];
         ts_render_request req = {j->scene, j->settings.integrator, j->film, j->sample_begin + t->spp,
                                  j->sample_begin + j->pass_end, 1, NULL, NULL, NULL};
+        req.active = j->active;
         /* What an interrupted tile goes back to: its snapshot, or nothing before its first
          * pass. Only after a snapshot could not be allocated (the film then holds more than
          * it) is there none to go back to: that tile pass runs to its end. */
@@ -587,17 +614,51 @@ ts_sched_job *ts_scheduler_submit(ts_scheduler *s, const ts_sched_job_desc *d, t
     }
     ts_tile_grid_size(j->w, j->h, &j->nx, &j->ny);
     j->n_tiles = j->nx * j->ny;
+    bool adaptive = j->settings.adaptive && d->scene && !finished && !d->external;
+    if (adaptive && d->film) {
+        /* A resumed adaptive job: its tiles must lie within the stretch its active pixels
+         * were chosen for (from the check point they were chosen at to the next one). */
+        uint32_t least = UINT32_MAX, most = 0, at = d->active ? d->active_spp : 0;
+        for (int i = 0; i < j->n_tiles; i++) {
+            uint32_t t = d->tile_spp ? d->tile_spp[i] : 0;
+            if (t < least) least = t;
+            if (t > most) most = t;
+        }
+        if ((at && !ts_adaptive_is_check(at)) || at > least || most > ts_adaptive_next_check(at)) {
+            ts_error_set(err, TS_ERR_INVALID,
+                         "the film to resume holds %u to %u samples per pixel, but its active pixels were chosen at "
+                         "%u: an adaptive job resumes only with the active pixels of the film's samples",
+                         least, most, at);
+            free(j);
+            return NULL;
+        }
+    }
+    size_t n_px = (size_t)j->w * (size_t)j->h;
     j->tiles = calloc((size_t)j->n_tiles, sizeof *j->tiles);
     j->order = malloc(sizeof *j->order * (size_t)j->n_tiles);
+    if (adaptive) {
+        j->active = malloc(n_px);
+        j->active_next = malloc(n_px);
+        j->adaptive_scratch = malloc(n_px * sizeof *j->adaptive_scratch);
+    }
+    bool adaptive_ok = !adaptive || (j->active && j->active_next && j->adaptive_scratch);
     ts_film *film = d->film ? d->film : ts_film_create(j->full_w, j->full_h, j->x0, j->y0, j->w, j->h, err);
     if (film && d->scene) film->scale = d->scene->film_scale; /* the output factor; a film of its own else */
-    if (!j->tiles || !j->order || !film) {
+    if (!j->tiles || !j->order || !film || !adaptive_ok) {
         if (film && film != d->film) ts_film_destroy(film);
         free(j->tiles);
         free(j->order);
+        free(j->active);
+        free(j->active_next);
+        free(j->adaptive_scratch);
         free(j);
         if (film) ts_error_set(err, TS_ERR_NOMEM, "out of memory for a job's tiles");
         return NULL;
+    }
+    if (adaptive) {
+        if (d->film && d->active) memcpy(j->active, d->active, n_px);
+        else memset(j->active, 1, n_px);
+        j->active_spp = d->film && d->active ? d->active_spp : 0;
     }
     for (int ty = 0; ty < j->ny; ty++)
         for (int tx = 0; tx < j->nx; tx++) {
@@ -728,6 +789,14 @@ ts_tile_snapshot *ts_sched_job_tile(ts_sched_job *j, int tx, int ty)
 
 ts_film *ts_sched_job_film(ts_sched_job *j, uint32_t *tile_spp, ts_error *err)
 {
+    return ts_sched_job_film_adaptive(j, tile_spp, NULL, NULL, err);
+}
+
+bool ts_sched_job_adaptive(const ts_sched_job *j) { return j->active != NULL; }
+
+ts_film *ts_sched_job_film_adaptive(ts_sched_job *j, uint32_t *tile_spp, uint8_t *active, uint32_t *active_spp,
+                                    ts_error *err)
+{
     ts_tile_snapshot **snaps = calloc((size_t)j->n_tiles, sizeof *snaps);
     ts_film *f = ts_film_create(j->full_w, j->full_h, j->x0, j->y0, j->w, j->h, err);
     if (f) f->scale = j->film->scale;
@@ -742,6 +811,11 @@ ts_film *ts_sched_job_film(ts_sched_job *j, uint32_t *tile_spp, ts_error *err)
         snaps[i] = j->tiles[i].snap;
         if (snaps[i]) atomic_fetch_add(&snaps[i]->refs, 1);
     }
+    /* The active pixels the snapshots were rendered with: the bytes change only while a
+     * pass closes, under this lock (the swap), so they go with the snapshots taken here. */
+    if (active && j->active) memcpy(active, j->active, (size_t)j->w * (size_t)j->h);
+    else if (active) memset(active, 1, (size_t)j->w * (size_t)j->h);
+    if (active_spp) *active_spp = j->active ? j->active_spp : 0;
     pthread_mutex_unlock(&j->s->mu);
     for (int i = 0; i < j->n_tiles; i++) {
         const ts_tile_snapshot *t = snaps[i];

@@ -129,6 +129,14 @@ typedef struct ts_sched_job_desc {
      * `medium_steps`, `walks_truncated` carry the counters of the earlier run. */
     ts_film *film;
     const uint32_t *tile_spp;
+    /* An adaptive job resumed (settings.adaptive, render/adaptive.h): the active pixels the
+     * film was rendered with (width·height bytes of the window, row-major; copied) and the
+     * check point they were chosen at (ts_sched_job_film_adaptive gives both). NULL: every
+     * pixel, which fits a film of at most TS_ADAPTIVE_MIN_SPP samples per pixel. A film
+     * whose tiles lie outside [active_spp, the next check point] is refused (TS_ERR_INVALID):
+     * its stopped pixels could not be told from the others. */
+    const uint8_t *active;
+    uint32_t active_spp;
     double elapsed_s;
     uint64_t samples, nonfinite, medium_steps, walks_truncated;
     /* Restoring a finished job: it is registered in this state (TS_JOB_DONE, _CANCELLED or
@@ -191,6 +199,17 @@ void ts_tile_snapshot_release(ts_tile_snapshot *t); /* NULL is fine */
  * (with the scene's output scale, film.h), and optionally (tile_spp: nx·ny entries, caller-allocated) each tile's spp. Tiles not
  * rendered yet are empty. Consistent per tile; reads no working state. */
 ts_film *ts_sched_job_film(ts_sched_job *j, uint32_t *tile_spp, ts_error *err);
+
+/* Whether the job samples adaptively (render/adaptive.h). */
+bool ts_sched_job_adaptive(const ts_sched_job *j);
+
+/* ts_sched_job_film, and for an adaptive job the active pixels its snapshots were
+ * rendered with, consistent with them: active (optional, width·height bytes of the
+ * window; all 1 for a job that is not adaptive) and the check point they were chosen at
+ * (optional; 0 before the first check and for a job that is not adaptive). What a
+ * checkpoint saves to resume the job (ts_sched_job_desc.active). */
+ts_film *ts_sched_job_film_adaptive(ts_sched_job *j, uint32_t *tile_spp, uint8_t *active, uint32_t *active_spp,
+                                    ts_error *err);
 
 /* External jobs (desc.external): marks the job running (its first samples are being
  * rendered elsewhere; elapsed time counts from here). Idempotent; no effect on a finished

@@ -72,6 +72,9 @@ typedef struct ts_job_desc {
     uint32_t spp;         /* 0 = the sampler's spp */
     double time_limit_s;  /* 0 = none */
     double target_error;  /* 0 = none */
+    /* Adaptive sampling (render/adaptive.h): after the first passes, samples go to the
+     * pixels whose error estimate is still above their share of the target. */
+    bool adaptive;
     /* "HOST:PORT" of a tev display server to stream the render to (job.display_server), or
      * NULL: a string of 1–255 characters here; its syntax, and whether a server honours it,
      * are for the program rendering the scene (server/display.h, docs/security.md). */
