@@ -149,6 +149,13 @@ static void test_usage_errors_exit_2(void **state)
     assert_int_equal(run(a4), 2);
     const char *a5[] = {NULL};
     assert_int_equal(run(a5), 2);
+    /* Adaptive renders hold different counts per pixel: no shard, no checkpoint EXR. */
+    const char *a6[] = {"render", "--adaptive", "--shard", "0/2", NULL};
+    assert_int_equal(run(a6), 2);
+    assert_non_null(strstr(read_log(), "--adaptive goes without --shard"));
+    const char *a7[] = {"render", "--adaptive", "--checkpoint", "c.exr", NULL};
+    assert_int_equal(run(a7), 2);
+    assert_non_null(strstr(read_log(), "--adaptive goes without --checkpoint"));
 }
 
 /* Every command words a usage error alike (server/usage.c): "tessera COMMAND: " and the

@@ -2,7 +2,7 @@
  * only the periodic checkpoints count; and SIGTERM, which checkpoints on the way out),
  * start it again on the same folder: jobs are listed, unfinished ones resume where they
  * stopped and finish with exactly the target number of samples in every pixel, and
- * finished jobs' images are still served. */
+ * finished jobs' images are still served; an adaptive job resumes bit-identical. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -117,6 +117,61 @@ static void test_restart_and_resume(void **state)
     free(big);
 }
 
+/* An adaptive job (job.adaptive, docs/design.md §8) killed past its first checks resumes
+ * from its checkpoint's film and active pixels: its image is bit-identical to the same job
+ * rendered without a break (colour and per-pixel counts, which differ across the image). */
+static void test_adaptive_resume(void **state)
+{
+    (void)state;
+    test_server s;
+    start(&s);
+    char *doc = ts_ao_scene("adaptive", 64, 64, 4096);
+    size_t n = strlen(doc);
+    char *ad = malloc(n + 64);
+    assert_non_null(ad);
+    snprintf(ad, n + 64, "%.*s,\"job\":{\"adaptive\":true,\"target_error\":0.01}}", (int)(n - 1), doc);
+    char a[32], b[32];
+    ts_submit(&s, ad, a, sizeof a);
+    ts_wait_field(&s, a, "spp_done", 40, 60);
+    for (int i = 0; i < 200 && !(file_exists(a, "film.bin") && file_exists(a, "job.json")); i++) ts_sleep_ms(20);
+    ts_sleep_ms(300);
+    assert_int_equal(ts_server_stop(&s, SIGKILL), 128 + SIGKILL);
+    start(&s);
+    char path[160];
+    snprintf(path, sizeof path, "/api/v1/jobs/%s", a);
+    cJSON *o = ts_http_json(&s, path, 200);
+    assert_true(ts_json_num(o, "spp_done") >= 16); /* resumed, not from zero */
+    assert_null(cJSON_GetObjectItem(o, "checkpoint_error"));
+    assert_true(cJSON_IsTrue(cJSON_GetObjectItem(o, "adaptive")));
+    cJSON_Delete(o);
+    o = ts_wait_done(&s, a, 120);
+    assert_string_equal(ts_json_str(o, "halt_reason"), "target_error");
+    cJSON_Delete(o);
+    ts_submit(&s, ad, b, sizeof b);
+    o = ts_wait_done(&s, b, 120);
+    cJSON_Delete(o);
+    ts_image ia, ib;
+    ts_job_exr(&s, a, &ia);
+    ts_job_exr(&s, b, &ib);
+    const char *names[] = {"R", "G", "B", "count"};
+    float least = 1e30f, most = 0;
+    for (int k = 0; k < 4; k++) {
+        int ca = ts_image_channel(&ia, names[k]), cb = ts_image_channel(&ib, names[k]);
+        assert_true(ca >= 0 && cb >= 0);
+        for (int i = 0; i < 64 * 64; i++) {
+            float va = ia.data[i * ia.n_channels + ca], vb = ib.data[i * ib.n_channels + cb];
+            if (memcmp(&va, &vb, sizeof va)) fail_msg("%s of pixel %d: %g resumed, %g uninterrupted", names[k], i, va, vb);
+            if (k == 3) least = va < least ? va : least, most = va > most ? va : most;
+        }
+    }
+    assert_true(least == 16 && most > 2 * least); /* the counts do differ */
+    ts_image_fini(&ia);
+    ts_image_fini(&ib);
+    assert_int_equal(ts_server_stop(&s, SIGTERM), 0);
+    free(ad);
+    free(doc);
+}
+
 int main(void)
 {
     curl_global_init(CURL_GLOBAL_DEFAULT);
@@ -124,6 +179,7 @@ int main(void)
     if (!mkdtemp(data_dir)) return 1;
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_restart_and_resume),
+        cmocka_unit_test(test_adaptive_resume),
     };
     int rc = cmocka_run_group_tests(tests, NULL, NULL);
     char cmd[128];
