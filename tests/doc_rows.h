@@ -1,4 +1,4 @@
-/* doc_rows.h — the rows of docs/pbrt-v3.md's tables, for the tests that hold a type's
+/* doc_rows.h — the schema, and the rows of docs/pbrt-v3.md's tables, for the tests that hold a type's
  * description (test_*_desc.c) to what the user reads: the row whose first cell names a
  * pbrt-v3 type in backquotes must name each parameter the table reads, in backquotes. */
 #ifndef TS_TEST_DOC_ROWS_H
@@ -9,13 +9,16 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* docs/pbrt-v3.md as one string (malloc'd), or NULL. */
-static inline char *doc_rows_load(void)
+#include <cjson/cJSON.h>
+
+/* The file at rel (from the repository root, TS_SOURCE_DIR) as one string (malloc'd), or
+ * NULL. */
+static inline char *doc_rows_read(const char *rel)
 {
     const char *src = getenv("TS_SOURCE_DIR");
     if (!src) return NULL;
     char path[4096];
-    snprintf(path, sizeof path, "%s/docs/pbrt-v3.md", src);
+    snprintf(path, sizeof path, "%s/%s", src, rel);
     FILE *f = fopen(path, "rb");
     if (!f) return NULL;
     fseek(f, 0, SEEK_END);
@@ -29,6 +32,18 @@ static inline char *doc_rows_load(void)
     if (buf) buf[n] = 0;
     fclose(f);
     return buf;
+}
+
+/* docs/pbrt-v3.md, or NULL. */
+static inline char *doc_rows_load(void) { return doc_rows_read("docs/pbrt-v3.md"); }
+
+/* proto/scene.schema.json parsed (the caller deletes it), or NULL. */
+static inline cJSON *doc_rows_schema(void)
+{
+    char *text = doc_rows_read("proto/scene.schema.json");
+    cJSON *s = text ? cJSON_Parse(text) : NULL;
+    free(text);
+    return s;
 }
 
 /* The table row (a line starting "| ") whose first cell holds `type` in backquotes, copied

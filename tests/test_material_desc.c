@@ -30,21 +30,6 @@
 #include "materials/material_desc.h"
 #include "scene/scene.h"
 
-static char *read_file(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f) fail_msg("cannot open %s", path);
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *buf = malloc((size_t)n + 1);
-    assert_non_null(buf);
-    assert_int_equal(fread(buf, 1, (size_t)n, f), (size_t)n);
-    buf[n] = 0;
-    fclose(f);
-    return buf;
-}
-
 static cJSON *schema_material(const cJSON *schema, const char *type)
 {
     const cJSON *defs = cJSON_GetObjectItemCaseSensitive(schema, "$defs");
@@ -85,13 +70,7 @@ static void check_schema_range(const ts_material_param *p, const cJSON *prop, co
 static void test_schema_agrees(void **state)
 {
     (void)state;
-    const char *src = getenv("TS_SOURCE_DIR");
-    if (!src) fail_msg("TS_SOURCE_DIR is not set (run through ctest)");
-    char path[4096];
-    snprintf(path, sizeof path, "%s/proto/scene.schema.json", src);
-    char *text = read_file(path);
-    cJSON *schema = cJSON_Parse(text);
-    free(text);
+    cJSON *schema = doc_rows_schema();
     assert_non_null(schema);
     for (int t = 0; t < TS_MATERIAL_TYPE_COUNT; t++) {
         const ts_material_desc *d = &ts_material_descs[t];

@@ -21,23 +21,8 @@
 
 static cJSON *load_schema(void)
 {
-    const char *src = getenv("TS_SOURCE_DIR");
-    if (!src) fail_msg("TS_SOURCE_DIR is not set (run through ctest)");
-    char path[4096];
-    snprintf(path, sizeof path, "%s/proto/scene.schema.json", src);
-    FILE *f = fopen(path, "rb");
-    if (!f) fail_msg("cannot open %s", path);
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *buf = malloc((size_t)n + 1);
-    assert_non_null(buf);
-    assert_int_equal(fread(buf, 1, (size_t)n, f), (size_t)n);
-    buf[n] = 0;
-    fclose(f);
-    cJSON *s = cJSON_Parse(buf);
-    free(buf);
-    assert_non_null(s);
+    cJSON *s = doc_rows_schema();
+    if (!s) fail_msg("cannot read proto/scene.schema.json (TS_SOURCE_DIR)");
     return s;
 }
 
