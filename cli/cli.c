@@ -8,11 +8,11 @@
  * and every output could be. */
 #include "cli.h"
 
-#include <getopt.h>
 #include <limits.h>
 #include <math.h>
 #include <pthread.h>
 #include <signal.h>
+#include <stddef.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -24,6 +24,7 @@
 #include "diagnostics.h"
 #include "display.h"
 #include "merge.h"
+#include "options.h"
 #include "outputs.h"
 #include "serve.h"
 #include "tessera.h"
@@ -43,46 +44,6 @@ static void usage(FILE *f)
                "`tessera COMMAND --help` lists the command's options.\n");
 }
 
-static void render_usage(FILE *f)
-{
-    fprintf(f,
-            "usage: tessera render [SCENE] [OPTIONS]\n"
-            "Renders SCENE (a scene document, .json, or a pbrt-v3 scene, .pbrt; without one the built-in\n"
-            "Cornell box; pbrt-v3's warnings are printed once each) in progressive\n"
-            "passes of 1, 1, 2, 4, ... samples per pixel until the first of --spp, --time-limit and\n"
-            "--target-error is reached.\n"
-            "  -o, --output FILE         write FILE; .exr (colour, per-pixel variance, sample count) or .png;\n"
-            "                            may repeat (at most 8); each is checked before rendering, and all are\n"
-            "                            written or none. Default: NAME.exr in this folder, NAME the job's\n"
-            "                            (the scene's job.name, else its \"name\", else its file name)\n"
-            "  --spp N                   samples per pixel, 1 to 16777216 (default: the scene's job.spp, else\n"
-            "                            its sampler.spp)\n"
-            "  --time-limit SECONDS      stop after this much rendering time (default: the scene's\n"
-            "                            job.time_limit_s, else none)\n"
-            "  --target-error E          stop at this relative error estimate, as 0.01 or 1%%, below 1\n"
-            "                            (default: the scene's job.target_error, else none)\n"
-            "  --adaptive                after the first 16 spp, only the pixels still short of their share\n"
-            "                            of the target error (else 1%%) take samples (default: the scene's\n"
-            "                            job.adaptive); not with --shard or --checkpoint\n"
-            "  --threads N               render threads, 1 to 1024 (default: one per core)\n"
-            "  --seed N                  the sampler's seed, 0 to 4294967295 (default: the scene's)\n"
-            "  --quiet                   no progress bar and no summary\n"
-            "Farm nodes (docs/design.md section 7):\n"
-            "  --shard I/N | auto        render shard I of N: samples [I*S/N, (I+1)*S/N) of every pixel;\n"
-            "                            auto takes I and N from JOB_COMPLETION_INDEX and --shard-count\n"
-            "                            (Kubernetes) or SLURM_ARRAY_TASK_ID/_COUNT (Slurm). Needs an .exr\n"
-            "                            output (default: NAME.shard-I-of-N.exr), which tessera merge adds\n"
-            "  --shard-count N           N for --shard auto under Kubernetes, 1 to 1000000\n"
-            "  --checkpoint FILE.exr     save the shard's progress to FILE periodically and on SIGTERM or\n"
-            "                            SIGINT, and resume from it when it exists\n"
-            "  --checkpoint-interval S   seconds between checkpoints (default 60)\n"
-            "Viewing:\n"
-            "  --display-server HOST:PORT  stream tiles as they finish to a tev viewer listening there (tev's\n"
-            "                            default is 127.0.0.1:14158); an unreachable one costs only a note\n"
-            "Exit status: 0 done, 1 bad input or a failed output, 2 usage error, 128+signal when stopped\n"
-            "by a signal with --checkpoint (the checkpoint saved).\n");
-}
-
 #define usage_error(...) (srv_usage_error("tessera", usage, __VA_ARGS__), SRV_USAGE_EXIT)
 #define render_usage_error(...) (srv_usage_error("tessera render", NULL, __VA_ARGS__), SRV_USAGE_EXIT)
 
@@ -94,25 +55,6 @@ static bool parse_relative_error(const char *s, double *out)
     if (end == s) return false;
     if (*end == '%' && end[1] == '\0') v /= 100, end++;
     if (*end || !(v > 0) || !(v < 1) || !isfinite(v)) return false;
-    *out = v;
-    return true;
-}
-
-static bool parse_uint(const char *s, unsigned long long max, unsigned long long *out)
-{
-    char *end;
-    if (!s[0] || s[0] == '-') return false;
-    unsigned long long v = strtoull(s, &end, 10);
-    if (*end || v > max) return false;
-    *out = v;
-    return true;
-}
-
-static bool parse_positive(const char *s, double *out)
-{
-    char *end;
-    double v = strtod(s, &end);
-    if (!s[0] || *end || !(v > 0) || !isfinite(v)) return false;
     *out = v;
     return true;
 }
@@ -143,81 +85,130 @@ static const char *adaptive_refusal(const render_opts *o)
     return NULL;
 }
 
+static bool take_output(void *opts, const char *name, const char *arg, char *why, size_t why_len)
+{
+    (void)name;
+    if (cli_outputs_add(&((render_opts *)opts)->outputs, arg)) return true;
+    snprintf(why, why_len, "at most 8 outputs");
+    return false;
+}
+
+static bool take_seed(void *opts, const char *name, const char *arg, char *why, size_t why_len)
+{
+    (void)name;
+    render_opts *o = opts;
+    char *end;
+    unsigned long long v = arg[0] && arg[0] != '-' ? strtoull(arg, &end, 10) : 0;
+    if (!arg[0] || arg[0] == '-' || *end || v > UINT32_MAX) {
+        snprintf(why, why_len, "expected a whole number from 0 to 4294967295, got '%s'", arg);
+        return false;
+    }
+    o->seed = v;
+    o->have_seed = true;
+    return true;
+}
+
+static bool take_target_error(void *opts, const char *name, const char *arg, char *why, size_t why_len)
+{
+    (void)name;
+    if (parse_relative_error(arg, &((render_opts *)opts)->target_error)) return true;
+    snprintf(why, why_len, "expected a relative error above 0 and below 1, as 0.01 or 1%%, got '%s'", arg);
+    return false;
+}
+
+static bool take_display(void *opts, const char *name, const char *arg, char *why, size_t why_len)
+{
+    (void)name;
+    ts_error derr = {0};
+    if (srv_display_parse_address(arg, NULL, NULL, &derr)) {
+        snprintf(why, why_len, "%s", derr.message);
+        return false;
+    }
+    ((render_opts *)opts)->display_server = arg;
+    return true;
+}
+
+#define F(field) offsetof(render_opts, field), sizeof(((render_opts *)0)->field)
+
+/* Every option of `tessera render`: --help, the parser and the errors are made from this. */
+static const srv_option render_options[] = {
+    {"output", 'o', "FILE", SRV_OPT_CUSTOM, 0, 0, false, false, NULL, 0, 0,
+     "write FILE; .exr (colour, per-pixel variance, sample count) or .png;\nmay repeat (at most 8); each is checked "
+     "before rendering, and all are\nwritten or none. Default: NAME.exr in this folder, NAME the job's\n(the scene's "
+     "job.name, else its \"name\", else its file name)",
+     "", take_output, NULL},
+    {"spp", 0, "N", SRV_OPT_UINT, 1, 16777216, false, false, NULL, F(spp), "samples per pixel",
+     "the scene's job.spp, else its sampler.spp", NULL, NULL},
+    {"time-limit", 0, "SECONDS", SRV_OPT_NUMBER, 0, INFINITY, true, false, "seconds", F(time_limit),
+     "stop after this much rendering time", "the scene's job.time_limit_s, else none", NULL, NULL},
+    {"target-error", 0, "E", SRV_OPT_CUSTOM, 0, 0, false, false, NULL, 0, 0,
+     "stop at this relative error estimate, as 0.01 or 1%, below 1",
+     "the scene's job.target_error, else none", take_target_error, NULL},
+    {"adaptive", 0, NULL, SRV_OPT_FLAG, 0, 0, false, false, NULL, F(adaptive),
+     "after the first 16 spp, only the pixels still short of their share\nof the target error (else 1%) take samples; not "
+     "with --shard or\n--checkpoint", "the scene's job.adaptive", NULL, NULL},
+    {"threads", 0, "N", SRV_OPT_UINT, 1, 1024, false, false, NULL, F(threads), "render threads", "one per core",
+     NULL, NULL},
+    {"seed", 0, "N", SRV_OPT_CUSTOM, 0, 0, false, false, NULL, 0, 0, "the sampler's seed, 0 to 4294967295",
+     "the scene's", take_seed, NULL},
+    {"quiet", 0, NULL, SRV_OPT_FLAG, 0, 0, false, false, NULL, F(quiet), "no progress bar and no summary", "", NULL,
+     NULL},
+    {"shard", 0, "I/N | auto", SRV_OPT_STRING, 0, 0, false, false, NULL, F(shard_text),
+     "render shard I of N: samples [I*S/N, (I+1)*S/N) of every pixel;\nauto takes I and N from JOB_COMPLETION_INDEX "
+     "and --shard-count\n(Kubernetes) or SLURM_ARRAY_TASK_ID/_COUNT (Slurm). Needs an .exr\noutput (default: "
+     "NAME.shard-I-of-N.exr), which tessera merge adds",
+     "", NULL, "Farm nodes (docs/design.md section 7):"},
+    {"shard-count", 0, "N", SRV_OPT_UINT, 1, 1000000, false, false, NULL, F(shard_count),
+     "N for --shard auto under Kubernetes", "", NULL, NULL},
+    {"checkpoint", 0, "FILE.exr", SRV_OPT_STRING, 0, 0, false, false, NULL, F(checkpoint),
+     "save the shard's progress to FILE periodically and on SIGTERM or\nSIGINT, and resume from it when it exists", "",
+     NULL, NULL},
+    {"checkpoint-interval", 0, "S", SRV_OPT_NUMBER, 0, INFINITY, true, false, "seconds", F(checkpoint_interval),
+     "seconds between checkpoints", NULL, NULL, NULL},
+    {"display-server", 0, "HOST:PORT", SRV_OPT_CUSTOM, 0, 0, false, false, NULL, 0, 0,
+     "stream tiles as they finish to a tev viewer listening there (tev's\ndefault is 127.0.0.1:14158); an "
+     "unreachable one costs only a note",
+     "", take_display, "Viewing:"},
+    {"help", 0, NULL, SRV_OPT_HELP, 0, 0, false, false, NULL, 0, 0, NULL, "", NULL, NULL},
+};
+#undef F
+#define N_RENDER_OPTIONS (sizeof render_options / sizeof *render_options)
+
+static void render_defaults(render_opts *o)
+{
+    memset(o, 0, sizeof *o);
+    o->checkpoint_interval = 60;
+}
+
+static void render_usage(FILE *f)
+{
+    render_opts defaults;
+    render_defaults(&defaults);
+    fprintf(f, "usage: tessera render [SCENE] [OPTIONS]\n"
+               "Renders SCENE (a scene document, .json, or a pbrt-v3 scene, .pbrt; without one the built-in\n"
+               "Cornell box; pbrt-v3's warnings are printed once each) in progressive\n"
+               "passes of 1, 1, 2, 4, ... samples per pixel until the first of --spp, --time-limit and\n"
+               "--target-error is reached.\n");
+    srv_options_help(f, render_options, N_RENDER_OPTIONS, &defaults);
+    fprintf(f, "Exit status: 0 done, 1 bad input or a failed output, 2 usage error, 128+signal when stopped\n"
+               "by a signal with --checkpoint (the checkpoint saved).\n");
+}
+
 /* Fills o from the command line; -1 when the render should go ahead, else the exit status
  * (usage errors, --help). */
 static int parse_render_options(int argc, char **argv, render_opts *o)
 {
-    enum { OPT_SPP = 256, OPT_THREADS, OPT_SEED, OPT_TIME, OPT_TARGET, OPT_QUIET, OPT_HELP, OPT_SHARD, OPT_SHARD_COUNT,
-           OPT_CHECKPOINT, OPT_CHECKPOINT_INTERVAL, OPT_DISPLAY, OPT_ADAPTIVE };
-    static const struct option opts[] = {
-        {"output", required_argument, NULL, 'o'},    {"spp", required_argument, NULL, OPT_SPP},
-        {"threads", required_argument, NULL, OPT_THREADS}, {"seed", required_argument, NULL, OPT_SEED},
-        {"time-limit", required_argument, NULL, OPT_TIME}, {"target-error", required_argument, NULL, OPT_TARGET},
-        {"quiet", no_argument, NULL, OPT_QUIET},     {"help", no_argument, NULL, OPT_HELP},
-        {"shard", required_argument, NULL, OPT_SHARD}, {"shard-count", required_argument, NULL, OPT_SHARD_COUNT},
-        {"checkpoint", required_argument, NULL, OPT_CHECKPOINT},
-        {"checkpoint-interval", required_argument, NULL, OPT_CHECKPOINT_INTERVAL},
-        {"display-server", required_argument, NULL, OPT_DISPLAY},
-        {"adaptive", no_argument, NULL, OPT_ADAPTIVE},
-        {NULL, 0, NULL, 0}};
-    memset(o, 0, sizeof *o);
-    o->checkpoint_interval = 60;
-    optind = 1;
-    opterr = 0;
-    int c;
-    while ((c = getopt_long(argc, argv, ":o:", opts, NULL)) != -1) {
-        switch (c) {
-        case 'o':
-            if (!cli_outputs_add(&o->outputs, optarg)) return render_usage_error("at most %s outputs", "8");
-            break;
-        case OPT_SPP:
-            if (!parse_uint(optarg, 1u << 24, &o->spp) || o->spp == 0)
-                return render_usage_error("--spp: expected a whole number from 1 to 16777216, got '%s'", optarg);
-            break;
-        case OPT_THREADS:
-            if (!parse_uint(optarg, 1024, &o->threads) || o->threads == 0)
-                return render_usage_error("--threads: expected a whole number from 1 to 1024, got '%s'", optarg);
-            break;
-        case OPT_SEED:
-            if (!parse_uint(optarg, UINT32_MAX, &o->seed))
-                return render_usage_error("--seed: expected a whole number from 0 to 4294967295, got '%s'", optarg);
-            o->have_seed = true;
-            break;
-        case OPT_TIME:
-            if (!parse_positive(optarg, &o->time_limit))
-                return render_usage_error("--time-limit: expected a positive number of seconds, got '%s'", optarg);
-            break;
-        case OPT_TARGET:
-            if (!parse_relative_error(optarg, &o->target_error))
-                return render_usage_error("--target-error: expected a relative error above 0 and below 1, as 0.01 or 1%%, "
-                                          "got '%s'", optarg);
-            break;
-        case OPT_QUIET: o->quiet = true; break;
-        case OPT_ADAPTIVE: o->adaptive = true; break;
-        case OPT_HELP: render_usage(stdout); return 0;
-        case OPT_SHARD: o->shard_text = optarg; break;
-        case OPT_SHARD_COUNT:
-            if (!parse_uint(optarg, 1000000, &o->shard_count) || o->shard_count == 0)
-                return render_usage_error("--shard-count: expected a whole number from 1 to 1000000, got '%s'", optarg);
-            break;
-        case OPT_CHECKPOINT: o->checkpoint = optarg; break;
-        case OPT_CHECKPOINT_INTERVAL:
-            if (!parse_positive(optarg, &o->checkpoint_interval))
-                return render_usage_error("--checkpoint-interval: expected a positive number of seconds, got '%s'", optarg);
-            break;
-        case OPT_DISPLAY: {
-            ts_error derr = {0};
-            if (srv_display_parse_address(optarg, NULL, NULL, &derr))
-                return render_usage_error("--display-server: %s", derr.message);
-            o->display_server = optarg;
-            break;
-        }
-        case ':': return render_usage_error("option '%s' needs a value", argv[optind - 1]);
-        default: return render_usage_error("unknown option '%s'", argv[optind - 1]);
-        }
+    render_defaults(o);
+    char why[600];
+    int first = 1;
+    int rc = srv_options_parse(render_options, N_RENDER_OPTIONS, argc, argv, o, &first, why, sizeof why);
+    if (rc == SRV_OPTIONS_HELP) {
+        render_usage(stdout);
+        return 0;
     }
-    if (argc - optind > 1) return render_usage_error("render takes at most one scene file, got another: '%s'", argv[optind + 1]);
-    o->scene_path = optind < argc ? argv[optind] : NULL;
+    if (rc == SRV_OPTIONS_BAD) return render_usage_error("%s", why);
+    if (argc - first > 1) return render_usage_error("render takes at most one scene file, got another: '%s'", argv[first + 1]);
+    o->scene_path = first < argc ? argv[first] : NULL;
     const char *unsupported = cli_outputs_unsupported(&o->outputs);
     if (unsupported) return render_usage_error("-o %s: the extension must be .exr or .png", unsupported);
     if (o->shard_count && !o->shard_text) return render_usage_error("--shard-count goes with --shard auto");

@@ -1,7 +1,7 @@
 /* options.h — a command's options as one table: name, value, range, default, field and help.
  *
- * Design note: `tessera serve`, `merge` and `convert` (cli/, which may include server/
- * headers; `render` keeps its own parser for now) describe each option once, in a table of srv_option; the parser (getopt_long underneath),
+ * Design note: every command — `tessera serve`, and `render`, `merge` and `convert` (cli/,
+ * which may include server/ headers) — describes each option once, in a table of srv_option; the parser (getopt_long underneath),
  * the usage errors and the --help text are all made from it, so the range an error names,
  * the range and default --help shows and the value the command uses cannot drift apart.
  * The defaults shown are read from the options struct as the command initialised it (or
