@@ -127,6 +127,7 @@ static int plain_build(const ts_scene *s, plain_scene *p)
     for (uint32_t i = 0; i < s->n_shapes; i++) {
         const ts_shape *sh = &s->shapes[i];
         RTCGeometry g;
+        if (sh->type == TS_SHAPE_CURVE) continue; /* not replayed: Embree curves need accel.c's filters */
         if (sh->type == TS_SHAPE_MESH) {
             const ts_mesh *m = &sh->mesh;
             if (m->n_triangles == 0 || m->n_vertices == 0) continue;

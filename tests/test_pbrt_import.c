@@ -278,7 +278,7 @@ static void error_sentences(void **state)
                  "t.pbrt:2:16: Shape \"sphere\": \"float radius\" expects 1 value, got 2");
     expect_error("WorldBegin\nShape \"hyperboloid\"\nWorldEnd\n",
                  "t.pbrt:2:1: Shape \"hyperboloid\" is not supported (sphere, disk, cylinder, trianglemesh, "
-                 "plymesh and loopsubdiv are)");
+                 "plymesh, loopsubdiv and curve are)");
     expect_error("Camera \"environment\"\nWorldBegin\nWorldEnd\n",
                  "t.pbrt:1:1: Camera \"environment\" is not supported (perspective and orthographic are)");
     expect_error("WorldBegin\nMaterial \"disney\"\nShape \"sphere\"\nWorldEnd\n",

@@ -178,7 +178,8 @@ static ref_hit ref_intersect(const ts_shape *s, ts_vec3 of, ts_vec3 df)
         }
         break;
     }
-    case TS_SHAPE_MESH: break;
+    case TS_SHAPE_MESH:
+    case TS_SHAPE_CURVE: break;
     }
     if (!hit) return R;
     R.hit = true;

@@ -45,6 +45,7 @@ struct ts_scene_builder {
     uint32_t n_lights;
     size_t cap_lights;
     uint64_t n_triangles, n_area_lights;
+    uint64_t n_curve_segments; /* counted with the triangles against limits.max_triangles */
     /* Object instancing: the objects' names (arena) and shape ranges, the instances; the
      * object being defined (TS_NONE outside ObjectBegin/End). */
     ts_object *objects;
@@ -697,6 +698,157 @@ static ts_status check_mesh(const ts_scene_builder *b, const ts_mesh *m, ts_erro
     return TS_OK;
 }
 
+/* A curve's description (scene_builder.h): pbrt-v3's checks of CreateCurveShape, the
+ * values finite, and no emission (pbrt-v3's Curve::Sample is not implemented: a render
+ * with a curve area light stops at its first light sample). */
+static ts_status check_curve(const ts_scene_builder *b, const ts_shape_desc *d, ts_error *err)
+{
+    static const char *const bases[] = {"bezier", "bspline"};
+    if (!ts_rgb_is_black(d->emission))
+        return ts_error_set(err, TS_ERR_UNSUPPORTED,
+                            "emission: a curve cannot be an area light (pbrt-v3 cannot sample curves: its "
+                            "Curve::Sample is not implemented and its render stops there)");
+    if ((unsigned)d->curve.type > TS_CURVE_CYLINDER)
+        return ts_error_set(err, TS_ERR_INVALID, "curve_type: unknown curve type %d", (int)d->curve.type);
+    if ((unsigned)d->curve.basis > TS_CURVE_BSPLINE)
+        return ts_error_set(err, TS_ERR_INVALID, "basis: unknown curve basis %d", (int)d->curve.basis);
+    int deg = d->curve.degree;
+    if (deg != 2 && deg != 3)
+        return ts_error_set(err, TS_ERR_INVALID, "degree: %d is not 2 or 3 (pbrt-v3's curve degrees)", deg);
+    uint32_t nseg;
+    if (!ts_curve_segment_count(d->curve.basis, deg, d->curve.n_points, &nseg) || !d->curve.p) {
+        if (d->curve.basis == TS_CURVE_BEZIER)
+            return ts_error_set(err, TS_ERR_INVALID,
+                                "points: %u control points do not make degree-%d Bézier segments (%d + n·%d are "
+                                "needed, n ≥ 0)",
+                                d->curve.n_points, deg, deg + 1, deg);
+        return ts_error_set(err, TS_ERR_INVALID,
+                            "points: %u control points are too few for a degree-%d B-spline (at least %d)",
+                            d->curve.n_points, deg, deg + 1);
+    }
+    if (nseg == 0)
+        return ts_error_set(err, TS_ERR_INVALID, "points: one control point makes no %s segment", bases[d->curve.basis]);
+    if (b->n_triangles + b->n_curve_segments + nseg > b->lim.max_triangles)
+        return ts_error_set(err, TS_ERR_LIMIT, "the scene's triangles and curve segments exceed the limit of %llu",
+                            (unsigned long long)b->lim.max_triangles);
+    for (uint64_t k = 0; k < 3ull * d->curve.n_points; k++)
+        if (!isfinite(d->curve.p[k]))
+            return ts_error_set(err, TS_ERR_INVALID, "points[%llu]: expected a finite number", (unsigned long long)k);
+    const double w[2] = {d->curve.width0, d->curve.width1};
+    for (int k = 0; k < 2; k++)
+        if (!(w[k] > 0) || !(w[k] < 1e30))
+            return ts_error_set(err, TS_ERR_INVALID, "width%d: expected a positive finite number, got %g", k, w[k]);
+    if (d->curve.type == TS_CURVE_RIBBON) {
+        if (!d->curve.n || d->curve.n_normals != nseg + 1)
+            return ts_error_set(err, TS_ERR_INVALID,
+                                "normals: a ribbon curve of %u segments needs %u normals (one at each segment end), "
+                                "got %u",
+                                nseg, nseg + 1, d->curve.n ? d->curve.n_normals : 0);
+        for (uint32_t k = 0; k <= nseg; k++) {
+            const float *n = d->curve.n + 3 * (size_t)k;
+            if (!(isfinite(n[0]) && isfinite(n[1]) && isfinite(n[2])) || (n[0] == 0 && n[1] == 0 && n[2] == 0))
+                return ts_error_set(err, TS_ERR_INVALID, "normals[%u]: expected a finite, non-zero normal", k);
+        }
+    } else if (d->curve.n && d->curve.n_normals) {
+        return ts_error_set(err, TS_ERR_INVALID, "normals: only ribbon curves take normals");
+    }
+    return TS_OK;
+}
+
+/* The curve of d in world space (to_world), in the arena: pbrt-v3's Bézier segments
+ * (curve.h) cut into the pieces ts_curve_split asks for, radii linear along each, normals
+ * by the inverse transpose, normalised. */
+static ts_status place_curve(ts_scene_builder *b, const ts_shape_desc *d, ts_curve *out, ts_error *err)
+{
+    ts_arena *arena = &b->s->arena;
+    uint32_t nseg;
+    ts_curve_segment_count(d->curve.basis, d->curve.degree, d->curve.n_points, &nseg);
+    const ts_xform *xf = &d->to_world;
+    const double(*m)[4] = xf->m.m;
+    double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                 m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+    double scale = cbrt(fabs(det));
+    float w0 = (float)d->curve.width0, w1 = (float)d->curve.width1;
+    /* Each segment in world space with its end widths (pbrt-v3: Lerp(seg / nSegments,
+     * width0, width1), in float), and its pieces. */
+    double(*wcp)[4][3] = malloc(sizeof *wcp * (size_t)nseg);
+    double(*wend)[2] = malloc(sizeof *wend * (size_t)nseg);
+    uint32_t *split = malloc(sizeof *split * (size_t)nseg);
+    ts_status st = TS_OK;
+    if (!wcp || !wend || !split) {
+        st = nomem(err, "a curve");
+        goto done;
+    }
+    uint64_t n_pieces = 0;
+    for (uint32_t sg = 0; sg < nseg; sg++) {
+        float bz[4][3];
+        ts_curve_bezier_segment(d->curve.basis, d->curve.degree, d->curve.p, sg, bz);
+        float t0 = (float)sg / (float)nseg, t1 = (float)(sg + 1) / (float)nseg;
+        wend[sg][0] = scale * ((1 - t0) * w0 + t0 * w1);
+        wend[sg][1] = scale * ((1 - t1) * w0 + t1 * w1);
+        for (int i = 0; i < 4; i++) {
+            ts_dvec3 q = ts_xform_point(xf, (ts_dvec3){bz[i][0], bz[i][1], bz[i][2]});
+            if (!(fabs(q.x) < 3e38 && fabs(q.y) < 3e38 && fabs(q.z) < 3e38)) {
+                st = ts_error_set(err, TS_ERR_INVALID, "a transformed control point is not a finite float");
+                goto done;
+            }
+            wcp[sg][i][0] = q.x, wcp[sg][i][1] = q.y, wcp[sg][i][2] = q.z;
+        }
+        if (!(wend[sg][0] > 0 && wend[sg][1] > 0 && wend[sg][0] < 3e38 && wend[sg][1] < 3e38)) {
+            st = ts_error_set(err, TS_ERR_INVALID, "the transformed width is not a positive finite float");
+            goto done;
+        }
+        split[sg] = ts_curve_split(wcp[sg], fmax(wend[sg][0], wend[sg][1]));
+        n_pieces += split[sg];
+    }
+    if (n_pieces > UINT32_MAX || b->n_triangles + b->n_curve_segments + n_pieces > b->lim.max_triangles) {
+        st = ts_error_set(err, TS_ERR_LIMIT,
+                          "the curve's %llu pieces (its sharp bends cut for Embree) exceed the scene's limit of %llu "
+                          "triangles and curve pieces",
+                          (unsigned long long)n_pieces, (unsigned long long)b->lim.max_triangles);
+        goto done;
+    }
+    float *cp = ts_arena_calloc(arena, 16 * (size_t)n_pieces, sizeof *cp);
+    float *ur = ts_arena_calloc(arena, 2 * (size_t)n_pieces, sizeof *ur);
+    uint32_t *segof = ts_arena_calloc(arena, (size_t)n_pieces, sizeof *segof);
+    float *nw = d->curve.type == TS_CURVE_RIBBON ? ts_arena_calloc(arena, 3 * ((size_t)nseg + 1), sizeof *nw) : NULL;
+    if (!cp || !ur || !segof || (d->curve.type == TS_CURVE_RIBBON && !nw)) {
+        st = nomem(err, "a curve");
+        goto done;
+    }
+    size_t k = 0;
+    for (uint32_t sg = 0; sg < nseg; sg++)
+        for (uint32_t j = 0; j < split[sg]; j++, k++) {
+            double a = (double)j / split[sg], e = (double)(j + 1) / split[sg], pc[4][3];
+            ts_curve_piece(wcp[sg], a, e, pc);
+            for (int i = 0; i < 4; i++) {
+                double u = a + (e - a) * (i / 3.0);
+                float *o = cp + 16 * k + 4 * i;
+                o[0] = (float)pc[i][0], o[1] = (float)pc[i][1], o[2] = (float)pc[i][2];
+                o[3] = (float)(0.5 * (wend[sg][0] + (wend[sg][1] - wend[sg][0]) * u));
+            }
+            ur[2 * k] = (float)a, ur[2 * k + 1] = (float)e;
+            segof[k] = sg;
+        }
+    for (uint32_t q = 0; nw && q <= nseg; q++) {
+        const float *n = d->curve.n + 3 * (size_t)q;
+        ts_dvec3 w = ts_xform_normal(xf, (ts_dvec3){n[0], n[1], n[2]});
+        double len = ts_dvec3_length(w);
+        if (!(len > 0) || !isfinite(len)) {
+            st = ts_error_set(err, TS_ERR_INVALID, "normals[%u]: the transformed normal is not a finite non-zero vector", q);
+            goto done;
+        }
+        nw[3 * q] = (float)(w.x / len), nw[3 * q + 1] = (float)(w.y / len), nw[3 * q + 2] = (float)(w.z / len);
+    }
+    *out = (ts_curve){d->curve.type, nseg, (uint32_t)n_pieces, cp, ur, segof, nw, det < 0, 0};
+    out->tessellation = ts_curve_tessellation(out);
+done:
+    free(wcp);
+    free(wend);
+    free(split);
+    return st;
+}
+
 /* The cut of a partial quadric (scene_builder.h, ts_shape_cut): finite values that leave
  * some area. */
 static ts_status check_cut(const ts_shape_desc *d, ts_error *err)
@@ -769,7 +921,8 @@ static void place_analytic(const ts_shape_desc *d, ts_shape *sh)
         }
         sh->partial = phi_cut;
         break;
-    case TS_SHAPE_MESH: break;
+    case TS_SHAPE_MESH:
+    case TS_SHAPE_CURVE: break;
     }
     sh->phi_max = sh->partial ? phi_max : 0;
     if (z_shift != 0) {
@@ -830,6 +983,10 @@ static ts_status check_shape(const ts_scene_builder *b, const ts_shape_desc *d, 
         if (d->cut.partial)
             return ts_error_set(err, TS_ERR_INVALID, "a mesh takes no zmin, zmax or phimax (partial quadrics only)");
         return check_mesh(b, &d->mesh, err);
+    case TS_SHAPE_CURVE:
+        if (d->cut.partial)
+            return ts_error_set(err, TS_ERR_INVALID, "a curve takes no zmin, zmax or phimax (partial quadrics only)");
+        return check_curve(b, d, err);
     default:
         return ts_error_set(err, TS_ERR_INVALID, "type: unknown shape type %d", (int)d->type);
     }
@@ -914,6 +1071,11 @@ ts_status ts_scene_builder_add_shape(ts_scene_builder *b, const ts_shape_desc *d
     if (d->type == TS_SHAPE_MESH) {
         TRY(place_mesh(b, &d->mesh, &d->to_world, d->reverse_orientation, &sh.mesh, err));
         sh.to_world = ts_xform_identity();
+    } else if (d->type == TS_SHAPE_CURVE) {
+        TRY(place_curve(b, d, &sh.curve, err));
+        sh.to_world = ts_xform_identity();
+        sh.reverse_orientation = d->reverse_orientation;
+        b->n_curve_segments += sh.curve.n_pieces;
     } else {
         place_analytic(d, &sh);
         sh.reverse_orientation = d->reverse_orientation;

@@ -47,6 +47,7 @@
 #include "core/transform.h"
 #include "core/vecmath.h"
 #include "film/filter.h"
+#include "geometry/curve.h"
 #include "geometry/shape.h"
 #include "build/light_desc.h"
 #include "lights/light.h"
@@ -262,6 +263,23 @@ typedef struct ts_shape_desc {
         ts_mesh mesh; /* object space, copied: n_vertices, n_triangles ≥ 1, finite positions,
                          indices < n_vertices, finite non-zero normals (or NULL), finite uvs
                          (or NULL) */
+        /* pbrt-v3's curve (geometry/curve.h), as its CreateCurveShape reads it: n_points
+         * finite control points p (object space, read during the call) of basis and degree
+         * (2, 3) in a count pbrt-v3 takes that makes at least one segment; the width
+         * linear from width0 to width1 (finite, > 0) over the segments; a ribbon's
+         * n_normals = segments + 1 finite non-zero normals n (object space), other kinds
+         * none. The builder makes the cubic Bézier segments, takes them to world space
+         * (widths scaled by ∛|det| of to_world) and counts each segment against
+         * limits.max_triangles. A curve cannot emit ("emission: pbrt-v3 cannot sample
+         * curves …"), has no cut and no alpha. */
+        struct {
+            ts_curve_type type;
+            ts_curve_basis basis;
+            int degree;
+            uint32_t n_points, n_normals;
+            const float *p, *n;
+            double width0, width1;
+        } curve;
     };
     /* clang-format on */
 } ts_shape_desc;

@@ -49,6 +49,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "geometry/curve.h"
 #include "textures/texture.h"
 
 /* Under ThreadSanitizer Embree builds on the calling thread. Embree and TBB are not
@@ -401,6 +402,37 @@ static void shadow_only_filter(const struct RTCFilterFunctionNArguments *args)
     else triangle_filter(args);
 }
 
+/* ---- ribbon curves (geometry/curve.h) ---- */
+
+/* Embree's flat curve carries a ribbon at its full width; this keeps the hits within
+ * pbrt-v3's ribbon width for the ray's direction (taken to the object's space through an
+ * instance, where pbrt-v3 tests it). Both intersect and occluded. */
+static void ribbon_filter(const struct RTCFilterFunctionNArguments *args)
+{
+    const query_ctx *q = (const query_ctx *)args->context;
+    const ts_shape *s = args->geometryUserPtr;
+    const float *rn = (const float *)args->ray;
+    const float *hf = (const float *)args->hit;
+    const unsigned *hu = (const unsigned *)args->hit;
+    unsigned N = args->N;
+    uint32_t k = q && q->ray ? current_instance(q->a, args->context) : TS_NONE;
+    ts_ray r_obj;
+    if (k != TS_NONE) {
+        const ts_xform *x = instance_xform(q, k);
+        if (!x) {
+            for (unsigned i = 0; i < N; i++) args->valid[i] = 0;
+            return;
+        }
+        r_obj = ray_to_object(x, q->ray);
+    }
+    for (unsigned i = 0; i < N; i++) {
+        if (args->valid[i] != -1) continue;
+        ts_vec3 d = q && q->ray ? (k != TS_NONE ? r_obj.d : q->ray->d)
+                                : (ts_vec3){rn[4 * N + i], rn[5 * N + i], rn[6 * N + i]};
+        if (!ts_curve_ribbon_covers(&s->curve, hu[5 * N + i], hf[3 * N + i], hf[4 * N + i], d)) args->valid[i] = 0;
+    }
+}
+
 /* ---- build ---- */
 
 static RTCGeometry make_mesh(ts_accel *a, uint32_t i)
@@ -441,6 +473,34 @@ static RTCGeometry make_mesh(ts_accel *a, uint32_t i)
     return g;
 }
 
+/* A curve as Embree's ray-facing Bézier curve (geometry/curve.h): its control points
+ * copied (x, y, z, radius), one index per segment, its tessellation rate; ribbons keep
+ * pbrt-v3's width through ribbon_filter. */
+static RTCGeometry make_curve(ts_accel *a, const ts_shape *s)
+{
+    const ts_curve *c = &s->curve;
+    RTCGeometry g = rtcNewGeometry(a->device, RTC_GEOMETRY_TYPE_FLAT_BEZIER_CURVE);
+    if (!g) return NULL;
+    float *v = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float),
+                                       4 * (size_t)c->n_pieces);
+    unsigned *ix = v ? rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, sizeof(unsigned),
+                                               c->n_pieces)
+                     : NULL;
+    if (!v || !ix) {
+        rtcReleaseGeometry(g);
+        return NULL;
+    }
+    memcpy(v, c->cp, 16 * (size_t)c->n_pieces * sizeof(float));
+    for (uint32_t k = 0; k < c->n_pieces; k++) ix[k] = 4 * k;
+    rtcSetGeometryTessellationRate(g, (float)c->tessellation);
+    rtcSetGeometryUserData(g, (void *)s);
+    if (c->type == TS_CURVE_RIBBON) {
+        rtcSetGeometryIntersectFilterFunction(g, ribbon_filter);
+        rtcSetGeometryOccludedFilterFunction(g, ribbon_filter);
+    }
+    return g;
+}
+
 static RTCGeometry make_user(ts_accel *a, const ts_shape *s)
 {
     RTCGeometry g = rtcNewGeometry(a->device, RTC_GEOMETRY_TYPE_USER);
@@ -474,6 +534,13 @@ static RTCGeometry make_geometry(ts_accel *a, uint32_t i, bool *none)
             return NULL;
         }
         return make_mesh(a, i);
+    }
+    if (s->type == TS_SHAPE_CURVE) {
+        if (s->curve.n_pieces == 0) {
+            *none = true;
+            return NULL;
+        }
+        return make_curve(a, s);
     }
     return make_user(a, s);
 }
@@ -798,14 +865,14 @@ static inline bool ray_valid(const ts_ray *r)
  * space under the composed transform; triangles in object space from the ray taken there,
  * then mapped to world space. */
 static void instanced_interaction(const query_ctx *q, uint32_t k, uint32_t local, uint32_t prim, const ts_ray *ray,
-                                  float t, ts_interaction *si)
+                                  float t, float hit_u, float hit_v, ts_interaction *si)
 {
     const ts_accel *a = q->a;
     const ts_instance *in = &a->instances[k];
     uint32_t index = a->objects[in->object].first_shape + local;
     const ts_shape *s = &a->shapes[index];
     const ts_xform *x = instance_xform(q, k); /* not NULL: its callbacks reported the hit */
-    if (s->type != TS_SHAPE_MESH) {
+    if (s->type != TS_SHAPE_MESH && s->type != TS_SHAPE_CURVE) {
         ts_shape p = placed(x, s);
         ts_shape_interaction(&p, index, 0, ray, t, si);
         si->inst = k + 1;
@@ -813,7 +880,10 @@ static void instanced_interaction(const query_ctx *q, uint32_t k, uint32_t local
     }
     ts_ray r = ray_to_object(x, ray);
     ts_interaction o;
-    ts_shape_triangle_interaction_cached(s, &a->meshes[index].tri[prim], index, prim, &r, t, &o);
+    if (s->type == TS_SHAPE_CURVE)
+        ts_curve_interaction(s, index, prim, &r, t, hit_u, hit_v, &o);
+    else
+        ts_shape_triangle_interaction_cached(s, &a->meshes[index].tri[prim], index, prim, &r, t, &o);
     const double(*m)[4] = x->m.m;
     /* p and its bound (pbrt-v3's transformed pError): |M|·e plus the double sum's and the
      * final float rounding's share, four half-ulps of the result as in shape.c. */
@@ -864,7 +934,8 @@ static inline bool intersect(const ts_accel *a, const ts_ray *ray, bool shadow, 
     rtcIntersect1(a->scene, &q.rtc, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
     if (rh.hit.instID[0] != RTC_INVALID_GEOMETRY_ID) {
-        instanced_interaction(&q, rh.hit.instID[0] - a->n_shapes, rh.hit.geomID, rh.hit.primID, ray, rh.ray.tfar, si);
+        instanced_interaction(&q, rh.hit.instID[0] - a->n_shapes, rh.hit.geomID, rh.hit.primID, ray, rh.ray.tfar,
+                              rh.hit.u, rh.hit.v, si);
         return true;
     }
     if (rh.hit.geomID >= a->n_shapes) return false;
@@ -873,6 +944,8 @@ static inline bool intersect(const ts_accel *a, const ts_ray *ray, bool shadow, 
         const mesh_geom *g = &a->meshes[rh.hit.geomID];
         ts_shape_triangle_interaction_cached(s, &g->tri[rh.hit.primID], rh.hit.geomID, rh.hit.primID, ray,
                                              rh.ray.tfar, si);
+    } else if (s->type == TS_SHAPE_CURVE) {
+        ts_curve_interaction(s, rh.hit.geomID, rh.hit.primID, ray, rh.ray.tfar, rh.hit.u, rh.hit.v, si);
     } else {
         ts_shape_interaction(s, rh.hit.geomID, 0, ray, rh.ray.tfar, si);
     }

@@ -34,6 +34,8 @@
  * Everything here is pure and thread-safe. */
 #include "geometry/shape.h"
 
+#include "geometry/curve.h"
+
 #include <float.h>
 #include <math.h>
 #include <string.h>
@@ -279,7 +281,8 @@ static bool analytic_hit(const ts_shape *s, const ts_ray *ray, float tmax, obj_h
     case TS_SHAPE_SPHERE: return sphere_hit(s, &R, tmax, h);
     case TS_SHAPE_DISK: return disk_hit(s, &R, tmax, h);
     case TS_SHAPE_CYLINDER: return cylinder_hit(s, &R, tmax, h);
-    case TS_SHAPE_MESH: break;
+    case TS_SHAPE_MESH:
+    case TS_SHAPE_CURVE: break;
     }
     return false;
 }
@@ -416,6 +419,7 @@ bool ts_shape_triangle_ahead_cached(const ts_shape *s, const ts_tri_cache *c, ui
 
 bool ts_shape_intersect(const ts_shape *s, const ts_ray *ray, float tmax, float *t_hit)
 {
+    if (s->type == TS_SHAPE_CURVE) return false; /* Embree's curves only (geometry/curve.h) */
     if (s->type == TS_SHAPE_MESH) {
         /* Brute force over the triangles (tests and tools; traversal uses Embree). */
         bool hit = false;
@@ -763,6 +767,10 @@ void ts_shape_interaction(const ts_shape *s, uint32_t shape_index, uint32_t prim
         triangle_interaction(s, &c, prim, ray, t, si);
         return;
     }
+    if (s->type == TS_SHAPE_CURVE) {
+        ts_curve_interaction_at(s, shape_index, prim, ray, t, si);
+        return;
+    }
     /* Re-solve: the same computation with tmax just above t finds the same root. */
     obj_hit h;
     if (!analytic_hit(s, ray, ts_next_float_up(t), &h) && !analytic_hit(s, ray, INFINITY, &h)) {
@@ -827,6 +835,7 @@ ts_bounds3 ts_shape_triangle_bounds(const ts_shape *s, uint32_t prim)
 
 ts_bounds3 ts_shape_bounds(const ts_shape *s)
 {
+    if (s->type == TS_SHAPE_CURVE) return ts_curve_bounds(&s->curve);
     if (s->type == TS_SHAPE_MESH) {
         ts_bounds3 b = ts_bounds3_empty();
         for (uint32_t i = 0; i < s->mesh.n_triangles; i++) b = ts_bounds3_union(b, ts_shape_triangle_bounds(s, i));
@@ -917,7 +926,8 @@ double ts_shape_object_area(const ts_shape *s)
     case TS_SHAPE_CYLINDER:
         if (s->partial) return phi_max * s->cylinder.radius * s->cylinder.height;
         return 2.0 * TS_PI_D * s->cylinder.radius * s->cylinder.height;
-    case TS_SHAPE_MESH: break;
+    case TS_SHAPE_MESH:
+    case TS_SHAPE_CURVE: break;
     }
     return 0;
 }
@@ -974,6 +984,7 @@ static double partial_area(const ts_shape *s)
  * spheres and cylinders: partial_area. */
 double ts_shape_area(const ts_shape *s, uint32_t prim)
 {
+    if (s->type == TS_SHAPE_CURVE) return ts_curve_area(&s->curve);
     if (s->type == TS_SHAPE_MESH) {
         if (prim >= s->mesh.n_triangles) return 0;
         tri_d tr = tri_load(&s->mesh, prim);

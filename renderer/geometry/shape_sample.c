@@ -164,7 +164,8 @@ ts_status ts_shape_sample_info_init(const ts_shape *s, uint32_t prim, ts_triangl
         info->area = a_obj * sum / np;
         break;
     }
-    case TS_SHAPE_MESH: break;
+    case TS_SHAPE_MESH:
+    case TS_SHAPE_CURVE: break; /* curves never emit (pbrt-v3 cannot sample them) */
     }
     if (!isfinite(info->area)) info->area = 0;
     return TS_OK;

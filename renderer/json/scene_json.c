@@ -932,6 +932,39 @@ static ts_status parse_cutout(loader *ld, const cJSON *sh, const char *path, con
     return at(ts_scene_builder_add_texture(ld->b, &zero, out, ld->err), p.s, ld->err);
 }
 
+/* A "curve" shape's keys (docs/design.md §4; pbrt-v3's curve parameters): points (its P,
+ * object space), basis, degree, curve_type, normals (a ribbon's N), width (1) and width0,
+ * width1 (defaulting to width). The arrays go into *arrays (the caller frees them); the
+ * builder checks the counts against the basis and degree. */
+static ts_status parse_curve(loader *ld, const cJSON *sh, const char *path, ts_mesh_data *arrays, ts_shape_desc *d)
+{
+    static const char *const bases[] = {"bezier", "bspline", NULL};
+    static const char *const kinds[] = {"flat", "ribbon", "cylinder", NULL};
+    int basis = 0, kind = 0;
+    int64_t degree = 3;
+    double width = 1, w0, w1;
+    uint32_t np = 0, nn = 0;
+    TRY(float_array(ld, sh, path, "points", 3, true, &arrays->p, &np));
+    TRY(float_array(ld, sh, path, "normals", 3, false, &arrays->n, &nn));
+    TRY(ts_json_enum(sh, path, "basis", false, bases, &basis, ld->err));
+    TRY(ts_json_enum(sh, path, "curve_type", false, kinds, &kind, ld->err));
+    TRY(ts_json_int(sh, path, "degree", false, 2, 3, &degree, ld->err));
+    TRY(ts_json_number(sh, path, "width", false, TS_J_POSITIVE, &width, ld->err));
+    w0 = w1 = width;
+    TRY(ts_json_number(sh, path, "width0", false, TS_J_POSITIVE, &w0, ld->err));
+    TRY(ts_json_number(sh, path, "width1", false, TS_J_POSITIVE, &w1, ld->err));
+    d->curve.type = (ts_curve_type)kind;
+    d->curve.basis = (ts_curve_basis)basis;
+    d->curve.degree = (int)degree;
+    d->curve.n_points = np;
+    d->curve.p = arrays->p;
+    d->curve.n_normals = nn;
+    d->curve.n = arrays->n;
+    d->curve.width0 = w0;
+    d->curve.width1 = w1;
+    return TS_OK;
+}
+
 /* Reads shape sh into *d (a mesh's arrays into *arrays, which the caller frees). */
 /* A shape: *d with to_world = user ∘ place, user the shape's "transform" (*user_out) and
  * place the shape's own placement (a sphere's centre, a disk's frame, a cylinder's axis; the
@@ -939,7 +972,7 @@ static ts_status parse_cutout(loader *ld, const cJSON *sh, const char *path, con
 static ts_status parse_shape(loader *ld, const cJSON *sh, const char *path, ts_shape_desc *d, ts_mesh_data *arrays,
                              ts_xform *user_out, ts_xform *place_out)
 {
-    static const char *const types[] = {"sphere", "disk", "cylinder", "mesh", "loopsubdiv", NULL};
+    static const char *const types[] = {"sphere", "disk", "cylinder", "mesh", "loopsubdiv", "curve", NULL};
     if (!cJSON_IsObject(sh)) return ts_json_check_object(sh, path, types, ld->err);
     int type = 0;
     TRY(ts_json_enum(sh, path, "type", true, types, &type, ld->err));
@@ -949,13 +982,15 @@ static ts_status parse_shape(loader *ld, const cJSON *sh, const char *path, ts_s
     static const char *const k_cyl[] = {COMMON, "p0", "p1", "radius", "phi_max", NULL};
     static const char *const k_mesh[] = {COMMON, "positions", "indices", "normals", "uvs", "file", "alpha", "shadow_alpha", NULL};
     static const char *const k_subdiv[] = {COMMON, "positions", "indices", "levels", NULL};
+    static const char *const k_curve[] = {COMMON, "points", "basis", "degree", "curve_type", "normals",
+                                          "width", "width0", "width1", NULL};
 #undef COMMON
-    const char *const *keys[] = {k_sphere, k_disk, k_cyl, k_mesh, k_subdiv};
+    const char *const *keys[] = {k_sphere, k_disk, k_cyl, k_mesh, k_subdiv, k_curve};
     TRY(ts_json_check_object(sh, path, keys[type], ld->err));
 
     *d = (ts_shape_desc){0};
     const bool subdiv = type == 4; /* a loopsubdiv control mesh: refined into a mesh here */
-    d->type = subdiv ? TS_SHAPE_MESH : (ts_shape_type)type;
+    d->type = subdiv ? TS_SHAPE_MESH : type == 5 ? TS_SHAPE_CURVE : (ts_shape_type)type;
     const char *mat = NULL;
     const cJSON *mv = cJSON_GetObjectItemCaseSensitive(sh, "material");
     if (!cJSON_IsNull(mv)) TRY(ts_json_string(sh, path, "material", true, &mat, ld->err));
@@ -1047,6 +1082,10 @@ static ts_status parse_shape(loader *ld, const cJSON *sh, const char *path, ts_s
             *arrays = fine;
             d->mesh = (ts_mesh){fine.n_vertices, fine.n_triangles, fine.p, fine.n, fine.uv, fine.index};
         }
+        break;
+    case TS_SHAPE_CURVE:
+        d->to_world = user; /* the builder takes the control points to world space */
+        TRY(parse_curve(ld, sh, path, arrays, d));
         break;
     }
     return TS_OK;

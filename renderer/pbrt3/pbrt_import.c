@@ -16,6 +16,7 @@
 
 #include <cjson/cJSON.h>
 
+#include "geometry/curve.h"
 #include "mesh/mesh_read.h"
 #include "mesh/mesh_subdiv.h"
 #include "build/light_desc.h"
@@ -1302,6 +1303,137 @@ static ts_status jcutout(imp *im, cJSON *j, const char *key, const cutout *c)
     return ts_jw_add(j, key, ref) ? TS_OK : nomem(im);
 }
 
+/* pbrt-v3's "curve" (CreateCurveShape, geometry/curve.h) into d and, converting, its
+ * document j. pbrt-v3's refusals (degree, basis, the control-point count for the basis, a
+ * ribbon's normals) are errors at the parameter; where pbrt-v3 warns and goes on, so does
+ * this: normals on another kind are dropped, an unknown type is a cylinder. *skip: one
+ * Bézier point, no segment (pbrt-v3 draws nothing; warned). splitdepth is read and
+ * checked but does not change the image: Embree's tessellation follows pbrt-v3's
+ * flatness rule instead (curve.h). */
+static ts_status read_curve(imp *im, ts_pbrt_shape *sh, ts_shape_desc *d, cJSON *j, bool *skip)
+{
+    ts_pbrt_params *ps = &sh->params;
+    *skip = false;
+    float width, w[2];
+    int32_t degree;
+    TRY(ts_pbrt_find_float(ps, "width", 1, &width, im->err));
+    TRY(ts_pbrt_find_float(ps, "width0", width, &w[0], im->err));
+    TRY(ts_pbrt_find_float(ps, "width1", width, &w[1], im->err));
+    for (int k = 0; k < 2; k++) {
+        if (w[k] > 0 && isfinite(w[k])) continue;
+        const char *names[3] = {k ? "width1" : "width0", "width", k ? "width1" : "width0"};
+        ts_pbrt_param *wp = ts_pbrt_params_get(ps, names[0]);
+        if (!wp) wp = ts_pbrt_params_get(ps, names[1]);
+        return ts_pbrt_param_error(ps, wp, im->err, TS_ERR_INVALID,
+                                   "must be a positive finite number, got %g (pbrt-v3 draws nothing or misbounds "
+                                   "the curve)",
+                                   w[k]);
+    }
+    TRY(ts_pbrt_find_int(ps, "degree", 3, &degree, im->err));
+    if (degree != 2 && degree != 3)
+        return ts_pbrt_param_error(ps, ts_pbrt_params_get(ps, "degree"), im->err, TS_ERR_INVALID,
+                                   "is %d: only degree 2 and 3 curves are supported (as pbrt-v3)", (int)degree);
+    const char *basis_name;
+    TRY(ts_pbrt_find_string(ps, "basis", "bezier", &basis_name, im->err));
+    ts_curve_basis basis = TS_CURVE_BEZIER;
+    if (strcmp(basis_name, "bspline") == 0)
+        basis = TS_CURVE_BSPLINE;
+    else if (strcmp(basis_name, "bezier") != 0)
+        return ts_pbrt_param_error(ps, ts_pbrt_params_get(ps, "basis"), im->err, TS_ERR_INVALID,
+                                   "is \"%s\": only \"bezier\" and \"bspline\" are supported (as pbrt-v3)",
+                                   basis_name);
+    const float *P;
+    size_t np;
+    TRY(ts_pbrt_find_point3s(ps, "P", &P, &np, im->err));
+    ts_pbrt_param *pp = ts_pbrt_params_get(ps, "P");
+    uint32_t nseg;
+    if (!P || !ts_curve_segment_count(basis, degree, np, &nseg)) {
+        if (!pp)
+            return derr(im, ps, sh->loc, TS_ERR_INVALID, "\"point3 P\" (the control points) is required");
+        if (basis == TS_CURVE_BEZIER)
+            return ts_pbrt_param_error(ps, pp, im->err, TS_ERR_INVALID,
+                                       "has %zu control points: for the degree %d Bézier basis %d + n * %d are "
+                                       "required, for n >= 0 (as pbrt-v3)",
+                                       np, (int)degree, (int)degree + 1, (int)degree);
+        return ts_pbrt_param_error(ps, pp, im->err, TS_ERR_INVALID,
+                                   "has %zu control points: the degree %d b-spline basis needs at least %d (as "
+                                   "pbrt-v3)",
+                                   np, (int)degree, (int)degree + 1);
+    }
+    const char *kind_name;
+    TRY(ts_pbrt_find_string(ps, "type", "flat", &kind_name, im->err));
+    ts_curve_type kind = TS_CURVE_CYLINDER;
+    if (strcmp(kind_name, "flat") == 0)
+        kind = TS_CURVE_FLAT;
+    else if (strcmp(kind_name, "ribbon") == 0)
+        kind = TS_CURVE_RIBBON;
+    else if (strcmp(kind_name, "cylinder") != 0)
+        pwarn(im, ps, ts_pbrt_params_get(ps, "type"),
+              "is \"%s\", not a curve type (flat, ribbon, cylinder): a \"cylinder\" curve, as pbrt-v3 makes it",
+              kind_name);
+    const float *N;
+    size_t nn;
+    TRY(ts_pbrt_find_normal3s(ps, "N", &N, &nn, im->err));
+    ts_pbrt_param *npar = ts_pbrt_params_get(ps, "N");
+    if (N && kind != TS_CURVE_RIBBON) {
+        pwarn(im, ps, npar, "is ignored: curve normals are only used with \"ribbon\" curves (as pbrt-v3)");
+        N = NULL, nn = 0;
+    } else if (N && nn != (size_t)nseg + 1) {
+        return ts_pbrt_param_error(ps, npar, im->err, TS_ERR_INVALID,
+                                   "has %zu normals: a ribbon curve of %u segments needs %u (as pbrt-v3)", nn, nseg,
+                                   nseg + 1);
+    } else if (!N && kind == TS_CURVE_RIBBON) {
+        return derr(im, ps, sh->loc, TS_ERR_INVALID,
+                    "a \"ribbon\" curve needs normals \"normal N\" at its segment ends (as pbrt-v3)");
+    }
+    for (size_t k = 0; N && k < nn; k++)
+        if (N[3 * k] == 0 && N[3 * k + 1] == 0 && N[3 * k + 2] == 0)
+            return ts_pbrt_param_error(ps, npar, im->err, TS_ERR_INVALID,
+                                       "normal %zu is zero (pbrt-v3 normalises it to NaN)", k);
+    ts_pbrt_param *sd = ts_pbrt_params_get(ps, "splitdepth");
+    if (sd) {
+        double v = sd->type == TS_PBRT_PARAM_INTEGER && sd->n == 1   ? sd->ints[0]
+                   : sd->type == TS_PBRT_PARAM_FLOAT && sd->n == 1 ? (double)(int)sd->floats[0]
+                                                                    : NAN;
+        if (!(v >= 0 && v <= 20))
+            return ts_pbrt_param_error(ps, sd, im->err, TS_ERR_INVALID,
+                                       "expects one whole number in [0, 20] (pbrt-v3 makes 2^splitdepth pieces of "
+                                       "each segment)");
+    }
+    if (nseg == 0) {
+        dwarn(im, ps, sh->loc, "has one control point, which makes no segment: nothing to draw (as pbrt-v3)");
+        *skip = true;
+        return TS_OK;
+    }
+    ts_shape probe = {0};
+    if (!user_xform(sh->object_to_world, &probe.to_world)) probe.to_world = ts_xform_identity();
+    if (!ts_shape_is_similarity(&probe))
+        dwarn(im, ps, sh->loc,
+              "is placed by a non-uniform scale or shear: its width is scaled by the cube root of the transform's "
+              "determinant in world space, where pbrt-v3 keeps it ray-facing in object space (the strip's width "
+              "then differs with the view direction)");
+    d->type = TS_SHAPE_CURVE;
+    d->reverse_orientation = sh->reverse_orientation;
+    d->curve.type = kind;
+    d->curve.basis = basis;
+    d->curve.degree = degree;
+    d->curve.n_points = (uint32_t)np;
+    d->curve.p = P;
+    d->curve.n = N;
+    d->curve.n_normals = (uint32_t)nn;
+    d->curve.width0 = w[0];
+    d->curve.width1 = w[1];
+    if (!j) return TS_OK;
+    static const char *const kinds[] = {"flat", "ribbon", "cylinder"};
+    bool ok = ts_jw_string(j, "type", "curve") && ts_jw_add(j, "points", ts_jw_floats(P, 3 * np)) &&
+              (basis == TS_CURVE_BEZIER || ts_jw_string(j, "basis", "bspline")) &&
+              (degree == 3 || ts_jw_number(j, "degree", degree)) &&
+              (kind == TS_CURVE_FLAT || ts_jw_string(j, "curve_type", kinds[kind])) &&
+              (!N || ts_jw_add(j, "normals", ts_jw_floats(N, 3 * nn))) && ts_jw_number(j, "width0", w[0]) &&
+              ts_jw_number(j, "width1", w[1]) && (!d->reverse_orientation || ts_jw_bool(j, "reverse_orientation", true));
+    return ok ? TS_OK : nomem(im);
+}
+
 static ts_status map_shape(imp *im, size_t si)
 {
     ts_pbrt_shape *sh = &im->s->shapes[si];
@@ -1309,9 +1441,10 @@ static ts_status map_shape(imp *im, size_t si)
     const char *t = sh->type;
     bool analytic = strcmp(t, "sphere") == 0 || strcmp(t, "disk") == 0 || strcmp(t, "cylinder") == 0;
     bool mesh = strcmp(t, "trianglemesh") == 0 || strcmp(t, "plymesh") == 0 || strcmp(t, "loopsubdiv") == 0;
-    if (!analytic && !mesh)
+    bool curve = strcmp(t, "curve") == 0;
+    if (!analytic && !mesh && !curve)
         return derr(im, ps, sh->loc, TS_ERR_UNSUPPORTED,
-                    "is not supported (sphere, disk, cylinder, trianglemesh, plymesh and loopsubdiv are)");
+                    "is not supported (sphere, disk, cylinder, trianglemesh, plymesh, loopsubdiv and curve are)");
 
     /* The surface, the emission and the cut-out first: they may make the shape vanish. */
     uint32_t mat;
@@ -1349,6 +1482,10 @@ static ts_status map_shape(imp *im, size_t si)
         TRY(ts_pbrt_find_bool(&al->params, "twosided", false, &d.two_sided, im->err));
         TRY(light_samples(im, &al->params, &d.light_samples));
         d.emission = (ts_rgb){L.r * scale.r, L.g * scale.g, L.b * scale.b};
+        if (curve && !ts_rgb_is_black(d.emission))
+            return derr(im, &al->params, al->loc, TS_ERR_UNSUPPORTED,
+                        "is refused on a \"curve\": pbrt-v3 cannot sample curves (its Curve::Sample is not "
+                        "implemented and stops the render at the first light sample)");
     }
     bool emits = d.emission.r > 0 || d.emission.g > 0 || d.emission.b > 0;
     if (no_surface) {
@@ -1475,6 +1612,14 @@ static ts_status map_shape(imp *im, size_t si)
         }
         if (j && d.reverse_orientation) jok = jok && ts_jw_bool(j, "reverse_orientation", true);
         d.to_world = ts_xform_compose(&user, &place);
+    } else if (curve) {
+        bool skip;
+        d.to_world = user;
+        st = read_curve(im, sh, &d, j, &skip);
+        if (!st && skip) {
+            ps->count = 0; /* nothing left to warn about */
+            goto fail;
+        }
     } else {
         d.type = TS_SHAPE_MESH;
         d.to_world = user;
