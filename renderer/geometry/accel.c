@@ -881,7 +881,7 @@ static void instanced_interaction(const query_ctx *q, uint32_t k, uint32_t local
     ts_ray r = ray_to_object(x, ray);
     ts_interaction o;
     if (s->type == TS_SHAPE_CURVE)
-        ts_curve_interaction(s, index, prim, &r, t, hit_u, hit_v, &o);
+        ts_curve_interaction(&s->curve, s->reverse_orientation, index, prim, &r, t, hit_u, hit_v, &o);
     else
         ts_shape_triangle_interaction_cached(s, &a->meshes[index].tri[prim], index, prim, &r, t, &o);
     const double(*m)[4] = x->m.m;
@@ -945,7 +945,8 @@ static inline bool intersect(const ts_accel *a, const ts_ray *ray, bool shadow, 
         ts_shape_triangle_interaction_cached(s, &g->tri[rh.hit.primID], rh.hit.geomID, rh.hit.primID, ray,
                                              rh.ray.tfar, si);
     } else if (s->type == TS_SHAPE_CURVE) {
-        ts_curve_interaction(s, rh.hit.geomID, rh.hit.primID, ray, rh.ray.tfar, rh.hit.u, rh.hit.v, si);
+        ts_curve_interaction(&s->curve, s->reverse_orientation, rh.hit.geomID, rh.hit.primID, ray, rh.ray.tfar,
+                             rh.hit.u, rh.hit.v, si);
     } else {
         ts_shape_interaction(s, rh.hit.geomID, 0, ray, rh.ray.tfar, si);
     }

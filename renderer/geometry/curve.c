@@ -214,10 +214,9 @@ static ts_dvec3 unit_or(ts_dvec3 v, ts_dvec3 fallback)
     return l > 0 && isfinite(l) ? ts_dvec3_scale(v, 1 / l) : fallback;
 }
 
-void ts_curve_interaction(const ts_shape *s, uint32_t shape_index, uint32_t seg, const ts_ray *ray, float t,
-                          float u_hit, float v_hit, ts_interaction *si)
+void ts_curve_interaction(const ts_curve *c, bool reverse_orientation, uint32_t shape_index, uint32_t seg,
+                          const ts_ray *ray, float t, float u_hit, float v_hit, ts_interaction *si)
 {
-    const ts_curve *c = &s->curve;
     if (seg >= c->n_pieces) seg = c->n_pieces ? c->n_pieces - 1 : 0;
     double u = u_hit < 0 ? 0 : u_hit > 1 ? 1 : (double)u_hit; /* along the piece */
     double du = c->u_range[2 * (size_t)seg + 1] - c->u_range[2 * (size_t)seg];
@@ -252,7 +251,7 @@ void ts_curve_interaction(const ts_shape *s, uint32_t shape_index, uint32_t seg,
     if (v < 0) v = 0;
     if (v > 1) v = 1;
     ts_dvec3 n = unit_or(ts_dvec3_cross(dpdu, dpdv), ts_dvec3_scale(dir, -1));
-    if (s->reverse_orientation) n = ts_dvec3_scale(n, -1);
+    if (reverse_orientation) n = ts_dvec3_scale(n, -1);
 
     ts_dvec3 p = ts_dvec3_add(O, ts_dvec3_scale(D, t));
     *si = (ts_interaction){0};
@@ -274,10 +273,9 @@ void ts_curve_interaction(const ts_shape *s, uint32_t shape_index, uint32_t seg,
     si->prim = seg;
 }
 
-void ts_curve_interaction_at(const ts_shape *s, uint32_t shape_index, uint32_t seg, const ts_ray *ray, float t,
-                             ts_interaction *si)
+void ts_curve_interaction_at(const ts_curve *c, bool reverse_orientation, uint32_t shape_index, uint32_t seg,
+                             const ts_ray *ray, float t, ts_interaction *si)
 {
-    const ts_curve *c = &s->curve;
     if (seg >= c->n_pieces) seg = c->n_pieces ? c->n_pieces - 1 : 0;
     ts_dvec3 D = ts_dvec3_from(ray->d), O = ts_dvec3_from(ray->o);
     double len = ts_dvec3_length(D);
@@ -304,5 +302,6 @@ void ts_curve_interaction_at(const ts_shape *s, uint32_t shape_index, uint32_t s
     double edge = ts_dvec3_dot(ts_dvec3_cross(r, dq), dir); /* pbrt-v3's edge function */
     double w = 2 * ((1 - u_best) * radius(c, seg, 0) + u_best * radius(c, seg, 3));
     double ve = w > 0 ? 2 * sqrt(best) / w : 0;
-    ts_curve_interaction(s, shape_index, seg, ray, t, (float)u_best, (float)(edge > 0 ? ve : -ve), si);
+    ts_curve_interaction(c, reverse_orientation, shape_index, seg, ray, t, (float)u_best, (float)(edge > 0 ? ve : -ve),
+                         si);
 }

@@ -41,7 +41,30 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "geometry/shape.h"
+#include "core/vecmath.h"
+#include "geometry/interaction.h"
+
+/* pbrt-v3's three curve kinds (its CurveType): ray-facing strips; a ribbon's width seen
+ * along a ray is scaled by |n·d| for its normal n slerped along the segment; a cylinder's
+ * normal is bent across the strip (geometry/curve.h). */
+typedef enum ts_curve_type { TS_CURVE_FLAT, TS_CURVE_RIBBON, TS_CURVE_CYLINDER } ts_curve_type;
+
+/* A curve: pbrt-v3's cubic Bézier segments (what the builder made of any basis and
+ * degree), each cut into 2^k pieces where it bends sharply for its width (curve.h), in
+ * world space, or in its object's space when the shape is part of an object. Piece i is
+ * Embree's primitive i. */
+typedef struct ts_curve {
+    ts_curve_type type;
+    uint32_t n_segments;   /* pbrt-v3's segments */
+    uint32_t n_pieces;     /* Embree's primitives */
+    const float *cp;       /* 16·n_pieces: each piece's 4 Bézier control points as x, y, z, radius
+                              (half the width, linear along it: Embree's float4 layout) */
+    const float *u_range;  /* 2·n_pieces: the piece's [u0, u1] within its segment (pbrt-v3's u) */
+    const uint32_t *segment; /* n_pieces: the piece's segment */
+    const float *n;        /* ribbon: 3·(n_segments + 1) unit normals at the segments' ends; else NULL */
+    bool mirrored;         /* the placing transform swapped handedness (curve.h: dpdv's sign) */
+    uint32_t tessellation; /* ray-facing pieces per piece Embree tests (geometry/curve.h) */
+} ts_curve;
 
 typedef enum ts_curve_basis { TS_CURVE_BEZIER, TS_CURVE_BSPLINE } ts_curve_basis;
 
@@ -97,18 +120,19 @@ ts_dvec3 ts_curve_ribbon_normal(const ts_curve *c, uint32_t seg, double u);
  * width: |v| ≤ |n_u·d| / |d|. */
 bool ts_curve_ribbon_covers(const ts_curve *c, uint32_t piece, float u, float v, ts_vec3 d);
 
-/* The interaction of a hit on piece seg of curve shape s at parameter t along ray, from
+/* The interaction of a hit on piece seg of curve c (reverse_orientation: its shape's,
+ * pbrt-v3's ReverseOrientation) at parameter t along ray, from
  * Embree's hit coordinates u (along the piece) and v (in [−1, 1] across the full width,
  * its sign pbrt-v3's edge function's): every field of ts_shape_interaction (uv.u the
- * segment's u, ∂p/∂u with respect to it, prim the piece), in s's space (the ray in that
+ * segment's u, ∂p/∂u with respect to it, prim the piece), in c's space (the ray in that
  * space). */
-void ts_curve_interaction(const ts_shape *s, uint32_t shape_index, uint32_t seg, const ts_ray *ray, float t,
-                          float u, float v, ts_interaction *si);
+void ts_curve_interaction(const ts_curve *c, bool reverse_orientation, uint32_t shape_index, uint32_t seg,
+                          const ts_ray *ray, float t, float u, float v, ts_interaction *si);
 
 /* ts_curve_interaction for a hit at t without Embree's (u, v) (tools and tests): u of the
  * curve point nearest the ray among 256 along the piece, refined, and v from the ray's
  * signed distance to it. */
-void ts_curve_interaction_at(const ts_shape *s, uint32_t shape_index, uint32_t seg, const ts_ray *ray, float t,
-                             ts_interaction *si);
+void ts_curve_interaction_at(const ts_curve *c, bool reverse_orientation, uint32_t shape_index, uint32_t seg,
+                             const ts_ray *ray, float t, ts_interaction *si);
 
 #endif

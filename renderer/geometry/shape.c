@@ -34,8 +34,6 @@
  * Everything here is pure and thread-safe. */
 #include "geometry/shape.h"
 
-#include "geometry/curve.h"
-
 #include <float.h>
 #include <math.h>
 #include <string.h>
@@ -768,7 +766,7 @@ void ts_shape_interaction(const ts_shape *s, uint32_t shape_index, uint32_t prim
         return;
     }
     if (s->type == TS_SHAPE_CURVE) {
-        ts_curve_interaction_at(s, shape_index, prim, ray, t, si);
+        ts_curve_interaction_at(&s->curve, s->reverse_orientation, shape_index, prim, ray, t, si);
         return;
     }
     /* Re-solve: the same computation with tmax just above t finds the same root. */

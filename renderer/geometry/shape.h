@@ -51,6 +51,7 @@
 
 #include "core/transform.h"
 #include "core/vecmath.h"
+#include "geometry/curve.h"
 #include "geometry/interaction.h"
 
 struct ts_texture;
@@ -70,28 +71,6 @@ typedef struct ts_mesh {
     const float *uv;       /* 2·n_vertices, or NULL */
     const uint32_t *index; /* 3·n_triangles, validated < n_vertices */
 } ts_mesh;
-
-/* pbrt-v3's three curve kinds (its CurveType): ray-facing strips; a ribbon's width seen
- * along a ray is scaled by |n·d| for its normal n slerped along the segment; a cylinder's
- * normal is bent across the strip (geometry/curve.h). */
-typedef enum ts_curve_type { TS_CURVE_FLAT, TS_CURVE_RIBBON, TS_CURVE_CYLINDER } ts_curve_type;
-
-/* A curve: pbrt-v3's cubic Bézier segments (what the builder made of any basis and
- * degree), each cut into 2^k pieces where it bends sharply for its width (curve.h), in
- * world space, or in its object's space when the shape is part of an object. Piece i is
- * Embree's primitive i. */
-typedef struct ts_curve {
-    ts_curve_type type;
-    uint32_t n_segments;   /* pbrt-v3's segments */
-    uint32_t n_pieces;     /* Embree's primitives */
-    const float *cp;       /* 16·n_pieces: each piece's 4 Bézier control points as x, y, z, radius
-                              (half the width, linear along it: Embree's float4 layout) */
-    const float *u_range;  /* 2·n_pieces: the piece's [u0, u1] within its segment (pbrt-v3's u) */
-    const uint32_t *segment; /* n_pieces: the piece's segment */
-    const float *n;        /* ribbon: 3·(n_segments + 1) unit normals at the segments' ends; else NULL */
-    bool mirrored;         /* the placing transform swapped handedness (curve.h: dpdv's sign) */
-    uint32_t tessellation; /* ray-facing pieces per piece Embree tests (geometry/curve.h) */
-} ts_curve;
 
 typedef struct ts_shape {
     ts_shape_type type;
