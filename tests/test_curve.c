@@ -579,6 +579,31 @@ static void instanced_curve(void **state)
     ts_scene_destroy(b);
 }
 
+/* A moving curve (JSON "motion", pbrt-v3's animated transform: an object of its own under
+ * a moving instance) is where its transform at the ray's time puts it: the strip of width
+ * 0.25 translated by 0.2·t in y. */
+static void moving_curve(void **state)
+{
+    (void)state;
+    ts_scene *s = curve_scene(STRAIGHT ",\"width\":0.25,\"motion\":{\"transform\":[{\"translate\":[0,0.2,0]}]}");
+    const double times[3] = {0, 0.5, 1};
+    for (int k = 0; k < 3; k++)
+        for (double x = -0.9; x < 1; x += 0.3) {
+            double c = 0.2 * times[k];
+            ts_interaction si;
+            ts_ray in = down_ray(x, c + 0.12), out = down_ray(x, c + 0.13), below = down_ray(x, c - 0.13);
+            in.time = out.time = below.time = (float)times[k];
+            if (!ts_accel_intersect(s->accel, &in, &si)) fail_msg("time %g: no hit at (%g, %g)", times[k], x, c + 0.12);
+            assert_true(ts_accel_intersect(s->accel, &out, &si) == false);
+            assert_true(ts_accel_intersect(s->accel, &below, &si) == false);
+            assert_true(ts_accel_intersect(s->accel, &in, &si));
+            assert_float_equal(si.uv.y, 0.5 - 0.12 / 0.25, 1e-4);
+            assert_float_equal(si.n.z, -1, 1e-5);
+            assert_float_equal(si.time, times[k], 0); /* rays spawned here keep it */
+        }
+    ts_scene_destroy(s);
+}
+
 /* Textures on curves take the hit's (u, v) and ray differentials from its ∂p/∂u, ∂p/∂v as on
  * any shape (pbrt-v3's): a checkerboard (closed-form antialiasing, which reads the
  * footprint) and a bump map on each kind, under the path integrator, give finite pixels,
@@ -680,6 +705,24 @@ static void pbrt_curve_params(void **state)
                                 "ribbon, cylinder): a \"cylinder\" curve, as pbrt-v3 makes it");
     assert_int_equal(s->shapes[0].curve.type, TS_CURVE_CYLINDER);
     ts_scene_destroy(s);
+    /* an animated curve: pbrt-v3's TransformedPrimitive, an object of its own and a moving
+     * instance (as the JSON's, tested by moving_curve) */
+    w = (warnings){0};
+    s = load_pbrt("LookAt 0 0 5  0 0 0  0 1 0\nCamera \"orthographic\" \"float shutteropen\" 0 \"float shutterclose\" 1\n"
+                  "Film \"image\" \"integer xresolution\" 8 \"integer yresolution\" 8\nWorldBegin\n"
+                  "ActiveTransform EndTime\nTranslate 0 0.2 0\nActiveTransform All\n"
+                  "Shape \"curve\" \"point P\" [-1 0 0 -0.3333333333 0 0 0.3333333333 0 0 1 0 0] \"float width\" 0.25\n"
+                  "WorldEnd\n",
+                  &w);
+    assert_int_equal(s->n_instances, 1);
+    assert_true(s->shapes[0].type == TS_SHAPE_CURVE && s->shapes[0].in_object);
+    ts_interaction si;
+    ts_ray r = down_ray(0.3, 0.1 + 0.12);
+    r.time = 0.5f;
+    assert_true(ts_accel_intersect(s->accel, &r, &si));
+    r.time = 0;
+    assert_false(ts_accel_intersect(s->accel, &r, &si));
+    ts_scene_destroy(s);
     /* splitdepth is taken (int or float, as pbrt-v3 reads it) and warned about nothing */
     w = (warnings){0};
     s = load_pbrt(PBRT_HEAD "Shape \"curve\" \"float splitdepth\" 5 \"point P\" [0 0 0 1 0 0 2 0 0 3 0 0 4 0 0 5 0 0 6 0 0]\n"
@@ -711,7 +754,7 @@ static void json_curve_keys(void **state)
     json_refused(CURVE_DOC("\"points\":[0,0,0, 1,0,0, 2,0,0, 3,0,0],\"curve_type\":\"tube\""),
                  "shapes[0].curve_type: expected one of \"flat\", \"ribbon\", \"cylinder\", got \"tube\"");
     json_refused(CURVE_DOC("\"points\":[0,0,0, 1,0,0, 2,0,0, 3,0,0],\"radius\":1"),
-                 "shapes[0].radius: unknown key (allowed here: type, material, transform, emission, two_sided, "
+                 "shapes[0].radius: unknown key (allowed here: type, material, transform, motion, emission, two_sided, "
                  "light_samples, reverse_orientation, medium, points, basis, degree, curve_type, normals, width, "
                  "width0, width1)");
 #undef CURVE_DOC
@@ -729,6 +772,7 @@ int main(void)
         cmocka_unit_test(against_pbrt_intersection),
         cmocka_unit_test(instanced_curve),
         cmocka_unit_test(textured_curves),
+        cmocka_unit_test(moving_curve),
         cmocka_unit_test(pbrt_curve_params),
         cmocka_unit_test(json_curve_keys),
     };

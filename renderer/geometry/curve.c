@@ -269,6 +269,7 @@ void ts_curve_interaction(const ts_curve *c, bool reverse_orientation, uint32_t 
     si->uv = (ts_vec2){(float)u_seg, (float)v};
     si->wo = ts_dvec3_to_vec3(ts_dvec3_scale(dir, -1));
     si->t = t;
+    si->time = ray->time;
     si->shape = shape_index;
     si->prim = seg;
 }
