@@ -211,6 +211,27 @@ static void dots_swap_warned(void **state)
     ts_scene_destroy(s);
 }
 
+/* A shutter whose open is after its close is swapped with a warning, pbrt-v3's message:
+ * also when only shutteropen is given (after shutterclose's default 1), the case the
+ * pbrt_import fuzzer found reading a null parameter. */
+static void shutter_swapped_warned(void **state)
+{
+    (void)state;
+    static const char *const cams[] = {"\"float shutteropen\" 5 \"float shutterclose\" 0.5",
+                                       "\"float shutteropen\" 5"};
+    static const char *const want[] = {"\"float shutterclose\" 0.5 is before shutteropen 5",
+                                       "\"float shutteropen\" 5 is after shutterclose's default 1"};
+    for (int k = 0; k < 2; k++) {
+        char doc[512];
+        snprintf(doc, sizeof doc, "Camera \"perspective\" %s\nWorldBegin\nShape \"sphere\"\nWorldEnd\n", cams[k]);
+        warnings w = {0};
+        ts_scene *s = load(doc, &w);
+        assert_int_equal(w.n, 1);
+        if (!strstr(w.last, want[k])) fail_msg("warning \"%s\" lacks \"%s\"", w.last, want[k]);
+        ts_scene_destroy(s);
+    }
+}
+
 /* NamedMaterial of a material not (yet) defined: pbrt-v3 reports an error and keeps the
  * material in force; so does the import, with a warning at the directive. */
 static void named_material_unknown_kept(void **state)
@@ -1213,6 +1234,7 @@ int main(void)
         cmocka_unit_test(convert_textures_round_trip),
         cmocka_unit_test(digest_of_bytes),
         cmocka_unit_test(media_mapped),
+        cmocka_unit_test(shutter_swapped_warned),
     };
     return cmocka_run_group_tests(tests, ts_tmp_group_setup, ts_tmp_group_teardown);
 }

@@ -577,8 +577,13 @@ static ts_status map_camera(imp *im, uint32_t width, uint32_t height)
     TRY(ts_pbrt_find_float(ps, "shutteropen", 0, &open, im->err));
     TRY(ts_pbrt_find_float(ps, "shutterclose", 1, &close, im->err));
     if (close < open) {
-        pwarn(im, ps, ts_pbrt_params_get(ps, "shutterclose"),
-              "%g is before shutteropen %g: the two are swapped, as pbrt-v3 does", close, open);
+        /* The parameter given (an absent shutterclose is its default 1, after a later open). */
+        ts_pbrt_param *cp = ts_pbrt_params_get(ps, "shutterclose");
+        if (cp)
+            pwarn(im, ps, cp, "%g is before shutteropen %g: the two are swapped, as pbrt-v3 does", close, open);
+        else
+            pwarn(im, ps, ts_pbrt_params_get(ps, "shutteropen"),
+                  "%g is after shutterclose's default %g: the two are swapped, as pbrt-v3 does", open, close);
         float tmp = open;
         open = close, close = tmp;
     }
