@@ -185,31 +185,14 @@ static void test_homogeneous_tr(void **state)
     ts_scene_destroy(s);
 }
 
-/* A 4 × 1 × 1 grid of densities {0.5, 2, 0, 1} over [0,4]×[0,1]×[0,1], rotated and moved:
- * ratio tracking's mean and delta tracking's chance of passing equal exp(−τ), τ = σt ∫
- * density along the segment, integrated by the midpoint rule over the interpolated
- * density (piecewise linear along the ray; 2·10^5 steps, error < 1e-7). */
-static void test_tracking(void **state)
+/* Ratio tracking's mean and delta tracking's chance of passing along segments of the grid's
+ * x axis (local y = z = 0.4) from x = −1 to each x_end, against exp(−τ), τ = σt ∫ density
+ * by the midpoint rule over the interpolated density (piecewise linear along the ray;
+ * 2·10^5 steps, error < 1e-7). */
+static void tracking_case(const ts_medium *m, const ts_xform *xf, const double *x_end, int n_end)
 {
-    (void)state;
-    ts_scene *s = media_scene("\"g\":{\"type\":\"grid\",\"sigma_a\":[1,1,1],\"sigma_s\":[2,2,2],\"nx\":4,\"ny\":1,"
-                              "\"nz\":1,\"density\":[0.5,2,0,1],\"p0\":[0,0,0],\"p1\":[4,1,1],"
-                              "\"transform\":[{\"rotate\":{\"angle\":30,\"axis\":[0,0,1]}},{\"translate\":[1,-2,0.5]}]}");
-    const ts_medium *m = &s->media[0];
-    assert_int_equal(m->type, TS_MEDIUM_GRID);
-    assert_float_equal(m->max_density, 2, 0);
-    /* Centre values and the half-cell ramp to 0 outside (pbrt-v3's lookup). */
-    ts_xform rot = ts_xform_rotate(30, (ts_dvec3){0, 0, 1}), mv = ts_xform_translate((ts_dvec3){1, -2, 0.5});
-    ts_xform to_world = ts_xform_compose(&mv, &rot);
-    const double cx[] = {0.5, 1.5, 2.5, 3.5, 1.0, 0.25};
-    const float dv[] = {0.5f, 2, 0, 1, 1.25f, 0.375f}; /* centres, between two, the ramp to 0 */
-    for (int k = 0; k < 6; k++) {
-        ts_dvec3 p = ts_xform_point(&to_world, (ts_dvec3){cx[k], 0.5, 0.5});
-        assert_float_equal(ts_medium_density(m, (ts_vec3){(float)p.x, (float)p.y, (float)p.z}), dv[k], 1e-4);
-    }
-    /* Segments along the grid's x axis (local y = z = 0.4), from outside, ending inside. */
-    const double x_end[] = {0.8, 1.7, 2.9, 5.0};
-    for (int k = 0; k < 4; k++) {
+    const ts_xform to_world = *xf;
+    for (int k = 0; k < n_end; k++) {
         ts_dvec3 a = ts_xform_point(&to_world, (ts_dvec3){-1, 0.4, 0.4});
         ts_dvec3 b = ts_xform_point(&to_world, (ts_dvec3){x_end[k], 0.4, 0.4});
         ts_ray r = ts_ray_make((ts_vec3){(float)a.x, (float)a.y, (float)a.z},
@@ -244,6 +227,61 @@ static void test_tracking(void **state)
         expect_close(what, pass / n, sqrt(exact * (1 - exact) / n), exact);
         assert_int_equal(w.truncated, 0);
     }
+}
+
+/* A 4 × 1 × 1 grid of densities {0.5, 2, 0, 1} over [0,4]×[0,1]×[0,1], rotated and moved:
+ * ratio tracking's mean and delta tracking's chance of passing equal exp(−τ), τ = σt ∫
+ * density along the segment, integrated by the midpoint rule over the interpolated
+ * density (piecewise linear along the ray; 2·10^5 steps, error < 1e-7). */
+static void test_tracking(void **state)
+{
+    (void)state;
+    ts_scene *s = media_scene("\"g\":{\"type\":\"grid\",\"sigma_a\":[1,1,1],\"sigma_s\":[2,2,2],\"nx\":4,\"ny\":1,"
+                              "\"nz\":1,\"density\":[0.5,2,0,1],\"p0\":[0,0,0],\"p1\":[4,1,1],"
+                              "\"transform\":[{\"rotate\":{\"angle\":30,\"axis\":[0,0,1]}},{\"translate\":[1,-2,0.5]}]}");
+    const ts_medium *m = &s->media[0];
+    assert_int_equal(m->type, TS_MEDIUM_GRID);
+    assert_float_equal(m->max_density, 2, 0);
+    /* Centre values and the half-cell ramp to 0 outside (pbrt-v3's lookup). */
+    ts_xform rot = ts_xform_rotate(30, (ts_dvec3){0, 0, 1}), mv = ts_xform_translate((ts_dvec3){1, -2, 0.5});
+    ts_xform to_world = ts_xform_compose(&mv, &rot);
+    const double cx[] = {0.5, 1.5, 2.5, 3.5, 1.0, 0.25};
+    const float dv[] = {0.5f, 2, 0, 1, 1.25f, 0.375f}; /* centres, between two, the ramp to 0 */
+    for (int k = 0; k < 6; k++) {
+        ts_dvec3 p = ts_xform_point(&to_world, (ts_dvec3){cx[k], 0.5, 0.5});
+        assert_float_equal(ts_medium_density(m, (ts_vec3){(float)p.x, (float)p.y, (float)p.z}), dv[k], 1e-4);
+    }
+    /* Segments along the grid's x axis, from outside, ending inside. */
+    const double x_end[] = {0.8, 1.7, 2.9, 5.0};
+    tracking_case(m, &to_world, x_end, 4);
+    ts_scene_destroy(s);
+}
+
+/* The majorant grid (media/medium.h): a 32 × 1 × 1 grid spans four of its cells along x,
+ * with densities that jump at the cells' faces (0 | 1 | 0.2 | 3, eight samples each), so a
+ * cell's bound must hold the interpolation's ramp into its neighbour's first sample (a
+ * bound of the cell's own samples only is 0 in the first cell); the trackers against
+ * exp(−τ) as above, over segments ending in each cell and past the grid. */
+static void test_tracking_majorant_cells(void **state)
+{
+    (void)state;
+    char media[1024], dens[512] = "";
+    for (int i = 0; i < 32; i++) {
+        const char *v[] = {"0", "1", "0.2", "3"};
+        strcat(dens, v[i / 8]);
+        if (i < 31) strcat(dens, ",");
+    }
+    snprintf(media, sizeof media,
+             "\"g\":{\"type\":\"grid\",\"sigma_a\":[1,1,1],\"sigma_s\":[2,2,2],\"nx\":32,\"ny\":1,\"nz\":1,"
+             "\"density\":[%s],\"p0\":[0,0,0],\"p1\":[4,1,1]}",
+             dens);
+    ts_scene *s = media_scene(media);
+    const ts_medium *m = &s->media[0];
+    assert_int_equal(m->mx, 4);
+    assert_true(m->majorant[0] >= 1); /* the ramp into the second cell's first sample */
+    ts_xform id = ts_xform_identity();
+    const double x_end[] = {0.99, 1.05, 1.5, 2.2, 3.1, 5.0};
+    tracking_case(m, &id, x_end, 6);
     ts_scene_destroy(s);
 }
 
@@ -566,6 +604,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_hg_chi2),       cmocka_unit_test(test_hg_pdf_matches),
         cmocka_unit_test(test_homogeneous_tr), cmocka_unit_test(test_tracking),
+        cmocka_unit_test(test_tracking_majorant_cells),
         cmocka_unit_test(test_walk_bounded),  cmocka_unit_test(test_beer_lambert),
         cmocka_unit_test(test_zero_grid),     cmocka_unit_test(test_single_scattering),
         cmocka_unit_test(test_constant_grid), cmocka_unit_test(test_furnace),

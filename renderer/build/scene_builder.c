@@ -1618,6 +1618,13 @@ static ts_status medium_grid(ts_scene_builder *b, const ts_medium_desc *d, ts_me
     m->nz = d->nz;
     m->density = den;
     m->max_density = mx;
+    uint32_t kx, ky, kz;
+    ts_medium_majorant_grid(m, &kx, &ky, &kz, NULL);
+    float *maj = ts_arena_alloc(&b->s->arena, (size_t)kx * ky * kz * sizeof *maj, _Alignof(float));
+    if (!maj) return nomem(err, "the medium's majorant grid");
+    ts_medium_majorant_grid(m, &kx, &ky, &kz, maj);
+    m->mx = kx, m->my = ky, m->mz = kz;
+    m->majorant = maj;
     return TS_OK;
 }
 

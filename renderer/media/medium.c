@@ -89,10 +89,24 @@ static float grid_density(const ts_medium *m, ts_vec3 p)
     float fx = floorf(sx), fy = floorf(sy), fz = floorf(sz);
     int x = (int)fx, y = (int)fy, z = (int)fz;
     float dx = sx - fx, dy = sy - fy, dz = sz - fz;
-    float d00 = lerpf(dx, grid_at(m, x, y, z), grid_at(m, x + 1, y, z));
-    float d10 = lerpf(dx, grid_at(m, x, y + 1, z), grid_at(m, x + 1, y + 1, z));
-    float d01 = lerpf(dx, grid_at(m, x, y, z + 1), grid_at(m, x + 1, y, z + 1));
-    float d11 = lerpf(dx, grid_at(m, x, y + 1, z + 1), grid_at(m, x + 1, y + 1, z + 1));
+    /* The eight samples: inside the grid straight from one base index (the common case, and
+     * the tracking loops' hot spot), else one by one with 0 outside; the same values. */
+    float v000, v100, v010, v110, v001, v101, v011, v111;
+    if (x >= 0 && y >= 0 && z >= 0 && x + 1 < (int)m->nx && y + 1 < (int)m->ny && z + 1 < (int)m->nz) {
+        const size_t row = m->nx, slab = (size_t)m->nx * m->ny;
+        const float *d = m->density + ((size_t)z * m->ny + (size_t)y) * row + (size_t)x;
+        v000 = d[0], v100 = d[1], v010 = d[row], v110 = d[row + 1];
+        v001 = d[slab], v101 = d[slab + 1], v011 = d[slab + row], v111 = d[slab + row + 1];
+    } else {
+        v000 = grid_at(m, x, y, z), v100 = grid_at(m, x + 1, y, z);
+        v010 = grid_at(m, x, y + 1, z), v110 = grid_at(m, x + 1, y + 1, z);
+        v001 = grid_at(m, x, y, z + 1), v101 = grid_at(m, x + 1, y, z + 1);
+        v011 = grid_at(m, x, y + 1, z + 1), v111 = grid_at(m, x + 1, y + 1, z + 1);
+    }
+    float d00 = lerpf(dx, v000, v100);
+    float d10 = lerpf(dx, v010, v110);
+    float d01 = lerpf(dx, v001, v101);
+    float d11 = lerpf(dx, v011, v111);
     return lerpf(dz, lerpf(dy, d00, d10), lerpf(dy, d01, d11));
 }
 
@@ -139,48 +153,156 @@ static bool grid_segment(const ts_medium *m, const ts_ray *ray, float tmax, ts_v
     return *t1 > *t0;
 }
 
-static inline float exp_step(ts_medium_walk *w, float inv_majorant)
+/* An exponential step of rate `rate` (> 0): a division, as a denormal rate has no finite
+ * inverse. */
+static inline float exp_step(ts_medium_walk *w, float rate) { return -logf(1 - ts_pcg32_float(&w->rng)) / rate; }
+
+void ts_medium_majorant_grid(const ts_medium *m, uint32_t *mx, uint32_t *my, uint32_t *mz, float *cells)
 {
-    return -logf(1 - ts_pcg32_float(&w->rng)) * inv_majorant;
+    const uint32_t n[3] = {m->nx, m->ny, m->nz}, c = TS_MEDIUM_MAJORANT_CELL;
+    uint32_t k[3];
+    for (int a = 0; a < 3; a++) k[a] = (n[a] + c - 1) / c;
+    *mx = k[0], *my = k[1], *mz = k[2];
+    if (!cells) return;
+    /* Cell i of an axis spans unit coordinates [i/k, (i+1)/k], where the interpolation reads
+     * samples ⌊u·n − ½⌋ and the one after: from ⌊i·n/k − ½⌋ to ⌊(i+1)·n/k − ½⌋ + 1, one more
+     * each side, clamped (samples outside the grid are 0 and raise no bound). */
+    int lo[3][2]; /* per axis, scratch for one cell */
+    for (uint32_t z = 0; z < k[2]; z++)
+        for (uint32_t y = 0; y < k[1]; y++)
+            for (uint32_t x = 0; x < k[0]; x++) {
+                const uint32_t i[3] = {x, y, z};
+                for (int a = 0; a < 3; a++) {
+                    double u0 = (double)i[a] / k[a], u1 = (double)(i[a] + 1) / k[a];
+                    int s0 = (int)floor(u0 * n[a] - 0.5) - 1, s1 = (int)floor(u1 * n[a] - 0.5) + 2;
+                    lo[a][0] = s0 < 0 ? 0 : s0;
+                    lo[a][1] = s1 > (int)n[a] - 1 ? (int)n[a] - 1 : s1;
+                }
+                float b = 0;
+                for (int sz = lo[2][0]; sz <= lo[2][1]; sz++)
+                    for (int sy = lo[1][0]; sy <= lo[1][1]; sy++)
+                        for (int sx = lo[0][0]; sx <= lo[0][1]; sx++) b = ts_maxf(b, grid_at(m, sx, sy, sz));
+                cells[((size_t)z * k[1] + y) * k[0] + x] = b;
+            }
 }
 
-/* Delta tracking: the first tentative collision accepted with probability density/max. */
+/* A walk through the majorant grid's cells along the ray o + dd·t (unit-cube space, t in
+ * world distance) over [t, t_end): the cell holding the current point, and the t where the
+ * ray leaves it. */
+typedef struct cell_walk {
+    int c[3], step[3], n[3];
+    float t_next[3], t_delta[3];
+    float t_end;
+} cell_walk;
+
+static void cell_walk_init(const ts_medium *m, ts_vec3 o, ts_vec3 dd, float t, float t_end, cell_walk *cw)
+{
+    const float oo[3] = {o.x, o.y, o.z}, dv[3] = {dd.x, dd.y, dd.z};
+    cw->n[0] = (int)m->mx, cw->n[1] = (int)m->my, cw->n[2] = (int)m->mz;
+    cw->t_end = t_end;
+    for (int a = 0; a < 3; a++) {
+        float u = oo[a] + dv[a] * t, k = (float)cw->n[a];
+        int c = (int)floorf(u * k);
+        if (!(c >= 0)) c = 0; /* also NaN */
+        if (c > cw->n[a] - 1) c = cw->n[a] - 1;
+        cw->c[a] = c;
+        if (dv[a] > 0) {
+            cw->step[a] = 1;
+            cw->t_next[a] = ((float)(c + 1) / k - oo[a]) / dv[a];
+            cw->t_delta[a] = 1 / (k * dv[a]);
+        } else if (dv[a] < 0) {
+            cw->step[a] = -1;
+            cw->t_next[a] = ((float)c / k - oo[a]) / dv[a];
+            cw->t_delta[a] = -1 / (k * dv[a]);
+        } else {
+            cw->step[a] = 0;
+            cw->t_next[a] = INFINITY;
+            cw->t_delta[a] = INFINITY;
+        }
+    }
+}
+
+/* The end of the current cell's stretch of the ray (at most t_end). */
+static inline float cell_exit(const cell_walk *cw)
+{
+    float t = ts_minf(cw->t_next[0], ts_minf(cw->t_next[1], cw->t_next[2]));
+    return ts_minf(t, cw->t_end);
+}
+
+/* On to the next cell: false when the ray leaves the grid (or reaches t_end). */
+static inline bool cell_advance(cell_walk *cw)
+{
+    int a = cw->t_next[0] <= cw->t_next[1] ? (cw->t_next[0] <= cw->t_next[2] ? 0 : 2)
+                                           : (cw->t_next[1] <= cw->t_next[2] ? 1 : 2);
+    if (!(cw->t_next[a] < cw->t_end)) return false;
+    cw->c[a] += cw->step[a];
+    if (cw->c[a] < 0 || cw->c[a] >= cw->n[a]) return false;
+    cw->t_next[a] += cw->t_delta[a];
+    return true;
+}
+
+static inline float cell_bound(const ts_medium *m, const cell_walk *cw)
+{
+    return m->majorant[((size_t)cw->c[2] * m->my + (size_t)cw->c[1]) * m->mx + (size_t)cw->c[0]];
+}
+
+/* Delta tracking: in each cell, tentative collisions at the cell's rate σt·bound, the first
+ * accepted with probability density/bound. */
 static ts_rgb grid_sample(const ts_medium *m, const ts_ray *ray, float tmax, ts_medium_walk *w, bool *scattered,
                           float *t_out)
 {
     ts_vec3 o, dd;
     float t0, t1, len;
-    float majorant = m->sigma_t.r * m->max_density;
-    if (!(majorant > 0) || !grid_segment(m, ray, tmax, &o, &dd, &t0, &t1, &len)) return ts_rgb_gray(1);
-    float inv_majorant = 1 / majorant, max = m->max_density, t = t0;
+    if (!(m->max_density > 0) || !grid_segment(m, ray, tmax, &o, &dd, &t0, &t1, &len)) return ts_rgb_gray(1);
+    cell_walk cw;
+    cell_walk_init(m, o, dd, t0, t1, &cw);
+    float t = t0;
     for (uint32_t n = 0;;) {
-        t += exp_step(w, inv_majorant);
-        if (!(t < t1)) return ts_rgb_gray(1);
-        if (!walk_step(w, &n)) return ts_rgb_gray(0);
-        float d = grid_density(m, ts_vec3_add(o, ts_vec3_scale(dd, t)));
-        if (d / max > ts_pcg32_float(&w->rng)) { /* a division: a denormal max has no finite inverse */
-            *scattered = true;
-            *t_out = t / len;
-            return ts_rgb_scale(m->sigma_s, 1 / m->sigma_t.r);
-        }
+        float bound = cell_bound(m, &cw), t_exit = cell_exit(&cw);
+        float rate = m->sigma_t.r * bound;
+        if (rate > 0)
+            for (;;) {
+                float tn = t + exp_step(w, rate);
+                if (!(tn < t_exit)) break;
+                t = tn;
+                if (!walk_step(w, &n)) return ts_rgb_gray(0);
+                float d = grid_density(m, ts_vec3_add(o, ts_vec3_scale(dd, t)));
+                if (d / bound > ts_pcg32_float(&w->rng)) {
+                    *scattered = true;
+                    *t_out = t / len;
+                    return ts_rgb_scale(m->sigma_s, 1 / m->sigma_t.r);
+                }
+            }
+        if (t_exit > t) t = t_exit; /* never back: the cell's exit may round below its entry */
+        if (!(t < t1) || !cell_advance(&cw)) return ts_rgb_gray(1);
     }
 }
 
-/* Ratio tracking: the product of (1 − density/max) over the tentative collisions. */
+/* Ratio tracking: the product of (1 − density/bound) over the tentative collisions, each
+ * cell at its own rate σt·bound. */
 static ts_rgb grid_tr(const ts_medium *m, const ts_ray *ray, float tmax, ts_medium_walk *w)
 {
     ts_vec3 o, dd;
     float t0, t1, len;
-    float majorant = m->sigma_t.r * m->max_density;
-    if (!(majorant > 0) || !grid_segment(m, ray, tmax, &o, &dd, &t0, &t1, &len)) return ts_rgb_gray(1);
-    float inv_majorant = 1 / majorant, max = m->max_density, t = t0, tr = 1;
+    if (!(m->max_density > 0) || !grid_segment(m, ray, tmax, &o, &dd, &t0, &t1, &len)) return ts_rgb_gray(1);
+    cell_walk cw;
+    cell_walk_init(m, o, dd, t0, t1, &cw);
+    float t = t0, tr = 1;
     for (uint32_t n = 0;;) {
-        t += exp_step(w, inv_majorant);
-        if (!(t < t1)) return ts_rgb_gray(tr);
-        if (!walk_step(w, &n)) return ts_rgb_gray(0);
-        float d = grid_density(m, ts_vec3_add(o, ts_vec3_scale(dd, t)));
-        tr *= 1 - ts_maxf(0, d / max);
-        if (!(tr > 0)) return ts_rgb_gray(0);
+        float bound = cell_bound(m, &cw), t_exit = cell_exit(&cw);
+        float rate = m->sigma_t.r * bound;
+        if (rate > 0)
+            for (;;) {
+                float tn = t + exp_step(w, rate);
+                if (!(tn < t_exit)) break;
+                t = tn;
+                if (!walk_step(w, &n)) return ts_rgb_gray(0);
+                float d = grid_density(m, ts_vec3_add(o, ts_vec3_scale(dd, t)));
+                tr *= 1 - ts_maxf(0, d / bound);
+                if (!(tr > 0)) return ts_rgb_gray(0);
+            }
+        if (t_exit > t) t = t_exit; /* never back: the cell's exit may round below its entry */
+        if (!(t < t1) || !cell_advance(&cw)) return ts_rgb_gray(tr);
     }
 }
 

@@ -11,9 +11,13 @@
  *    interpolated trilinearly in an nx × ny × nz grid of samples at cell centres, which
  *    spans the box [p0, p1] of the medium's space (placed in the world by to_world); 0
  *    outside the grid. σt must be the same in every channel (pbrt-v3 uses the first).
- *    Distance sampling by delta tracking against the majorant σt·max density;
- *    transmittance by ratio tracking (pbrt-v3's Sample and Tr), both in the segment where
- *    the ray crosses the box.
+ *    Distance sampling by delta tracking; transmittance by ratio tracking (pbrt-v3's Sample
+ *    and Tr), both in the segment where the ray crosses the box, against a piecewise-
+ *    constant majorant: σt times the bound of each cell of a coarse grid over the box that
+ *    the ray crosses (walked cell by cell; pbrt-v3 takes σt·max density everywhere). A
+ *    tentative collision past a cell's end restarts at the next cell with its own rate
+ *    (the exponential's memorylessness), so both estimators stay exact in expectation;
+ *    empty cells cost no step. docs/design.md §9 #22.
  * Rays here are segments o + t·d, t in [0, tmax) (d need not be unit; tmax may be ∞).
  *
  * Random numbers: the homogeneous closed form takes a 2-D sample value (x the channel, y
@@ -44,8 +48,13 @@ typedef struct ts_medium {
     /* grid only */
     uint32_t nx, ny, nz;
     const float *density;    /* nx·ny·nz values ≥ 0, x fastest: density[(z·ny + y)·nx + x] */
-    float max_density;       /* the majorant's density (0: the medium is empty) */
+    float max_density;       /* the largest density (0: the medium is empty) */
     ts_xform to_unit;        /* world → the grid's unit cube ([p0, p1] in the medium's space ↦ [0, 1]³) */
+    /* The majorant grid: the unit cube in mx × my × mz equal cells (TS_MEDIUM_MAJORANT_CELL
+     * samples an axis each), each holding a bound on the interpolated density anywhere in
+     * it (x fastest); the trackers' majorant is σt times the bound of the cell they cross. */
+    uint32_t mx, my, mz;
+    const float *majorant;
 } ts_medium;
 
 /* Henyey–Greenstein's density for the scattering cosine cos θ = dot(d_in, d_out) (the
@@ -78,6 +87,14 @@ ts_rgb ts_medium_tr(const ts_medium *m, const ts_ray *ray, float tmax, ts_medium
  * throughput is multiplied by (black: the path ends). u: the closed form's sample value. */
 ts_rgb ts_medium_sample(const ts_medium *m, const ts_ray *ray, float tmax, ts_vec2 u, ts_medium_walk *w,
                         bool *scattered, float *t);
+
+/* The majorant grid of a grid medium whose nx, ny, nz and density are set: its cells per
+ * axis (*mx, *my, *mz, each ⌈n / TS_MEDIUM_MAJORANT_CELL⌉), and, with cells non-NULL (room
+ * for mx·my·mz floats), their bounds: the largest of the samples the interpolation can
+ * read anywhere in the cell, widened by one sample each side (a point rounded across a
+ * cell face still finds its bound). */
+#define TS_MEDIUM_MAJORANT_CELL 8u
+void ts_medium_majorant_grid(const ts_medium *m, uint32_t *mx, uint32_t *my, uint32_t *mz, float *cells);
 
 /* The density the trackers see at a world point: the grid's interpolation inside its box
  * (which ramps to 0 over the outer half cell), 0 outside; homogeneous 1. */
