@@ -405,7 +405,8 @@ static void test_single_scattering(void **state)
 
 /* A grid of constant density 1 (3 cells an axis over a box that holds the slab between
  * the first and last cell centres, where trilinear interpolation is exactly 1) with the
- * homogeneous medium's σ: the same closed form, by delta and ratio tracking. */
+ * homogeneous medium's σ: the same closed form, by delta and ratio tracking; also the hard
+ * cases of test_single_scattering in a grid. */
 static void test_constant_grid(void **state)
 {
     (void)state;
@@ -415,6 +416,19 @@ static void test_constant_grid(void **state)
              "\"nz\":3,\"p0\":[-2000,-2000,-1],\"p1\":[2000,2000,2],\"density\":[%s]}",
              "1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1");
     slab_case(m, 0.8, 1.2, 1, 0.3, 40000);
+    /* The hard cases through the trackers: σt = 1e6 in a slab 1e-3 thick (optical depth
+     * 1000, g 0.99), and σt = 2e-30 (g −0.99), the box made to hold the slab likewise. */
+    const char *ones = "1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1";
+    snprintf(m, sizeof m,
+             "{\"type\":\"grid\",\"sigma_a\":[5e5,5e5,5e5],\"sigma_s\":[5e5,5e5,5e5],\"g\":0.99,\"nx\":3,"
+             "\"ny\":3,\"nz\":3,\"p0\":[-2000,-2000,-1e-3],\"p1\":[2000,2000,2e-3],\"density\":[%s]}",
+             ones);
+    slab_case(m, 5e5, 1e6, 1e-3, 0.99, 20000);
+    snprintf(m, sizeof m,
+             "{\"type\":\"grid\",\"sigma_a\":[1e-30,1e-30,1e-30],\"sigma_s\":[1e-30,1e-30,1e-30],\"g\":-0.99,"
+             "\"nx\":3,\"ny\":3,\"nz\":3,\"p0\":[-2000,-2000,-1],\"p1\":[2000,2000,2],\"density\":[%s]}",
+             ones);
+    slab_case(m, 1e-30, 2e-30, 1, -0.99, 2000);
 }
 
 /* Furnaces: albedo-1 media under a uniform environment of radiance 1 with no surface:
