@@ -157,7 +157,7 @@ static void test_random_rays(void **state)
         if (hit) {
             hits++;
             per_shape[si.shape]++;
-            /* tmax respected (triangle t is recomputed in double: allow its float rounding). */
+            /* tmax respected (allow the float rounding of t). */
             assert_true(si.t > 0 && si.t <= r.tmax * (1 + 0x1p-20f));
             assert_true(ts_vec3_is_finite(si.p) && ts_vec3_is_finite(si.n));
             assert_true(fabsf(ts_vec3_length(si.n) - 1) < 1e-6f);
@@ -170,9 +170,13 @@ static void test_random_rays(void **state)
                          hit ? si.shape : 0, hit ? si.prim : 0, hit ? si.t : 0, b.hit, b.shape, b.prim, b.t);
             continue;
         }
-        /* Same surface: the same t (ours in double for both, rounded to float; relative
-         * 1e-6 is a few float ulps). */
-        if (hit && !(fabsf(si.t - b.t) <= 1e-6f * b.t)) fail_msg("ray %d: t %g vs %g", i, si.t, b.t);
+        /* Same surface: the same t. Brute force's is the double solve rounded to float; a
+         * triangle hit's t is Embree's float t, whose round-off is a few ulps of the ray's
+         * coordinates (its test works relative to the origin), not of t: 1e-6 of t plus of
+         * max|o|/|d| is some 16 such ulps. */
+        float o_max = fmaxf(fabsf(r.o.x), fmaxf(fabsf(r.o.y), fabsf(r.o.z)));
+        if (hit && !(fabsf(si.t - b.t) <= 1e-6f * (b.t + o_max / ts_vec3_length(r.d))))
+            fail_msg("ray %d: t %g vs %g", i, si.t, b.t);
     }
     print_message("  %d rays: %ld hits (mesh %ld, sphere %ld, disk %ld, cylinder %ld, triangle %ld), "
                   "%ld edge-case disagreements with brute force\n",
@@ -286,6 +290,17 @@ static void test_skip_ids(void **state)
 
 /* Two coplanar triangles sharing an edge, in a random plane: rays leaving one close to the
  * shared edge never hit either, through Embree (skip ids + the filter's double check). */
+/* A mesh of world-space positions p and indices idx, without normals or uvs. */
+static ts_shape world_mesh(uint32_t n_vertices, uint32_t n_triangles, const float *p, const uint32_t *idx)
+{
+    ts_shape m;
+    memset(&m, 0, sizeof m);
+    m.type = TS_SHAPE_MESH;
+    m.to_world = ts_xform_identity();
+    m.mesh = (ts_mesh){n_vertices, n_triangles, p, NULL, NULL, idx};
+    return m;
+}
+
 static void test_quad_spawn(void **state)
 {
     (void)state;
@@ -306,11 +321,7 @@ static void test_quad_spawn(void **state)
             p[3 * k] = f.x, p[3 * k + 1] = f.y, p[3 * k + 2] = f.z;
         }
         const uint32_t idx[6] = {0, 1, 2, 0, 2, 3};
-        ts_shape quad;
-        memset(&quad, 0, sizeof quad);
-        quad.type = TS_SHAPE_MESH;
-        quad.to_world = ts_xform_identity();
-        quad.mesh = (ts_mesh){4, 2, p, NULL, NULL, idx};
+        ts_shape quad = world_mesh(4, 2, p, idx);
         ts_accel *a = ts_accel_create(&quad, 1, NULL);
         assert_non_null(a);
         for (int h = 0; h < 10; h++) {
@@ -506,6 +517,87 @@ static void test_memory(void **state)
     ts_accel_destroy(a);
 }
 
+/* The float hit refinement (shape.c, "the accelerator's hits"): a hit's p, evaluated from
+ * Embree's barycentrics, is within its p_error of the float triangle's plane — the
+ * distance |(p − p0)·n̂|, n̂ the unit normal of the float vertices in long double, is at
+ * most |n|·p_error, the spawn offset (interaction.h) — and a ray spawned from it starts
+ * strictly on the side it is sent to. Triangles 1e-4 … 1e4 across, up to 1e3 from the
+ * origin (100 of their sizes), rays from 3 sizes away at points anywhere in them, a tenth
+ * within 1e-6 of an edge. The bound is a worst case: the figure printed is the largest
+ * distance seen over its bound (shrinking p_error by 8 makes the test fail). */
+static void test_hit_bound(void **state)
+{
+    (void)state;
+    ts_pcg32 g;
+    ts_pcg32_seed(&g, 33, 1);
+    long hits = 0, rays = 0;
+    long double worst = 0;
+    const double sizes[5] = {1e-4, 1e-2, 1, 1e2, 1e4};
+    for (int si_ = 0; si_ < 5; si_++)
+        for (int k = 0; k < 20; k++) {
+            double L = sizes[si_];
+            ts_dvec3 c = ts_dvec3_scale(rnd_unit(&g), fmin(1e3, 100 * L) * rnd(&g));
+            float p[9];
+            for (int v = 0; v < 3; v++) {
+                ts_vec3 f = ts_dvec3_to_vec3(ts_dvec3_add(c, ts_dvec3_scale(rnd_unit(&g), L)));
+                p[3 * v] = f.x, p[3 * v + 1] = f.y, p[3 * v + 2] = f.z;
+            }
+            const uint32_t idx[3] = {0, 1, 2};
+            ts_shape tri = world_mesh(3, 1, p, idx);
+            ts_accel *a = ts_accel_create(&tri, 1, NULL);
+            assert_non_null(a);
+            long double P0[3] = {p[0], p[1], p[2]}, E1[3], E2[3], N[3];
+            for (int j = 0; j < 3; j++) E1[j] = p[3 + j] - P0[j], E2[j] = p[6 + j] - P0[j];
+            N[0] = E1[1] * E2[2] - E1[2] * E2[1];
+            N[1] = E1[2] * E2[0] - E1[0] * E2[2];
+            N[2] = E1[0] * E2[1] - E1[1] * E2[0];
+            long double nl = sqrtl(N[0] * N[0] + N[1] * N[1] + N[2] * N[2]);
+            if (!(nl > 0)) continue;
+            for (int j = 0; j < 3; j++) N[j] /= nl;
+            for (int h = 0; h < 200; h++) {
+                double b1 = rnd(&g), b2 = rnd(&g);
+                if (b1 + b2 > 1) b1 = 1 - b1, b2 = 1 - b2;
+                if (h % 10 == 0) b1 = 1e-6 * rnd(&g); /* near the edge p0–p2 */
+                ts_dvec3 P = {P0[0] + b1 * E1[0] + b2 * E2[0], P0[1] + b1 * E1[1] + b2 * E2[1],
+                              P0[2] + b1 * E1[2] + b2 * E2[2]};
+                ts_vec3 o = ts_dvec3_to_vec3(ts_dvec3_add(P, ts_dvec3_scale(rnd_unit(&g), 3 * L)));
+                ts_ray r = ts_ray_make(o, ts_dvec3_to_vec3(ts_dvec3_sub(P, ts_dvec3_from(o))), INFINITY);
+                ts_interaction si;
+                if (!ts_accel_intersect(a, &r, &si)) continue;
+                hits++;
+                long double q[3] = {si.p.x, si.p.y, si.p.z}, dist = 0;
+                for (int j = 0; j < 3; j++) dist += (q[j] - P0[j]) * N[j];
+                long double off = fabsl((long double)si.n.x) * si.p_error.x +
+                                  fabsl((long double)si.n.y) * si.p_error.y +
+                                  fabsl((long double)si.n.z) * si.p_error.z;
+                if (fabsl(dist) > off)
+                    fail_msg("p off its plane by %Lg, bound %Lg (size %g, at (%g %g %g))", fabsl(dist), off, L,
+                             si.p.x, si.p.y, si.p.z);
+                if (off > 0 && fabsl(dist) / off > worst) worst = fabsl(dist) / off;
+                for (int side = -1; side <= 1; side += 2) {
+                    ts_vec3 d = ts_vec3_scale(si.n, (float)side);
+                    ts_dvec3 t = rnd_unit(&g);
+                    d = ts_vec3_add(d, ts_vec3_scale(ts_dvec3_to_vec3(t), 0.9f));
+                    if (ts_vec3_dot(d, si.n) * side <= 0) continue;
+                    ts_ray sr = ts_spawn_ray(&si, &tri, d);
+                    long double so = 0;
+                    so += ((long double)sr.o.x - P0[0]) * N[0];
+                    so += ((long double)sr.o.y - P0[1]) * N[1];
+                    so += ((long double)sr.o.z - P0[2]) * N[2];
+                    rays++;
+                    if (!(so * side * (ts_vec3_dot(si.n, (ts_vec3){(float)N[0], (float)N[1], (float)N[2]}) > 0 ? 1 : -1) >
+                          0))
+                        fail_msg("spawned origin on the wrong side: %Lg (side %d, size %g)", so, side, L);
+                }
+            }
+            ts_accel_destroy(a);
+        }
+    print_message("  %ld hits: p within p_error of the plane (largest distance / bound %.3Lg); %ld spawned "
+                  "origins on their side\n",
+                  hits, worst, rays);
+    assert_true(hits > 15000);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -513,6 +605,7 @@ int main(void)
         cmocka_unit_test(test_skip_ids),         cmocka_unit_test(test_quad_spawn),
         cmocka_unit_test(test_empty_scene),      cmocka_unit_test(test_embree_error),
         cmocka_unit_test(test_concurrent),       cmocka_unit_test(test_memory),
+        cmocka_unit_test(test_hit_bound),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -18,10 +18,10 @@
  * the intersect filter tests alpha, the occluded filter alpha and then shadow_alpha
  * (pbrt-v3's Triangle::Intersect and IntersectP), as does the intersect filter of a shadow
  * ray's nearest-hit query (ts_accel_intersect_shadow: the context says which), each after
- * the skip test above, at the
- * hit's point and (u, v) as ts_shape_triangle_point_uv computes them from the ray (taken to
- * the object's space through an instance, where pbrt-v3's TransformedPrimitive tests the
- * object's own triangles), with no footprint: a texture lookup of the finest MIP level. A
+ * the skip test above, at the hit's point and (u, v) as ts_shape_triangle_point_uv
+ * computes them from Embree's barycentrics (through an instance those of the object's own
+ * triangle, as pbrt-v3's TransformedPrimitive tests the object's own triangles), with no
+ * footprint: a texture lookup of the finest MIP level. A
  * rejected hit is no hit and traversal goes on past it. A mesh without alpha textures
  * keeps the plain filter and pays nothing. The decision is a pure function of the ray and
  * the hit, so it is the same on every thread and in any traversal order.
@@ -343,11 +343,11 @@ static void triangle_filter(const struct RTCFilterFunctionNArguments *args)
  * alpha, or for a shadow ray shadow_alpha, evaluates to exactly 0 there (pbrt-v3's test).
  * The context is pbrt-v3's isectLocal: the hit's point and (u, v), the triangle's ∂p/∂u,
  * ∂p/∂v, no footprint. */
-static bool cut_out(const mesh_geom *g, uint32_t prim, const ts_ray *r, float t, bool shadow)
+static bool cut_out(const mesh_geom *g, uint32_t prim, float b1, float b2, bool shadow)
 {
     const ts_shape *s = g->shape;
     ts_texture_context c;
-    ts_shape_triangle_point_uv(s, prim, r, t, &c.p, &c.uv);
+    ts_shape_triangle_point_uv(s, prim, b1, b2, &c.p, &c.uv);
     c.dpdu = g->tri[prim].dpdu;
     c.dpdv = g->tri[prim].dpdv;
     ts_texture_context_clear_differentials(&c);
@@ -362,7 +362,7 @@ static inline void cutout_filter(const struct RTCFilterFunctionNArguments *args,
     const ts_ray *ray = q->ray;
     const mesh_geom *g = args->geometryUserPtr;
     const unsigned *hit = (const unsigned *)args->hit;
-    const float *rn = (const float *)args->ray; /* tfar: the hit's t */
+    const float *hf = (const float *)args->hit;
     unsigned N = args->N;
     uint32_t k = current_instance(q->a, args->context), inst = k == TS_NONE ? 0 : k + 1;
     ts_ray r_obj;
@@ -384,9 +384,8 @@ static inline void cutout_filter(const struct RTCFilterFunctionNArguments *args,
             args->valid[i] = 0;
             continue;
         }
-        ts_ray own; /* a query without our ray: Embree's, in the geometry's space */
-        if (!r) own = ray_from_packet(rn, N, i);
-        if (cut_out(g, prim, r ? r : &own, rn[8 * N + i], shadow)) args->valid[i] = 0;
+        /* RTCHitN's u and v: the hit's barycentrics of p1 and p2. */
+        if (cut_out(g, prim, hf[3 * N + i], hf[4 * N + i], shadow)) args->valid[i] = 0;
     }
 }
 
@@ -883,7 +882,7 @@ static void instanced_interaction(const query_ctx *q, uint32_t k, uint32_t local
     if (s->type == TS_SHAPE_CURVE)
         ts_curve_interaction(&s->curve, s->reverse_orientation, index, prim, &r, t, hit_u, hit_v, &o);
     else
-        ts_shape_triangle_interaction_cached(s, &a->meshes[index].tri[prim], index, prim, &r, t, &o);
+        ts_shape_triangle_interaction_cached(s, &a->meshes[index].tri[prim], index, prim, &r, t, hit_u, hit_v, &o);
     const double(*m)[4] = x->m.m;
     /* p and its bound (pbrt-v3's transformed pError): |M|·e plus the double sum's and the
      * final float rounding's share, four half-ulps of the result as in shape.c. */
@@ -943,7 +942,7 @@ static inline bool intersect(const ts_accel *a, const ts_ray *ray, bool shadow, 
     if (s->type == TS_SHAPE_MESH) {
         const mesh_geom *g = &a->meshes[rh.hit.geomID];
         ts_shape_triangle_interaction_cached(s, &g->tri[rh.hit.primID], rh.hit.geomID, rh.hit.primID, ray,
-                                             rh.ray.tfar, si);
+                                             rh.ray.tfar, rh.hit.u, rh.hit.v, si);
     } else if (s->type == TS_SHAPE_CURVE) {
         ts_curve_interaction(&s->curve, s->reverse_orientation, rh.hit.geomID, rh.hit.primID, ray, rh.ray.tfar,
                              rh.hit.u, rh.hit.v, si);

@@ -29,7 +29,8 @@ typedef struct ts_ray {
 
 typedef struct ts_interaction {
     ts_vec3 p;         /* world-space hit point */
-    ts_vec3 p_error;   /* |p − exact hit| ≤ p_error, per component */
+    ts_vec3 p_error;   /* |p − exact hit| ≤ p_error, per component (a triangle hit of the
+                          accelerator: of a point of its plane, shape.c) */
     ts_vec3 n;         /* unit geometric normal on the shape's front side (docs/design.md §4) */
     ts_vec3 ns;        /* unit shading normal, in n's hemisphere */
     ts_vec3 dpdu, dpdv;

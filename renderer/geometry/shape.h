@@ -6,7 +6,8 @@
  * precision: the float ray is transformed with the double inverse transform, the root is
  * found in double and the hit reprojected onto the surface, so the world-space point,
  * rounded once to float, is within about one ulp of the exact hit and p_error bounds it
- * conservatively. The same routine rebuilds the full interaction after traversal.
+ * conservatively. The same routine rebuilds the full interaction after traversal; a
+ * triangle hit's is evaluated in float from Embree's barycentrics (shape.c).
  *
  * Object spaces: sphere centred at the origin; disk in the plane z = 0 facing +z with
  * inner_radius ≤ r ≤ radius; cylinder an open tube around the z axis from z = 0 to
@@ -37,7 +38,7 @@
  * Alpha cut-outs (pbrt-v3's TriangleMesh alphaMask / shadowAlphaMask; docs/design.md §4):
  * a mesh may carry a float texture `alpha` and one `shadow_alpha`. The accelerator
  * (geometry/accel.c) evaluates them in its Embree filters at the hit's point and (u, v)
- * (ts_shape_triangle_point_uv: the interaction's own values) with no footprint, and a hit
+ * (ts_shape_triangle_point_uv at Embree's barycentrics: the interaction's own values) with no footprint, and a hit
  * where alpha is exactly 0 is no hit for any ray; one where shadow_alpha is 0 is none for
  * shadow rays (pbrt-v3's Triangle::Intersect and IntersectP). Analytic shapes have none
  * (pbrt-v3 reads alpha on trianglemesh and plymesh only).
@@ -126,7 +127,9 @@ ts_bounds3 ts_shape_triangle_bounds(const ts_shape *s, uint32_t prim);
 bool ts_shape_intersect(const ts_shape *s, const ts_ray *ray, float tmax, float *t_hit);
 
 /* The full interaction of a hit found by traversal: shape s, primitive prim, parameter t
- * along ray (triangles: recomputed in double from the ray, not from Embree's barycentrics).
+ * along ray (triangles: recomputed in double from the ray — the reference for tests and
+ * tools; the accelerator's hits take ts_shape_triangle_interaction_cached, in float from
+ * Embree's barycentrics).
  * Fills p, p_error, n, ns, dpdu, dpdv, dndu, dndv, uv, wo, t, shape index (shape_index),
  * prim, mesh_normals. ∂ns/∂u, ∂ns/∂v are pbrt-v3's: spheres and cylinders by the
  * Weingarten equations of their parameterisation (in object space; then the derivative
@@ -151,20 +154,23 @@ typedef struct ts_tri_cache {
 /* Fills c for triangle prim of mesh s. */
 void ts_shape_triangle_cache_init(const ts_shape *s, uint32_t prim, ts_tri_cache *c);
 
-/* ts_shape_interaction of a triangle hit with its cache (c from ts_shape_triangle_cache_init
- * of the same s and prim): the same interaction, bit for bit. */
+/* The interaction of a hit that Embree found on triangle prim of mesh s, with its cache (c
+ * from ts_shape_triangle_cache_init of the same s and prim), Embree's t and its
+ * barycentrics b1, b2 of p1 and p2 (RTCHit's u, v): what ts_shape_interaction fills, in
+ * float from the barycentrics (shape.c, "the accelerator's hits"): p within p_error of the
+ * triangle's plane (not of the exact ray's hit along it), n, dpdu, dpdv from the cache, ns
+ * and uv interpolated in float, ∂n/∂u, ∂n/∂v and wo as ts_shape_interaction. */
 void ts_shape_triangle_interaction_cached(const ts_shape *s, const ts_tri_cache *c, uint32_t shape_index,
-                                          uint32_t prim, const ts_ray *ray, float t, ts_interaction *si);
+                                          uint32_t prim, const ts_ray *ray, float t, float b1, float b2,
+                                          ts_interaction *si);
 
 /* ts_shape_triangle_ahead with the triangle's cache: the same answer. */
 bool ts_shape_triangle_ahead_cached(const ts_shape *s, const ts_tri_cache *c, uint32_t prim, const ts_ray *ray);
 
-/* The point p and (u, v) of the hit of ray on triangle prim of mesh s (t_hint: its
- * parameter, read only for a ray in the triangle's plane): the p and uv that
- * ts_shape_interaction fills for that hit, bit for bit, without the rest. Embree's filters
- * test the alpha textures there. */
-void ts_shape_triangle_point_uv(const ts_shape *s, uint32_t prim, const ts_ray *ray, float t_hint, ts_vec3 *p,
-                                ts_vec2 *uv);
+/* The point p and (u, v) at barycentrics b1, b2 (of p1, p2) of triangle prim of mesh s:
+ * the p and uv that ts_shape_triangle_interaction_cached fills for that hit, bit for bit,
+ * without the rest. Embree's filters test the alpha textures there. */
+void ts_shape_triangle_point_uv(const ts_shape *s, uint32_t prim, float b1, float b2, ts_vec3 *p, ts_vec2 *uv);
 
 /* Surface area in world space (meshes: of one triangle prim; other shapes ignore prim). */
 double ts_shape_area(const ts_shape *s, uint32_t prim);
