@@ -2,7 +2,7 @@
  * same rays (docs/design.md §8; how to read the numbers: bench/README.md).
  *
  *   bench_throughput [--integrators LIST] [--threads N] [--reps R] [--seconds S]
- *                    [--max-rays N] [--header] SCENE.json...
+ *                    [--max-rays N] [--header] [--packets] SCENE...
  *
  * For every scene and integrator (LIST: comma-separated `scene`, `ao`, `path`, `direct`,
  * `normals`; `scene` is the scene's own integrator, or `ao` while that is not available
@@ -18,7 +18,7 @@
  *      (render, then the two replays, seconds apart, so load changes hit all three):
  *        render  — ts_render of the whole film, the CLI's code path;
  *        accel   — our ts_accel_intersect / ts_accel_occluded on the logged rays (Embree
- *                  plus our triangle filter, user geometry and double-precision
+ *                  plus our triangle filter, user geometry and the hit's
  *                  interaction);
  *        embree  — rtcIntersect1 / rtcOccluded1 on the logged rays, on a plain Embree
  *                  scene of the same geometry and build settings: triangles without
@@ -37,6 +37,14 @@
  * logged_rays, reps, scaling (samples/s at this thread count ÷ at 1 thread, per repetition,
  * median). Rates are per second of wall time over all threads.
  *
+ * --packets adds one row a scene and integrator, `packets,scene,integrator,camera_rays,
+ * camera_share,x8,x16,saved8,saved16`: the logged camera rays (render order) replayed on
+ * the plain scene at 1 thread singly and as Embree packets of 8 and 16 in each
+ * repetition; camera_share is their single-ray time ÷ the whole log's, x8/x16 the packets'
+ * speed-up on them, saved8/saved16 the fraction of the 1-thread render's time the packets
+ * would save (time saved per camera ray × the render's camera rays ÷ its time); medians.
+ * It measures what camera-ray packets could buy (docs/performance.md).
+ *
  * Exit status 0, 1 when a scene fails to load or render, 2 on usage errors. */
 #include <embree3/rtcore.h>
 #include <errno.h>
@@ -53,7 +61,7 @@
 #include "integrators/integrator.h"
 #include "render/render.h"
 #include "scene/scene.h"
-#include "json/scene_json.h"
+#include "load/scene_load.h"
 #include "bench_util.h"
 
 #define MAX_REPS        15
@@ -65,6 +73,7 @@ typedef struct options {
     double seconds;
     size_t max_rays;
     int header;
+    int packets; /* --packets: the camera rays' packet replay (below) */
 } options;
 
 /* ---------------------------------------------------------------- the plain Embree scene */
@@ -236,6 +245,85 @@ static double replay(replay_kind kind, const ts_accel *accel, RTCScene plain, co
     return dt;
 }
 
+
+/* ---------------------------------------------------------------- camera-ray packets */
+
+/* The logged camera rays (nearest-hit queries without skip ids from the first logged
+ * ray's origin: a pinhole camera's; in render order, so 8 or 16 consecutive ones are one
+ * pixel's samples or neighbours — as coherent as a tile's packets can be) replayed on the
+ * plain scene one at a time (rtcIntersect1) and as packets of 8 and 16 (rtcIntersect8/16,
+ * the last one padded with invalid lanes). Returns the three times in seconds and the
+ * count, or -1 when there are no camera rays. */
+typedef struct packet_times {
+    size_t n;
+    double t1, t8, t16;
+    uint64_t h1, h8, h16; /* hits, so no query is optimised away (and the three agree) */
+} packet_times;
+
+static int replay_packets(RTCScene plain, const ts_ray_log *log, size_t n, packet_times *out)
+{
+    ts_ray *cam = malloc(sizeof *cam * (n ? n : 1));
+    if (!cam || n == 0) {
+        free(cam);
+        return -1;
+    }
+    ts_vec3 o = log->rays[0].o;
+    size_t m = 0;
+    for (size_t i = 0; i < n; i++) {
+        const ts_ray *r = &log->rays[i];
+        if (log->kinds[i] == TS_RAY_LOG_INTERSECT && r->skip_shape == TS_NONE && r->o.x == o.x && r->o.y == o.y &&
+            r->o.z == o.z)
+            cam[m++] = *r;
+    }
+    if (m == 0) {
+        free(cam);
+        return -1;
+    }
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    out->n = m;
+    uint64_t h = 0;
+    double t0 = ts_now_seconds();
+    for (size_t i = 0; i < m; i++) {
+        struct RTCRayHit rh;
+        rh.ray.org_x = cam[i].o.x, rh.ray.org_y = cam[i].o.y, rh.ray.org_z = cam[i].o.z;
+        rh.ray.dir_x = cam[i].d.x, rh.ray.dir_y = cam[i].d.y, rh.ray.dir_z = cam[i].d.z;
+        rh.ray.tnear = 0, rh.ray.tfar = cam[i].tmax, rh.ray.time = 0;
+        rh.ray.mask = 0xffffffffu, rh.ray.id = 0, rh.ray.flags = 0;
+        rh.hit.geomID = rh.hit.primID = rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(plain, &ctx, &rh);
+        h += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+    }
+    out->t1 = ts_now_seconds() - t0;
+    out->h1 = h;
+    for (int w = 8; w <= 16; w += 8) {
+        _Alignas(64) struct RTCRayHit16 rh; /* the 8-wide packet uses its first 8 lanes' layout */
+        _Alignas(64) int valid[16];
+        h = 0;
+        t0 = ts_now_seconds();
+        for (size_t i = 0; i < m; i += (size_t)w) {
+            float *f = (float *)&rh;
+            unsigned *u = (unsigned *)&rh;
+            for (int k = 0; k < w; k++) {
+                const ts_ray *r = &cam[i + (size_t)k < m ? i + (size_t)k : m - 1];
+                valid[k] = i + (size_t)k < m ? -1 : 0;
+                f[0 * w + k] = r->o.x, f[1 * w + k] = r->o.y, f[2 * w + k] = r->o.z, f[3 * w + k] = 0;
+                f[4 * w + k] = r->d.x, f[5 * w + k] = r->d.y, f[6 * w + k] = r->d.z, f[7 * w + k] = 0;
+                f[8 * w + k] = r->tmax;
+                u[9 * w + k] = 0xffffffffu, u[10 * w + k] = 0, u[11 * w + k] = 0;
+                u[17 * w + k] = u[18 * w + k] = u[19 * w + k] = RTC_INVALID_GEOMETRY_ID;
+            }
+            if (w == 8) rtcIntersect8(valid, plain, &ctx, (struct RTCRayHit8 *)&rh);
+            else rtcIntersect16(valid, plain, &ctx, &rh);
+            for (int k = 0; k < w; k++) h += valid[k] && u[18 * w + k] != RTC_INVALID_GEOMETRY_ID;
+        }
+        if (w == 8) out->t8 = ts_now_seconds() - t0, out->h8 = h;
+        else out->t16 = ts_now_seconds() - t0, out->h16 = h;
+    }
+    free(cam);
+    return 0;
+}
+
 /* ---------------------------------------------------------------- renders */
 
 typedef struct render_result {
@@ -282,6 +370,9 @@ static int bench_integrator(const char *path, ts_scene *s, ts_integrator_type in
     int threads[2] = {1, o->threads}, n_cfg = o->threads > 1 ? 2 : 1;
     double r_samples[2][MAX_REPS], r_rays[2][MAX_REPS], r_accel[2][MAX_REPS], r_embree[2][MAX_REPS];
     double r_eff[2][MAX_REPS], r_aeff[2][MAX_REPS], r_secs[2][MAX_REPS];
+    double p_share[MAX_REPS], p_gain8[MAX_REPS], p_gain16[MAX_REPS], p_x8[MAX_REPS], p_x16[MAX_REPS];
+    double p_render[MAX_REPS];
+    size_t p_n = 0;
     render_result rr = {0};
 
     /* One render at all threads before the ray log exists: the peak memory is the
@@ -347,6 +438,24 @@ static int bench_integrator(const char *path, ts_scene *s, ts_integrator_type in
             r_embree[c][k] = (double)n / te;
             r_eff[c][k] = r_rays[c][k] / r_embree[c][k];
             r_aeff[c][k] = r_accel[c][k] / r_embree[c][k];
+            /* Camera rays in packets, at 1 thread, beside this repetition's render and
+             * replays: their share of the single-ray Embree time of the log, the packets'
+             * speed-up on them, and what that would save of the render's time (the render
+             * makes rk.samples camera rays, the log p.n of them). */
+            packet_times p = {0};
+            if (o->packets && c == 0 && replay_packets(plain.scene, &log, n, &p) == 0) {
+                double per1 = p.t1 / (double)p.n, per8 = p.t8 / (double)p.n, per16 = p.t16 / (double)p.n;
+                p_n = p.n;
+                p_share[k] = p.t1 / te;
+                p_x8[k] = p.t1 / p.t8;
+                p_x16[k] = p.t1 / p.t16;
+                p_gain8[k] = (per1 - per8) * (double)rk.samples / rk.seconds;
+                p_gain16[k] = (per1 - per16) * (double)rk.samples / rk.seconds;
+                p_render[k] = rk.seconds;
+                if (p.h1 != p.h8 || p.h1 != p.h16)
+                    fprintf(stderr, "bench_throughput: note: camera-ray hits %llu / %llu / %llu (1 / 8 / 16)\n",
+                            (unsigned long long)p.h1, (unsigned long long)p.h8, (unsigned long long)p.h16);
+            }
         }
     plain_destroy(&plain);
     free(log.rays);
@@ -365,6 +474,13 @@ static int bench_integrator(const char *path, ts_scene *s, ts_integrator_type in
                sps, rps, median(r_accel[c], o->reps), median(r_embree[c], o->reps), median(r_eff[c], o->reps),
                median(r_aeff[c], o->reps), peak_mib, n, o->reps, median(scale, o->reps));
     }
+    /* packets,scene,integrator,camera_rays,camera share of the log's Embree time, packet
+     * speed-up ×8, ×16 on camera rays, fraction of the render's time they would save. */
+    if (o->packets && p_n > 0)
+        printf("packets,%s,%s,%zu,%.3f,%.2f,%.2f,%.4f,%.4f\n", name, integrator_name(integ), p_n,
+               median(p_share, o->reps), median(p_x8, o->reps), median(p_x16, o->reps), median(p_gain8, o->reps),
+               median(p_gain16, o->reps));
+    (void)p_render;
     fflush(stdout);
     return 0;
 
@@ -404,7 +520,7 @@ static int run_child(const char *path, int j, const options *o)
 {
     ts_scene *s = NULL;
     ts_error err = {0};
-    if (ts_scene_load_file(path, NULL, &s, &err) != TS_OK) {
+    if (ts_scene_load_path(path, NULL, NULL, NULL, &s, &err) != TS_OK) {
         fprintf(stderr, "bench_throughput: %s: %s\n", path, err.message);
         return CHILD_LOAD_FAILED;
     }
@@ -435,7 +551,7 @@ static int usage(const char *msg)
 {
     fprintf(stderr,
             "bench_throughput: %s\nusage: bench_throughput [--integrators scene,ao] [--threads N] [--reps R] "
-            "[--seconds S] [--max-rays N] [--header] SCENE.json...\n",
+            "[--seconds S] [--max-rays N] [--header] [--packets] SCENE.json...\n",
             msg);
     return 2;
 }
@@ -443,12 +559,16 @@ static int usage(const char *msg)
 int main(int argc, char **argv)
 {
     long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
-    options o = {"scene,ao", ncpu > 0 ? (int)ncpu : 1, 3, 2.0, (size_t)1 << 21, 0};
+    options o = {"scene,ao", ncpu > 0 ? (int)ncpu : 1, 3, 2.0, (size_t)1 << 21, 0, 0};
     int first = 1;
     for (; first < argc && strncmp(argv[first], "--", 2) == 0; first++) {
         const char *a = argv[first], *v = first + 1 < argc ? argv[first + 1] : NULL;
         if (strcmp(a, "--header") == 0) {
             o.header = 1;
+            continue;
+        }
+        if (strcmp(a, "--packets") == 0) {
+            o.packets = 1;
             continue;
         }
         if (!v) return usage("missing value");
