@@ -34,23 +34,7 @@
 #include "render/render.h"
 #include "scene/scene.h"
 #include "bench_util.h"
-
-typedef struct sbuf { char *p; size_t n, cap; } sbuf;
-static void put(sbuf *b, const char *fmt, ...)
-{
-    va_list ap;
-    for (;;) {
-        va_start(ap, fmt);
-        int k = vsnprintf(b->p + b->n, b->cap - b->n, fmt, ap);
-        va_end(ap);
-        if (k >= 0 && (size_t)k < b->cap - b->n) {
-            b->n += (size_t)k;
-            return;
-        }
-        b->cap = b->cap * 2 + (size_t)(k > 0 ? k : 0) + 64;
-        if (!(b->p = realloc(b->p, b->cap))) exit(1);
-    }
-}
+#include "text_buffer.h"
 
 static uint64_t rng_state;
 static double rnd(void)
@@ -62,8 +46,8 @@ static double rnd(void)
 static char *scene_doc(int n_tri, int n_sph, int spp, uint32_t seed, const char *mode)
 {
     rng_state = 12345;
-    sbuf b = {malloc(4096), 0, 4096};
-    put(&b, "{\"tessera\":1,\"camera\":{\"type\":\"perspective\",\"from\":[0,2,5],\"to\":[0,1.6,-10],\"fov\":60},"
+    text_buffer b = {0};
+    text_put(&b, "{\"tessera\":1,\"camera\":{\"type\":\"perspective\",\"from\":[0,2,5],\"to\":[0,1.6,-10],\"fov\":60},"
             "\"film\":{\"width\":96,\"height\":96},\"sampler\":{\"type\":\"sobol\",\"spp\":%d,\"seed\":%u},"
             "\"integrator\":{\"type\":\"path\",\"max_depth\":2,\"light_sampling\":\"%s\"},"
             "\"materials\":{\"w\":{\"type\":\"diffuse\",\"reflectance\":0.6},\"k\":{\"type\":\"diffuse\",\"reflectance\":0}},"
@@ -80,15 +64,15 @@ static char *scene_doc(int n_tri, int n_sph, int spp, uint32_t seed, const char 
         double x = -2.8 + 5.6 * ((i % across) + 0.5 * rnd()) / across;
         double z = -39.5 + 45.0 * ((i / across) + 0.5 * rnd()) / along;
         double s = 0.05 + 0.05 * rnd(), le = 0.5 * pow(10, 2 * rnd());
-        put(&b, ",{\"type\":\"mesh\",\"material\":\"k\",\"emission\":%.4g,\"positions\":[%.4f,3.9,%.4f, %.4f,3.9,%.4f, "
+        text_put(&b, ",{\"type\":\"mesh\",\"material\":\"k\",\"emission\":%.4g,\"positions\":[%.4f,3.9,%.4f, %.4f,3.9,%.4f, "
                 "%.4f,3.9,%.4f],\"indices\":[0,1,2]}",
             le, x, z, x + s, z, x, z + s);
     }
     /* small spheres all along the corridor, at any height */
     for (int i = 0; i < n_sph; i++)
-        put(&b, ",{\"type\":\"sphere\",\"center\":[%.4f,%.4f,%.4f],\"radius\":%.3f,\"material\":\"k\",\"emission\":%.4g}",
+        text_put(&b, ",{\"type\":\"sphere\",\"center\":[%.4f,%.4f,%.4f],\"radius\":%.3f,\"material\":\"k\",\"emission\":%.4g}",
             -2.7 + 5.4 * rnd(), 0.3 + 3.3 * rnd(), -39.5 + 45 * rnd(), 0.02 + 0.03 * rnd(), 2 * pow(10, 2 * rnd()));
-    put(&b, "]}");
+    text_put(&b, "]}");
     return b.p;
 }
 

@@ -34,6 +34,7 @@
 #include "lights/light.h"
 #include "lights/light_bvh.h"
 #include "scene/scene.h"
+#include "text_buffer.h"
 
 typedef struct rng { uint64_t s; } rng;
 static double rnd(rng *r)
@@ -42,32 +43,13 @@ static double rnd(rng *r)
     return (double)(r->s >> 11) * 0x1p-53;
 }
 
-/* Appends printf output to buf (grown as needed). */
-typedef struct sbuf { char *p; size_t n, cap; } sbuf;
-static void put(sbuf *b, const char *fmt, ...)
-{
-    va_list ap;
-    for (;;) {
-        va_start(ap, fmt);
-        int k = vsnprintf(b->p + b->n, b->cap - b->n, fmt, ap);
-        va_end(ap);
-        if (k >= 0 && (size_t)k < b->cap - b->n) {
-            b->n += (size_t)k;
-            return;
-        }
-        b->cap = b->cap * 2 + (size_t)(k > 0 ? k : 0) + 64;
-        b->p = realloc(b->p, b->cap);
-        assert_non_null(b->p);
-    }
-}
-
 /* The many-lights scene (seeded): every kind of bounded light in a 10-unit cube. */
 static char *many_lights_doc(uint64_t seed, int n_tris, int n_spheres, int n_points, bool unbounded,
                              const char *selection)
 {
     rng r = {seed};
-    sbuf b = {malloc(1024), 0, 1024};
-    put(&b, "{\"tessera\":1,\"camera\":{\"type\":\"perspective\",\"from\":[0,0,-20],\"to\":[0,0,0],\"fov\":40},"
+    text_buffer b = {0};
+    text_put(&b, "{\"tessera\":1,\"camera\":{\"type\":\"perspective\",\"from\":[0,0,-20],\"to\":[0,0,0],\"fov\":40},"
             "\"film\":{\"width\":8,\"height\":8},\"integrator\":{\"type\":\"path\",\"light_sampling\":\"%s\"},"
             "\"materials\":{\"m\":{\"type\":\"diffuse\"}},\"shapes\":[",
         selection);
@@ -80,13 +62,13 @@ static char *many_lights_doc(uint64_t seed, int n_tris, int n_spheres, int n_poi
             a[k] = 0.6 * rnd(&r) - 0.3, bb[k] = 0.6 * rnd(&r) - 0.3;
         double e = i % 7 == 3 ? 0 : 0.2 + 3 * rnd(&r); /* some emit nothing */
         if (i % 5 == 0) {
-            put(&b, "%s{\"type\":\"mesh\",\"material\":\"m\",\"emission\":%g,\"two_sided\":%s,\"positions\":["
+            text_put(&b, "%s{\"type\":\"mesh\",\"material\":\"m\",\"emission\":%g,\"two_sided\":%s,\"positions\":["
                     "%g,%g,%g, %g,%g,%g, %g,%g,%g, %g,%g,%g],\"indices\":[0,1,2, 0,2,3]}",
                 sep, e, i % 4 == 0 ? "true" : "false", c[0], c[1], c[2], c[0] + a[0], c[1] + a[1], c[2] + a[2],
                 c[0] + a[0] + bb[0], c[1] + a[1] + bb[1], c[2] + a[2] + bb[2], c[0] + bb[0], c[1] + bb[1],
                 c[2] + bb[2]);
         } else {
-            put(&b, "%s{\"type\":\"mesh\",\"material\":\"m\",\"emission\":%g,\"two_sided\":%s,\"positions\":["
+            text_put(&b, "%s{\"type\":\"mesh\",\"material\":\"m\",\"emission\":%g,\"two_sided\":%s,\"positions\":["
                     "%g,%g,%g, %g,%g,%g, %g,%g,%g],\"indices\":[0,1,2]}",
                 sep, e, i % 4 == 0 ? "true" : "false", c[0], c[1], c[2], c[0] + a[0], c[1] + a[1], c[2] + a[2],
                 c[0] + bb[0], c[1] + bb[1], c[2] + bb[2]);
@@ -97,38 +79,38 @@ static char *many_lights_doc(uint64_t seed, int n_tris, int n_spheres, int n_poi
         double c[3] = {10 * rnd(&r) - 5, 10 * rnd(&r) - 5, 10 * rnd(&r) - 5};
         double nz[3] = {rnd(&r) - 0.5, rnd(&r) - 0.5, rnd(&r) - 0.5};
         if (i % 3 == 0)
-            put(&b, "%s{\"type\":\"sphere\",\"center\":[%g,%g,%g],\"radius\":%g,\"material\":\"m\",\"emission\":%g}",
+            text_put(&b, "%s{\"type\":\"sphere\",\"center\":[%g,%g,%g],\"radius\":%g,\"material\":\"m\",\"emission\":%g}",
                 sep, c[0], c[1], c[2], 0.05 + 0.2 * rnd(&r), 1 + 4 * rnd(&r));
         else if (i % 3 == 1)
-            put(&b, "%s{\"type\":\"disk\",\"center\":[%g,%g,%g],\"normal\":[%g,%g,%g],\"radius\":%g,\"material\":\"m\","
+            text_put(&b, "%s{\"type\":\"disk\",\"center\":[%g,%g,%g],\"normal\":[%g,%g,%g],\"radius\":%g,\"material\":\"m\","
                     "\"emission\":%g,\"two_sided\":%s}",
                 sep, c[0], c[1], c[2], nz[0], nz[1], nz[2] + 0.01, 0.05 + 0.3 * rnd(&r), 1 + 4 * rnd(&r),
                 i % 2 ? "true" : "false");
         else
-            put(&b, "%s{\"type\":\"cylinder\",\"p0\":[%g,%g,%g],\"p1\":[%g,%g,%g],\"radius\":%g,\"material\":\"m\","
+            text_put(&b, "%s{\"type\":\"cylinder\",\"p0\":[%g,%g,%g],\"p1\":[%g,%g,%g],\"radius\":%g,\"material\":\"m\","
                     "\"emission\":%g}",
                 sep, c[0], c[1], c[2], c[0] + nz[0], c[1] + nz[1], c[2] + nz[2] + 0.01, 0.05 + 0.1 * rnd(&r),
                 1 + 4 * rnd(&r));
     }
-    put(&b, "],\"lights\":[");
+    text_put(&b, "],\"lights\":[");
     sep = "";
     for (int i = 0; i < n_points; i++) {
         double c[3] = {10 * rnd(&r) - 5, 10 * rnd(&r) - 5, 10 * rnd(&r) - 5};
         if (i % 2)
-            put(&b, "%s{\"type\":\"point\",\"position\":[%g,%g,%g],\"intensity\":%g}", sep, c[0], c[1], c[2],
+            text_put(&b, "%s{\"type\":\"point\",\"position\":[%g,%g,%g],\"intensity\":%g}", sep, c[0], c[1], c[2],
                 0.5 + rnd(&r));
         else
-            put(&b, "%s{\"type\":\"spot\",\"from\":[%g,%g,%g],\"to\":[%g,%g,%g],\"intensity\":%g,\"cone_angle\":%g,"
+            text_put(&b, "%s{\"type\":\"spot\",\"from\":[%g,%g,%g],\"to\":[%g,%g,%g],\"intensity\":%g,\"cone_angle\":%g,"
                     "\"cone_delta\":%g}",
                 sep, c[0], c[1], c[2], c[0] + rnd(&r) - 0.5, c[1] + rnd(&r) - 0.5, c[2] + rnd(&r) - 0.5,
                 1 + rnd(&r), 5 + 40 * rnd(&r), i % 4 == 0 ? 0.0 : 5 * rnd(&r));
         sep = ",";
     }
     if (unbounded)
-        put(&b, "%s{\"type\":\"distant\",\"irradiance\":1,\"from\":[0,1,0],\"to\":[0,0,0]},"
+        text_put(&b, "%s{\"type\":\"distant\",\"irradiance\":1,\"from\":[0,1,0],\"to\":[0,0,0]},"
                 "{\"type\":\"infinite\",\"radiance\":0.2}",
             sep);
-    put(&b, "]}");
+    text_put(&b, "]}");
     return b.p;
 }
 
