@@ -119,21 +119,16 @@ ts_ray ts_camera_ray(const ts_camera *cam, ts_vec2 p_raster, ts_vec2 u_lens)
 void ts_camera_move_ray(const ts_camera *cam, ts_ray *ray, float time)
 {
     ray->time = time;
-    if (!cam->moving || time <= cam->motion.start_time) return;
-    /* world ← camera at time ← camera at the start, in double, rounded once. */
-    ts_mat4 m = ts_anim_xform_matrix(&cam->motion, time);
-    ts_mat4 delta = ts_mat4_mul(&m, &cam->motion.start.m_inv);
-    ts_xform x = {delta, delta}; /* only the forward matrix is read */
-    ray->o = ts_dvec3_to_vec3(ts_xform_point(&x, ts_dvec3_from(ray->o)));
-    ray->d = ts_dvec3_to_vec3(ts_xform_vector(&x, ts_dvec3_from(ray->d)));
+    ts_camera_move_points(cam, time, &ray->o, &ray->d, 1);
 }
 
 void ts_camera_move_points(const ts_camera *cam, float time, ts_vec3 *o, ts_vec3 *d, int n)
 {
     if (!cam->moving || time <= cam->motion.start_time) return;
+    /* world ← camera at time ← camera at the start, in double, rounded once. */
     ts_mat4 m = ts_anim_xform_matrix(&cam->motion, time);
     ts_mat4 delta = ts_mat4_mul(&m, &cam->motion.start.m_inv);
-    ts_xform x = {delta, delta};
+    ts_xform x = {delta, delta}; /* only the forward matrix is read */
     for (int i = 0; i < n; i++) {
         o[i] = ts_dvec3_to_vec3(ts_xform_point(&x, ts_dvec3_from(o[i])));
         d[i] = ts_dvec3_to_vec3(ts_xform_vector(&x, ts_dvec3_from(d[i])));

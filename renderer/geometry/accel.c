@@ -608,12 +608,18 @@ static void set_step(RTCGeometry g, unsigned step, ts_dvec3 t, ts_quat r, const 
 /* Embree's time steps for a moving instance (accel.h): pbrt's own T, R, S at the two ends
  * where Embree's interpolation is pbrt's, else TS_ACCEL_MOTION_STEPS steps of pbrt's
  * matrix at their times, each re-decomposed as T·Q·U. */
+/* Whether Embree's interpolation between m's two keyframes is pbrt's (accel.h). */
+static bool two_steps(const ts_accel *a, const ts_anim_xform *m)
+{
+    bool signs = true;
+    for (int i = 0; i < 3; i++) signs = signs && ((m->s[0].m[i][i] > 0) == (m->s[1].m[i][i] > 0));
+    return m->start_time == a->time0 && m->end_time == a->time1 && diagonal(&m->s[0]) && diagonal(&m->s[1]) && signs;
+}
+
 static void set_motion_steps(ts_accel *a, RTCGeometry g, const ts_anim_xform *m)
 {
     double t0 = a->time0, t1 = a->time1;
-    bool signs = true;
-    for (int i = 0; i < 3; i++) signs = signs && ((m->s[0].m[i][i] > 0) == (m->s[1].m[i][i] > 0));
-    if (m->start_time == t0 && m->end_time == t1 && diagonal(&m->s[0]) && diagonal(&m->s[1]) && signs) {
+    if (two_steps(a, m)) {
         rtcSetGeometryTimeStepCount(g, 2);
         for (unsigned k = 0; k < 2; k++) {
             double u[3][3] = {{m->s[k].m[0][0], 0, 0}, {0, m->s[k].m[1][1], 0}, {0, 0, m->s[k].m[2][2]}};
@@ -649,6 +655,24 @@ static void motion_interval(ts_accel *a)
     a->time0 = a->moving ? lo : 0;
     a->time1 = a->moving ? hi : 1;
     a->time_scale = a->moving ? 1 / (hi - lo) : 1;
+}
+
+/* Embree's time steps of every moving instance together, within TS_ACCEL_MOTION_STEP_LIMIT
+ * (Embree holds a transform a step and its motion BVH grows with them). */
+static bool motion_steps_fit(const ts_accel *a, ts_error *err)
+{
+    uint64_t steps = 0;
+    for (uint32_t k = 0; k < a->n_instances; k++) {
+        const ts_anim_xform *m = a->instances[k].motion;
+        if (m && m->animated) steps += two_steps(a, m) ? 2 : TS_ACCEL_MOTION_STEPS;
+    }
+    if (steps <= TS_ACCEL_MOTION_STEP_LIMIT) return true;
+    ts_error_set(err, TS_ERR_LIMIT,
+                 "instances: the moving shapes and instances need %llu time steps of the ray-intersection structure, "
+                 "more than its limit of %u (a motion with shear, or over part of the scene's motion interval, "
+                 "takes %u, others 2)",
+                 (unsigned long long)steps, TS_ACCEL_MOTION_STEP_LIMIT, TS_ACCEL_MOTION_STEPS);
+    return false;
 }
 
 /* One Embree scene per object, then an instance geometry per instance (top-level ID
@@ -760,6 +784,7 @@ ts_accel *ts_accel_create_instanced(const ts_shape *shapes, uint32_t n_shapes, c
     a->n_objects = n_objects;
     a->n_instances = n_instances;
     motion_interval(a);
+    if (!motion_steps_fit(a, err)) goto fail_limit;
     for (uint32_t i = 0; i < n_shapes; i++) {
         const ts_shape *s = &shapes[i];
         if (s->in_object) continue; /* seen through its instances */
@@ -796,6 +821,7 @@ fail_embree:
         ts_error_set(err, a->build_code == RTC_ERROR_OUT_OF_MEMORY ? TS_ERR_NOMEM : TS_ERR_INTERNAL,
                      "Embree failed to build the scene's ray-intersection structure: %s", a->build_error);
 fail_cancelled:
+fail_limit:
     if (a->scene) rtcReleaseScene(a->scene);
     for (uint32_t o = 0; a->obj_scene && o < a->n_objects; o++)
         if (a->obj_scene[o]) rtcReleaseScene(a->obj_scene[o]);

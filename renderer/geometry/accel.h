@@ -46,6 +46,8 @@ typedef struct ts_accel ts_accel;
  * Either way Embree only finds the candidate: the hit itself (and every filter's test) is
  * computed in double under pbrt's transform at the ray's time, ts_anim_xform_at. */
 #define TS_ACCEL_MOTION_STEPS 129
+/* All moving instances' time steps together at most (else TS_ERR_LIMIT at create). */
+#define TS_ACCEL_MOTION_STEP_LIMIT (1u << 20)
 
 typedef struct ts_object {
     uint32_t first_shape, n_shapes;
