@@ -139,6 +139,12 @@ await check('shards not a whole number in 1 … --max-shards: 400', async () => 
   }
   const r = await post(base, scene(4, { shards: 8 }));
   assert(r.status === 400 && /without samples/.test(r.body.error), `8 shards of 4 spp: ${r.status} ${JSON.stringify(r.body)}`);
+  // An adaptive job's pixels stop at counts chosen from the whole image: no exact merge.
+  const ad = scene(16, { shards: 2 });
+  ad.job.adaptive = true;
+  const ra = await post(base, ad);
+  assert(ra.status === 400 && /job\.adaptive/.test(ra.body.error), `adaptive farm job: ${ra.status} ${JSON.stringify(ra.body)}`);
+  log('  ' + ra.body.error);
   const list = await (await fetch(`${base}/api/v1/jobs`)).json();
   assert(list.jobs.length === 0, 'a refused job was listed');
 });
