@@ -44,40 +44,16 @@
 #include "json/scene_json.h"
 #include "load/scene_load.h"
 #include "render_stats.h"
+#include "scene_support.h"
 #include "textures/texture.h"
 #include "tmp_folder.h"
 
 /* ---------------------------------------------------------------- helpers */
 
-static ts_scene *load(const char *doc)
-{
-    ts_scene *s = NULL;
-    ts_error err = {0};
-    if (ts_scene_load_text(doc, strlen(doc), NULL, "t", NULL, &s, &err)) fail_msg("%s\n%s", err.message, doc);
-    return s;
-}
-
-static void refused(const char *doc, const char *want)
-{
-    ts_scene *s = NULL;
-    ts_error err = {0};
-    ts_status st = ts_scene_load_text(doc, strlen(doc), NULL, "t", NULL, &s, &err);
-    if (st == TS_OK) fail_msg("accepted, expected \"%s\"", want);
-    if (strcmp(err.message, want) != 0) fail_msg("got      \"%s\"\nexpected \"%s\"", err.message, want);
-    assert_null(s);
-}
-
-static ts_film *render_threads(const ts_scene *s, int threads)
-{
-    ts_error err = {0};
-    ts_film *f = ts_film_create(s->width, s->height, 0, 0, s->width, s->height, &err);
-    assert_non_null(f);
-    ts_render_stats stats = {0};
-    ts_render_request req = {s, s->integrator.type, f, 0, s->spp, threads, NULL, NULL, NULL};
-    if (ts_render(&req, &stats, &err)) fail_msg("%s", err.message);
-    assert_int_equal(stats.counters.nonfinite, 0);
-    return f;
-}
+/* tests/scene_support.h's, under this file's names */
+static ts_scene *load(const char *doc) { return ts_test_load_json(doc); }
+static void refused(const char *doc, const char *want) { ts_test_json_refused(doc, want); }
+static ts_film *render_threads(const ts_scene *s, int threads) { return ts_test_render(s, threads); }
 
 static ts_film *render(const ts_scene *s) { return render_threads(s, 2); }
 

@@ -31,63 +31,11 @@
 #include "film/film.h"
 #include "geometry/accel.h"
 #include "geometry/curve.h"
-#include "json/scene_json.h"
-#include "load/scene_load.h"
 #include "render/render.h"
-#include "render_stats.h"
+#include "scene_support.h"
 #include "scene/scene.h"
 
 /* ---------------------------------------------------------------- helpers */
-
-static ts_scene *load_json(const char *doc)
-{
-    ts_scene *s = NULL;
-    ts_error err = {0};
-    if (ts_scene_load_text(doc, strlen(doc), NULL, "t", NULL, &s, &err)) fail_msg("%s\n%s", err.message, doc);
-    return s;
-}
-
-static void json_refused(const char *doc, const char *want)
-{
-    ts_scene *s = NULL;
-    ts_error err = {0};
-    ts_status st = ts_scene_load_text(doc, strlen(doc), NULL, "t", NULL, &s, &err);
-    if (st == TS_OK) fail_msg("accepted, expected \"%s\"", want);
-    if (strcmp(err.message, want) != 0) fail_msg("got      \"%s\"\nexpected \"%s\"", err.message, want);
-    assert_null(s);
-}
-
-typedef struct warnings {
-    int n;
-    char last[TS_ERROR_MAX + 64];
-} warnings;
-
-static void on_warning(void *ctx, const char *msg)
-{
-    warnings *w = ctx;
-    w->n++;
-    snprintf(w->last, sizeof w->last, "%s", msg);
-}
-
-static ts_scene *load_pbrt(const char *text, warnings *w)
-{
-    ts_scene *s = NULL;
-    ts_error err = {0};
-    if (ts_scene_load_pbrt_text(text, strlen(text), NULL, "t.pbrt", NULL, on_warning, w, &s, &err))
-        fail_msg("%s", err.message);
-    return s;
-}
-
-static void pbrt_refused(const char *text, const char *want)
-{
-    ts_scene *s = NULL;
-    ts_error err = {0};
-    warnings w = {0};
-    ts_status st = ts_scene_load_pbrt_text(text, strlen(text), NULL, "t.pbrt", NULL, on_warning, &w, &s, &err);
-    if (st == TS_OK) fail_msg("accepted, expected \"%s\"", want);
-    if (strcmp(err.message, want) != 0) fail_msg("got      \"%s\"\nexpected \"%s\"", err.message, want);
-    assert_null(s);
-}
 
 /* An orthographic view down −z of 2 × 2 units, 16 × 16 pixels, box filter. */
 #define VIEW                                                                                                   \
@@ -100,7 +48,7 @@ static ts_scene *curve_scene(const char *curve)
 {
     char doc[8192];
     snprintf(doc, sizeof doc, VIEW "\"shapes\":[{\"type\":\"curve\",\"material\":\"m\",%s}]}", curve);
-    return load_json(doc);
+    return ts_test_load_json(doc);
 }
 
 /* The straight curve from (−1, 0, 0) to (1, 0, 0), control points evenly spaced. */
@@ -252,13 +200,8 @@ static void cylinder_shading(void **state)
         "\"lights\":[{\"type\":\"distant\",\"from\":[0,0,1],\"to\":[0,0,0],\"irradiance\":3.14159265358979}],"
         "\"shapes\":[{\"type\":\"curve\",\"material\":\"m\",\"curve_type\":\"cylinder\",\"width\":1,"
         "\"points\":[-2,0,0, -0.6666666667,0,0, 0.6666666667,0,0, 2,0,0]}]}";
-    ts_scene *s = load_json(doc);
-    ts_error err = {0};
-    ts_film *f = ts_film_create(s->width, s->height, 0, 0, s->width, s->height, &err);
-    assert_non_null(f);
-    ts_render_stats stats = {0};
-    ts_render_request req = {s, s->integrator.type, f, 0, s->spp, 2, NULL, NULL, NULL};
-    if (ts_render(&req, &stats, &err)) fail_msg("%s", err.message);
+    ts_scene *s = ts_test_load_json(doc);
+    ts_film *f = ts_test_render(s, 2);
     double worst = 0;
     for (int py = 0; py < 16; py++) {
         double y0 = 1 - (py + 1) / 8.0, y1 = 1 - py / 8.0, sum = 0; /* the pixel's rows */
@@ -547,12 +490,12 @@ static void instanced_curve(void **state)
              VIEW "\"objects\":{\"o\":{\"shapes\":[%s}]}},\"instances\":[{\"object\":\"o\",\"transform\":"
                   "[{\"rotate\":{\"angle\":30,\"axis\":[0,0,1]}},{\"translate\":[0.1,0.05,0]}]}]}",
              curve);
-    ts_scene *a = load_json(doc);
+    ts_scene *a = ts_test_load_json(doc);
     snprintf(doc, sizeof doc,
              VIEW "\"shapes\":[%s,\"transform\":[{\"rotate\":{\"angle\":30,\"axis\":[0,0,1]}},{\"translate\":[0.1,0.05,"
                   "0]}]}]}",
              curve);
-    ts_scene *b = load_json(doc);
+    ts_scene *b = ts_test_load_json(doc);
     int both = 0;
     for (double y = -0.9; y < 0.9; y += 0.0131)
         for (double x = -0.9; x < 0.9; x += 0.0127) {
@@ -625,17 +568,8 @@ static void textured_curves(void **state)
         "\"points\":[-1.5,0,0, -0.5,0.6,0.3, 0.5,-0.6,0, 1.5,0.2,0]},"
         "{\"type\":\"curve\",\"material\":\"m\",\"width\":0.3,\"curve_type\":\"ribbon\","
         "\"normals\":[0,0,1, 0,0.6,0.8],\"points\":[-1.5,-0.7,0, -0.5,-0.1,0.3, 0.5,-1.3,0, 1.5,-0.6,0]}]}";
-    ts_scene *s = load_json(doc);
-    ts_film *f[2];
-    for (int k = 0; k < 2; k++) {
-        ts_error err = {0};
-        f[k] = ts_film_create(s->width, s->height, 0, 0, s->width, s->height, &err);
-        assert_non_null(f[k]);
-        ts_render_stats stats = {0};
-        ts_render_request req = {s, s->integrator.type, f[k], 0, s->spp, k + 1, NULL, NULL, NULL};
-        if (ts_render(&req, &stats, &err)) fail_msg("%s", err.message);
-        assert_int_equal(stats.counters.nonfinite, 0);
-    }
+    ts_scene *s = ts_test_load_json(doc);
+    ts_film *f[2] = {ts_test_render(s, 1), ts_test_render(s, 2)};
     int red = 0, blue = 0;
     for (int y = 0; y < s->height; y++)
         for (int x = 0; x < s->width; x++) {
@@ -663,34 +597,34 @@ static void textured_curves(void **state)
 static void pbrt_curve_params(void **state)
 {
     (void)state;
-    pbrt_refused(PBRT_HEAD "Shape \"curve\" \"point P\" [0 0 0 1 0 0 2 0 0]\nWorldEnd\n",
+    ts_test_pbrt_refused(PBRT_HEAD "Shape \"curve\" \"point P\" [0 0 0 1 0 0 2 0 0]\nWorldEnd\n",
                  "t.pbrt:5:15: Shape \"curve\": \"point P\" has 3 control points: for the degree 3 Bézier basis 4 + "
                  "n * 3 are required, for n >= 0 (as pbrt-v3)");
-    pbrt_refused(PBRT_HEAD "Shape \"curve\" \"string basis\" \"bspline\" \"point P\" [0 0 0 1 0 0 2 0 0]\nWorldEnd\n",
+    ts_test_pbrt_refused(PBRT_HEAD "Shape \"curve\" \"string basis\" \"bspline\" \"point P\" [0 0 0 1 0 0 2 0 0]\nWorldEnd\n",
                  "t.pbrt:5:40: Shape \"curve\": \"point P\" has 3 control points: the degree 3 b-spline basis needs "
                  "at least 4 (as pbrt-v3)");
-    pbrt_refused(PBRT_HEAD "Shape \"curve\" \"integer degree\" 4 \"point P\" [0 0 0 1 0 0 2 0 0 3 0 0]\nWorldEnd\n",
+    ts_test_pbrt_refused(PBRT_HEAD "Shape \"curve\" \"integer degree\" 4 \"point P\" [0 0 0 1 0 0 2 0 0 3 0 0]\nWorldEnd\n",
                  "t.pbrt:5:15: Shape \"curve\": \"integer degree\" is 4: only degree 2 and 3 curves are supported (as "
                  "pbrt-v3)");
-    pbrt_refused(PBRT_HEAD "Shape \"curve\" \"string basis\" \"hermite\" \"point P\" [0 0 0 1 0 0 2 0 0 3 0 0]\nWorldEnd\n",
+    ts_test_pbrt_refused(PBRT_HEAD "Shape \"curve\" \"string basis\" \"hermite\" \"point P\" [0 0 0 1 0 0 2 0 0 3 0 0]\nWorldEnd\n",
                  "t.pbrt:5:15: Shape \"curve\": \"string basis\" is \"hermite\": only \"bezier\" and \"bspline\" are "
                  "supported (as pbrt-v3)");
-    pbrt_refused(PBRT_HEAD "Shape \"curve\" \"string type\" \"ribbon\" \"point P\" [0 0 0 1 0 0 2 0 0 3 0 0]\nWorldEnd\n",
+    ts_test_pbrt_refused(PBRT_HEAD "Shape \"curve\" \"string type\" \"ribbon\" \"point P\" [0 0 0 1 0 0 2 0 0 3 0 0]\nWorldEnd\n",
                  "t.pbrt:5:1: Shape \"curve\": a \"ribbon\" curve needs normals \"normal N\" at its segment ends (as "
                  "pbrt-v3)");
-    pbrt_refused(PBRT_HEAD "Shape \"curve\" \"string type\" \"ribbon\" \"point P\" [0 0 0 1 0 0 2 0 0 3 0 0] "
+    ts_test_pbrt_refused(PBRT_HEAD "Shape \"curve\" \"string type\" \"ribbon\" \"point P\" [0 0 0 1 0 0 2 0 0 3 0 0] "
                            "\"normal N\" [0 0 1]\nWorldEnd\n",
                  "t.pbrt:5:74: Shape \"curve\": \"normal N\" has 1 normals: a ribbon curve of 1 segments needs 2 (as "
                  "pbrt-v3)");
-    pbrt_refused(PBRT_HEAD "Shape \"curve\" \"float width\" 0 \"point P\" [0 0 0 1 0 0 2 0 0 3 0 0]\nWorldEnd\n",
+    ts_test_pbrt_refused(PBRT_HEAD "Shape \"curve\" \"float width\" 0 \"point P\" [0 0 0 1 0 0 2 0 0 3 0 0]\nWorldEnd\n",
                  "t.pbrt:5:15: Shape \"curve\": \"float width\" must be a positive finite number, got 0 (pbrt-v3 "
                  "draws nothing or misbounds the curve)");
-    pbrt_refused(PBRT_HEAD "AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\n"
+    ts_test_pbrt_refused(PBRT_HEAD "AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\n"
                            "Shape \"curve\" \"point P\" [0 0 0 1 0 0 2 0 0 3 0 0]\nAttributeEnd\nWorldEnd\n",
                  "t.pbrt:6:1: AreaLightSource \"diffuse\" is refused on a \"curve\": pbrt-v3 cannot sample curves (its "
                  "Curve::Sample is not implemented and stops the render at the first light sample)");
-    warnings w = {0};
-    ts_scene *s = load_pbrt(PBRT_HEAD "Shape \"curve\" \"normal N\" [0 0 1 0 0 1] \"point P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n"
+    ts_test_warnings w = {0};
+    ts_scene *s = ts_test_load_pbrt(PBRT_HEAD "Shape \"curve\" \"normal N\" [0 0 1 0 0 1] \"point P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n"
                                       "WorldEnd\n",
                             &w);
     assert_string_equal(w.last, "t.pbrt:5:15: Shape \"curve\": \"normal N\" is ignored: curve normals are only used "
@@ -698,8 +632,8 @@ static void pbrt_curve_params(void **state)
     assert_int_equal(s->shapes[0].type, TS_SHAPE_CURVE);
     assert_int_equal(s->shapes[0].curve.type, TS_CURVE_FLAT);
     ts_scene_destroy(s);
-    w = (warnings){0};
-    s = load_pbrt(PBRT_HEAD "Shape \"curve\" \"string type\" \"tube\" \"point P\" [0 0 0 1 0 0 2 0 0 3 0 0]\nWorldEnd\n",
+    w = (ts_test_warnings){0};
+    s = ts_test_load_pbrt(PBRT_HEAD "Shape \"curve\" \"string type\" \"tube\" \"point P\" [0 0 0 1 0 0 2 0 0 3 0 0]\nWorldEnd\n",
                   &w);
     assert_string_equal(w.last, "t.pbrt:5:15: Shape \"curve\": \"string type\" is \"tube\", not a curve type (flat, "
                                 "ribbon, cylinder): a \"cylinder\" curve, as pbrt-v3 makes it");
@@ -707,8 +641,8 @@ static void pbrt_curve_params(void **state)
     ts_scene_destroy(s);
     /* an animated curve: pbrt-v3's TransformedPrimitive, an object of its own and a moving
      * instance (as the JSON's, tested by moving_curve) */
-    w = (warnings){0};
-    s = load_pbrt("LookAt 0 0 5  0 0 0  0 1 0\nCamera \"orthographic\" \"float shutteropen\" 0 \"float shutterclose\" 1\n"
+    w = (ts_test_warnings){0};
+    s = ts_test_load_pbrt("LookAt 0 0 5  0 0 0  0 1 0\nCamera \"orthographic\" \"float shutteropen\" 0 \"float shutterclose\" 1\n"
                   "Film \"image\" \"integer xresolution\" 8 \"integer yresolution\" 8\nWorldBegin\n"
                   "ActiveTransform EndTime\nTranslate 0 0.2 0\nActiveTransform All\n"
                   "Shape \"curve\" \"point P\" [-1 0 0 -0.3333333333 0 0 0.3333333333 0 0 1 0 0] \"float width\" 0.25\n"
@@ -724,8 +658,8 @@ static void pbrt_curve_params(void **state)
     assert_false(ts_accel_intersect(s->accel, &r, &si));
     ts_scene_destroy(s);
     /* splitdepth is taken (int or float, as pbrt-v3 reads it) and warned about nothing */
-    w = (warnings){0};
-    s = load_pbrt(PBRT_HEAD "Shape \"curve\" \"float splitdepth\" 5 \"point P\" [0 0 0 1 0 0 2 0 0 3 0 0 4 0 0 5 0 0 6 0 0]\n"
+    w = (ts_test_warnings){0};
+    s = ts_test_load_pbrt(PBRT_HEAD "Shape \"curve\" \"float splitdepth\" 5 \"point P\" [0 0 0 1 0 0 2 0 0 3 0 0 4 0 0 5 0 0 6 0 0]\n"
                             "WorldEnd\n",
                   &w);
     assert_int_equal(w.n, 0);
@@ -738,22 +672,22 @@ static void json_curve_keys(void **state)
     (void)state;
     char doc[2048];
 #define CURVE_DOC(keys) (snprintf(doc, sizeof doc, VIEW "\"shapes\":[{\"type\":\"curve\",\"material\":\"m\"," keys "}]}"), doc)
-    json_refused(CURVE_DOC("\"points\":[0,0,0, 1,0,0, 2,0,0]"),
+    ts_test_json_refused(CURVE_DOC("\"points\":[0,0,0, 1,0,0, 2,0,0]"),
                  "shapes[0]: points: 3 control points do not make degree-3 Bézier segments (4 + n·3 are needed, n ≥ 0)");
-    json_refused(CURVE_DOC("\"points\":[0,0,0, 1,0,0, 2,0,0, 3,0,0],\"curve_type\":\"ribbon\""),
+    ts_test_json_refused(CURVE_DOC("\"points\":[0,0,0, 1,0,0, 2,0,0, 3,0,0],\"curve_type\":\"ribbon\""),
                  "shapes[0]: normals: a ribbon curve of 1 segments needs 2 normals (one at each segment end), got 0");
-    json_refused(CURVE_DOC("\"points\":[0,0,0, 1,0,0, 2,0,0, 3,0,0],\"normals\":[0,0,1, 0,0,1]"),
+    ts_test_json_refused(CURVE_DOC("\"points\":[0,0,0, 1,0,0, 2,0,0, 3,0,0],\"normals\":[0,0,1, 0,0,1]"),
                  "shapes[0]: normals: only ribbon curves take normals");
-    json_refused(CURVE_DOC("\"points\":[0,0,0, 1,0,0, 2,0,0, 3,0,0],\"emission\":1"),
+    ts_test_json_refused(CURVE_DOC("\"points\":[0,0,0, 1,0,0, 2,0,0, 3,0,0],\"emission\":1"),
                  "shapes[0]: emission: a curve cannot be an area light (pbrt-v3 cannot sample curves: its "
                  "Curve::Sample is not implemented and its render stops there)");
-    json_refused(CURVE_DOC("\"points\":[0,0,0, 1,0,0, 2,0,0, 3,0,0],\"degree\":4"),
+    ts_test_json_refused(CURVE_DOC("\"points\":[0,0,0, 1,0,0, 2,0,0, 3,0,0],\"degree\":4"),
                  "shapes[0].degree: expected an integer in [2, 3], got 4");
-    json_refused(CURVE_DOC("\"points\":[0,0,0, 1,0,0, 2,0,0, 3,0,0],\"width0\":-1"),
+    ts_test_json_refused(CURVE_DOC("\"points\":[0,0,0, 1,0,0, 2,0,0, 3,0,0],\"width0\":-1"),
                  "shapes[0].width0: expected a positive number, got -1");
-    json_refused(CURVE_DOC("\"points\":[0,0,0, 1,0,0, 2,0,0, 3,0,0],\"curve_type\":\"tube\""),
+    ts_test_json_refused(CURVE_DOC("\"points\":[0,0,0, 1,0,0, 2,0,0, 3,0,0],\"curve_type\":\"tube\""),
                  "shapes[0].curve_type: expected one of \"flat\", \"ribbon\", \"cylinder\", got \"tube\"");
-    json_refused(CURVE_DOC("\"points\":[0,0,0, 1,0,0, 2,0,0, 3,0,0],\"radius\":1"),
+    ts_test_json_refused(CURVE_DOC("\"points\":[0,0,0, 1,0,0, 2,0,0, 3,0,0],\"radius\":1"),
                  "shapes[0].radius: unknown key (allowed here: type, material, transform, motion, emission, two_sided, "
                  "light_samples, reverse_orientation, medium, points, basis, degree, curve_type, normals, width, "
                  "width0, width1)");

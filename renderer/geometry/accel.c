@@ -307,6 +307,21 @@ static void user_occluded(const struct RTCOccludedFunctionNArguments *args)
     }
 }
 
+/* A filter's ray in the space of the instance k it runs under (instance_xform), into *out;
+ * false, with every hit of the call rejected, where that instance's transform is
+ * singular at the ray's time (nothing of it is hit). */
+static bool filter_object_ray(const struct RTCFilterFunctionNArguments *args, const query_ctx *q, uint32_t k,
+                              const ts_ray *ray, ts_ray *out)
+{
+    const ts_xform *x = instance_xform(q, k);
+    if (!x) {
+        for (unsigned i = 0; i < args->N; i++) args->valid[i] = 0;
+        return false;
+    }
+    *out = ray_to_object(x, ray);
+    return true;
+}
+
 /* ---- triangle filter (both intersect and occluded) ---- */
 
 static void triangle_filter(const struct RTCFilterFunctionNArguments *args)
@@ -320,14 +335,7 @@ static void triangle_filter(const struct RTCFilterFunctionNArguments *args)
     /* Through instance k the triangle is in the object's space: so is the ray tested. */
     uint32_t k = current_instance(q->a, args->context), inst = k == TS_NONE ? 0 : k + 1;
     ts_ray r_obj;
-    if (k != TS_NONE) {
-        const ts_xform *x = instance_xform(q, k);
-        if (!x) {
-            for (unsigned i = 0; i < N; i++) args->valid[i] = 0;
-            return;
-        }
-        r_obj = ray_to_object(x, ray);
-    }
+    if (k != TS_NONE && !filter_object_ray(args, q, k, ray, &r_obj)) return;
     for (unsigned i = 0; i < N; i++) {
         if (args->valid[i] != -1) continue;
         unsigned prim = hit[5 * N + i];
@@ -366,14 +374,7 @@ static inline void cutout_filter(const struct RTCFilterFunctionNArguments *args,
     unsigned N = args->N;
     uint32_t k = current_instance(q->a, args->context), inst = k == TS_NONE ? 0 : k + 1;
     ts_ray r_obj;
-    if (ray && k != TS_NONE) {
-        const ts_xform *x = instance_xform(q, k);
-        if (!x) {
-            for (unsigned i = 0; i < N; i++) args->valid[i] = 0;
-            return;
-        }
-        r_obj = ray_to_object(x, ray);
-    }
+    if (ray && k != TS_NONE && !filter_object_ray(args, q, k, ray, &r_obj)) return;
     const ts_ray *r = ray && k != TS_NONE ? &r_obj : ray;
     bool skips = ray && ray->skip_shape != TS_NONE;
     for (unsigned i = 0; i < N; i++) {
@@ -416,14 +417,7 @@ static void ribbon_filter(const struct RTCFilterFunctionNArguments *args)
     unsigned N = args->N;
     uint32_t k = q && q->ray ? current_instance(q->a, args->context) : TS_NONE;
     ts_ray r_obj;
-    if (k != TS_NONE) {
-        const ts_xform *x = instance_xform(q, k);
-        if (!x) {
-            for (unsigned i = 0; i < N; i++) args->valid[i] = 0;
-            return;
-        }
-        r_obj = ray_to_object(x, q->ray);
-    }
+    if (k != TS_NONE && !filter_object_ray(args, q, k, q->ray, &r_obj)) return;
     for (unsigned i = 0; i < N; i++) {
         if (args->valid[i] != -1) continue;
         ts_vec3 d = q && q->ray ? (k != TS_NONE ? r_obj.d : q->ray->d)

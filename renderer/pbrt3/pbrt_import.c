@@ -1308,6 +1308,14 @@ static ts_status jcutout(imp *im, cJSON *j, const char *key, const cutout *c)
     return ts_jw_add(j, key, ref) ? TS_OK : nomem(im);
 }
 
+/* The index of s in the NULL-terminated names, or −1. */
+static int name_index(const char *s, const char *const *names)
+{
+    for (int k = 0; names[k]; k++)
+        if (strcmp(s, names[k]) == 0) return k;
+    return -1;
+}
+
 /* pbrt-v3's "curve" (CreateCurveShape, geometry/curve.h) into d and, converting, its
  * document j. pbrt-v3's refusals (degree, basis, the control-point count for the basis, a
  * ribbon's normals) are errors at the parameter; where pbrt-v3 warns and goes on, so does
@@ -1338,12 +1346,12 @@ static ts_status read_curve(imp *im, ts_pbrt_shape *sh, ts_shape_desc *d, cJSON 
     if (degree != 2 && degree != 3)
         return ts_pbrt_param_error(ps, ts_pbrt_params_get(ps, "degree"), im->err, TS_ERR_INVALID,
                                    "is %d: only degree 2 and 3 curves are supported (as pbrt-v3)", (int)degree);
-    const char *basis_name;
+    static const char *const bases[] = {"bezier", "bspline", NULL}, *const kinds[] = {"flat", "ribbon", "cylinder", NULL};
+    const char *basis_name, *kind_name;
     TRY(ts_pbrt_find_string(ps, "basis", "bezier", &basis_name, im->err));
-    ts_curve_basis basis = TS_CURVE_BEZIER;
-    if (strcmp(basis_name, "bspline") == 0)
-        basis = TS_CURVE_BSPLINE;
-    else if (strcmp(basis_name, "bezier") != 0)
+    TRY(ts_pbrt_find_string(ps, "type", "flat", &kind_name, im->err));
+    int basis = name_index(basis_name, bases), kind = name_index(kind_name, kinds);
+    if (basis < 0)
         return ts_pbrt_param_error(ps, ts_pbrt_params_get(ps, "basis"), im->err, TS_ERR_INVALID,
                                    "is \"%s\": only \"bezier\" and \"bspline\" are supported (as pbrt-v3)",
                                    basis_name);
@@ -1365,17 +1373,12 @@ static ts_status read_curve(imp *im, ts_pbrt_shape *sh, ts_shape_desc *d, cJSON 
                                    "pbrt-v3)",
                                    np, (int)degree, (int)degree + 1);
     }
-    const char *kind_name;
-    TRY(ts_pbrt_find_string(ps, "type", "flat", &kind_name, im->err));
-    ts_curve_type kind = TS_CURVE_CYLINDER;
-    if (strcmp(kind_name, "flat") == 0)
-        kind = TS_CURVE_FLAT;
-    else if (strcmp(kind_name, "ribbon") == 0)
-        kind = TS_CURVE_RIBBON;
-    else if (strcmp(kind_name, "cylinder") != 0)
+    if (kind < 0) {
         pwarn(im, ps, ts_pbrt_params_get(ps, "type"),
               "is \"%s\", not a curve type (flat, ribbon, cylinder): a \"cylinder\" curve, as pbrt-v3 makes it",
               kind_name);
+        kind = TS_CURVE_CYLINDER;
+    }
     const float *N;
     size_t nn;
     TRY(ts_pbrt_find_normal3s(ps, "N", &N, &nn, im->err));
@@ -1419,8 +1422,8 @@ static ts_status read_curve(imp *im, ts_pbrt_shape *sh, ts_shape_desc *d, cJSON 
               "then differs with the view direction)");
     d->type = TS_SHAPE_CURVE;
     d->reverse_orientation = sh->reverse_orientation;
-    d->curve.type = kind;
-    d->curve.basis = basis;
+    d->curve.type = (ts_curve_type)kind;
+    d->curve.basis = (ts_curve_basis)basis;
     d->curve.degree = degree;
     d->curve.n_points = (uint32_t)np;
     d->curve.p = P;
@@ -1429,7 +1432,6 @@ static ts_status read_curve(imp *im, ts_pbrt_shape *sh, ts_shape_desc *d, cJSON 
     d->curve.width0 = w[0];
     d->curve.width1 = w[1];
     if (!j) return TS_OK;
-    static const char *const kinds[] = {"flat", "ribbon", "cylinder"};
     bool ok = ts_jw_string(j, "type", "curve") && ts_jw_add(j, "points", ts_jw_floats(P, 3 * np)) &&
               (basis == TS_CURVE_BEZIER || ts_jw_string(j, "basis", "bspline")) &&
               (degree == 3 || ts_jw_number(j, "degree", degree)) &&
