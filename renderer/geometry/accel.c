@@ -26,6 +26,12 @@
  * keeps the plain filter and pays nothing. The decision is a pure function of the ray and
  * the hit, so it is the same on every thread and in any traversal order.
  *
+ * Curves (geometry/curve.h) are Embree's flat Bézier curves: their pieces' control points
+ * copied (x, y, z, radius), one index per piece, the curve's tessellation rate; a ribbon
+ * gets ribbon_filter (intersect and occluded), which keeps only hits within pbrt-v3's
+ * width for the ray's direction. A hit's interaction comes from Embree's (t, u, v). Curves
+ * carry no skip ids: a ray leaving one starts 2·width off it (pbrt-v3's error bound).
+ *
  * Each mesh triangle has a ts_tri_cache (shape.h: its normal, edge lengths, ∂p/∂u, ∂p/∂v),
  * made at build time, 72 bytes a triangle; the filter and the hit's interaction read it
  * instead of recomputing those per hit, with bit-identical results.

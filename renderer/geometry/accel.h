@@ -2,7 +2,8 @@
  *
  * Design note: one Embree device and scene per ts_accel. Shape i is attached with geometry
  * ID i, so a hit's geomID is the index into the scene's shapes. Meshes are native Embree
- * triangles; analytic shapes are user geometry calling ts_shape_intersect. A ray naming a
+ * triangles, curves Embree's flat Bézier curves (geometry/curve.h); analytic shapes are
+ * user geometry calling ts_shape_intersect. A ray naming a
  * triangle in skip_shape/skip_prim never reports it (see interaction.h). Built once;
  * ts_accel_intersect and ts_accel_occluded are thread-safe and allocate nothing. */
 #ifndef TS_ACCEL_H
