@@ -31,8 +31,11 @@
 #include "film/film.h"
 #include "geometry/accel.h"
 #include "geometry/curve.h"
+#include "json/scene_json.h"
+#include "load/scene_load.h"
 #include "render/render.h"
 #include "scene_support.h"
+#include "tmp_folder.h"
 #include "scene/scene.h"
 
 /* ---------------------------------------------------------------- helpers */
@@ -667,6 +670,54 @@ static void pbrt_curve_params(void **state)
     ts_scene_destroy(s);
 }
 
+/* `tessera convert` writes every curve parameter: the document renders the .pbrt's pixels
+ * bit for bit (a flat, a ribbon, a bspline of degree 2, a reversed cylinder under a mirror
+ * and an animated curve). */
+static void pbrt_convert_same_pixels(void **state)
+{
+    (void)state;
+    const char *text =
+        "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 40 \"float shutterclose\" 1\n"
+        "Film \"image\" \"integer xresolution\" 32 \"integer yresolution\" 24\n"
+        "Sampler \"sobol\" \"integer pixelsamples\" 4\nIntegrator \"path\"\nWorldBegin\n"
+        "LightSource \"distant\" \"point from\" [1 1 5] \"point to\" [0 0 0] \"rgb L\" [3 3 3]\n"
+        "Material \"matte\" \"rgb Kd\" [0.8 0.3 0.2]\n"
+        "Shape \"curve\" \"point P\" [-1.5 -1 0 -0.5 1 0 0.5 -1 0 1.5 1 0] \"float width0\" 0.2 \"float width1\" 0.05\n"
+        "Shape \"curve\" \"point P\" [-1.5 0.5 0 -0.5 1.5 0 0.5 0.5 0 1.5 1.5 0 2 1 0 2 0 0 1.5 -1 0] "
+        "\"float width\" 0.1 \"string type\" \"ribbon\" \"normal N\" [0 0 1 0 1 1 1 0 0]\n"
+        "Shape \"curve\" \"point P\" [-1.5 -1.2 0 -0.5 -0.5 0 0.5 -1.5 0 1.5 -1.2 0] \"float width\" 0.1 "
+        "\"string basis\" \"bspline\" \"integer degree\" 2\n"
+        "AttributeBegin\nScale -1 1 1\nReverseOrientation\nShape \"curve\" \"point P\" [-1 -0.5 0.5 0 0.5 0 1 -0.5 0.5 "
+        "1.5 0 0] \"float width\" 0.15 \"string type\" \"cylinder\"\nAttributeEnd\n"
+        "AttributeBegin\nActiveTransform EndTime\nTranslate 0 0.3 0\nActiveTransform All\n"
+        "Shape \"curve\" \"point P\" [-1 0 1 0 0.4 1 1 0 1 1.2 0.2 1] \"float width\" 0.08\nAttributeEnd\nWorldEnd\n";
+    char path[512];
+    ts_tmp_write("curves.pbrt", text, strlen(text), path, sizeof path);
+    ts_scene *a = NULL, *b = NULL;
+    ts_error err = {0};
+    if (ts_scene_load_path(path, NULL, NULL, NULL, &a, &err)) fail_msg("%s", err.message);
+    char *json = NULL;
+    size_t len = 0;
+    if (ts_scene_convert_pbrt_path(path, NULL, NULL, NULL, &json, &len, &err)) fail_msg("%s", err.message);
+    if (ts_scene_load_text(json, len, ts_tmp_dir, "curves", NULL, &b, &err)) fail_msg("%s", err.message);
+    free(json);
+    assert_int_equal(a->n_shapes, b->n_shapes);
+    ts_film *fa = ts_test_render(a, 2), *fb = ts_test_render(b, 2);
+    int lit = 0;
+    for (int y = 0; y < a->height; y++)
+        for (int x = 0; x < a->width; x++) {
+            ts_rgb p = ts_film_pixel_rgb(fa, x, y), q = ts_film_pixel_rgb(fb, x, y);
+            if (p.r != q.r || p.g != q.g || p.b != q.b)
+                fail_msg("pixel (%d, %d): .pbrt (%g %g %g), converted (%g %g %g)", x, y, p.r, p.g, p.b, q.r, q.g, q.b);
+            lit += p.r > 0;
+        }
+    assert_true(lit > 50);
+    ts_film_destroy(fa);
+    ts_film_destroy(fb);
+    ts_scene_destroy(a);
+    ts_scene_destroy(b);
+}
+
 static void json_curve_keys(void **state)
 {
     (void)state;
@@ -708,7 +759,8 @@ int main(void)
         cmocka_unit_test(textured_curves),
         cmocka_unit_test(moving_curve),
         cmocka_unit_test(pbrt_curve_params),
+        cmocka_unit_test(pbrt_convert_same_pixels),
         cmocka_unit_test(json_curve_keys),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return cmocka_run_group_tests(tests, ts_tmp_group_setup, ts_tmp_group_teardown);
 }
