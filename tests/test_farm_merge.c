@@ -68,13 +68,13 @@ static const char *tmp(const char *name)
 static void write_file(const char *path, const char *text) { cli_write_file(path, text); }
 static bool exists(const char *path) { return cli_exists(path); }
 
-/* The Cornell box shrunk for tests: w×h pixels, spp, a filter, optional crop. */
-static void write_cornell(const char *path, int w, int h, int spp, const char *filter, const char *crop, int red)
+/* A scene document of the source tree (rel from its root), parsed; the caller deletes it. */
+static cJSON *source_doc(const char *rel)
 {
     const char *src = getenv("TS_SOURCE_DIR");
     assert_non_null(src);
     char in[512];
-    snprintf(in, sizeof in, "%s/scenes/cornell-box.json", src);
+    snprintf(in, sizeof in, "%s/%s", src, rel);
     FILE *f = fopen(in, "r");
     assert_non_null(f);
     static char text[1 << 16];
@@ -83,6 +83,13 @@ static void write_cornell(const char *path, int w, int h, int spp, const char *f
     text[n] = '\0';
     cJSON *doc = cJSON_Parse(text);
     assert_non_null(doc);
+    return doc;
+}
+
+/* The Cornell box shrunk for tests: w×h pixels, spp, a filter, optional crop. */
+static void write_cornell(const char *path, int w, int h, int spp, const char *filter, const char *crop, int red)
+{
+    cJSON *doc = source_doc("scenes/cornell-box.json");
     cJSON *film = cJSON_GetObjectItem(doc, "film");
     cJSON_ReplaceItemInObject(film, "width", cJSON_CreateNumber(w));
     cJSON_ReplaceItemInObject(film, "height", cJSON_CreateNumber(h));
@@ -522,18 +529,7 @@ static void test_film_scale_shards(void **state)
 static void test_media_shards(void **state)
 {
     (void)state;
-    const char *src = getenv("TS_SOURCE_DIR");
-    assert_non_null(src);
-    char in[512];
-    snprintf(in, sizeof in, "%s/proto/examples/media.json", src);
-    FILE *f = fopen(in, "r");
-    assert_non_null(f);
-    static char text[1 << 16];
-    size_t n = fread(text, 1, sizeof text - 1, f);
-    fclose(f);
-    text[n] = '\0';
-    cJSON *doc = cJSON_Parse(text);
-    assert_non_null(doc);
+    cJSON *doc = source_doc("proto/examples/media.json");
     cJSON *film = cJSON_GetObjectItem(doc, "film");
     cJSON_ReplaceItemInObject(film, "width", cJSON_CreateNumber(24));
     cJSON_ReplaceItemInObject(film, "height", cJSON_CreateNumber(16));

@@ -819,7 +819,7 @@ static void test_media_walk_counters(void **state)
 {
     (void)state;
     const double walks = 16, steps = 16.0 * (1u << 20);
-    char id[32], path[160];
+    char id[32];
     ts_submit(&srv, walk_cut_scene, id, sizeof id);
     cJSON *o = ts_wait_done(&srv, id, 60);
     assert_string_equal(ts_json_str(o, "state"), "done");
@@ -827,12 +827,8 @@ static void test_media_walk_counters(void **state)
     assert_true(ts_json_num(o, "medium_steps") == steps);
     assert_int_equal((int)ts_json_num(o, "nonfinite_samples"), 0);
     cJSON_Delete(o);
-    http_resp r;
-    get_path(path, sizeof path, id, "/image.exr");
-    ts_http(&srv, "GET", path, NULL, 0, NULL, &r);
     ts_image a;
-    decode_exr(&r, &a);
-    ts_http_free(&r);
+    ts_job_exr(&srv, id, &a);
     assert_true(exr_number(&a, "tessera_walks_truncated") == walks);
     assert_true(exr_number(&a, "tessera_medium_steps") == steps);
     ts_image_fini(&a);
@@ -881,10 +877,7 @@ static void test_media_walk_counters(void **state)
     o = ts_wait_done(&srv, id, 30);
     assert_true(ts_json_num(o, "walks_truncated") == 0);
     cJSON_Delete(o);
-    get_path(path, sizeof path, id, "/image.exr");
-    ts_http(&srv, "GET", path, NULL, 0, NULL, &r);
-    decode_exr(&r, &a);
-    ts_http_free(&r);
+    ts_job_exr(&srv, id, &a);
     assert_null(ts_image_attr_find(&a, "tessera_walks_truncated"));
     assert_null(ts_image_attr_find(&a, "tessera_medium_steps"));
     ts_image_fini(&a);
