@@ -46,6 +46,30 @@ static inline cJSON *doc_rows_schema(void)
     return s;
 }
 
+/* The entry of the schema's $defs.DEF.oneOf whose "type" is the constant `type` (its
+ * object, with "properties" and "required"), or NULL. */
+static inline const cJSON *doc_rows_schema_alt(const cJSON *schema, const char *def, const char *type)
+{
+    const cJSON *d = cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(schema, "$defs"), def);
+    const cJSON *alt;
+    cJSON_ArrayForEach(alt, cJSON_GetObjectItemCaseSensitive(d, "oneOf"))
+    {
+        const cJSON *c = cJSON_GetObjectItemCaseSensitive(
+            cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(alt, "properties"), "type"), "const");
+        if (cJSON_IsString(c) && strcmp(c->valuestring, type) == 0) return alt;
+    }
+    return NULL;
+}
+
+/* Whether a schema entry's "required" lists key. */
+static inline bool doc_rows_schema_required(const cJSON *alt, const char *key)
+{
+    const cJSON *e;
+    cJSON_ArrayForEach(e, cJSON_GetObjectItemCaseSensitive(alt, "required"))
+    if (cJSON_IsString(e) && strcmp(e->valuestring, key) == 0) return true;
+    return false;
+}
+
 /* The table row (a line starting "| ") whose first cell holds `type` in backquotes, copied
  * into row (false when there is none). `after`: a heading the row must follow ("## Lights"),
  * so that a name two tables share is looked up in the right one. */

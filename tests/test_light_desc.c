@@ -32,42 +32,14 @@ static cJSON *load_schema(void)
     return s;
 }
 
-/* The schema's object for light type `name` (its oneOf entry, or an entry of a nested one). */
-static const cJSON *schema_light(const cJSON *node, const char *name)
-{
-    if (!node) return NULL;
-    const cJSON *props = cJSON_GetObjectItemCaseSensitive(node, "properties");
-    const cJSON *t = cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(props, "type"), "const");
-    if (cJSON_IsString(t) && strcmp(t->valuestring, name) == 0) return node;
-    const char *lists[] = {"oneOf", "anyOf", "allOf"};
-    for (size_t k = 0; k < 3; k++) {
-        const cJSON *e;
-        cJSON_ArrayForEach(e, cJSON_GetObjectItemCaseSensitive(node, lists[k]))
-        {
-            const cJSON *r = schema_light(e, name);
-            if (r) return r;
-        }
-    }
-    return NULL;
-}
-
-static bool in_required(const cJSON *alt, const char *key)
-{
-    const cJSON *e;
-    cJSON_ArrayForEach(e, cJSON_GetObjectItemCaseSensitive(alt, "required"))
-    if (cJSON_IsString(e) && strcmp(e->valuestring, key) == 0) return true;
-    return false;
-}
-
 static void test_schema_agrees(void **state)
 {
     (void)state;
     cJSON *schema = load_schema();
-    const cJSON *light = cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(schema, "$defs"), "light");
     for (int t = 0; t < TS_LIGHT_DESC_COUNT; t++) {
         const ts_light_type_desc *d = &ts_light_descs[t];
         if (d->flags & TS_LDESC_ENVIRONMENT) continue; /* radiance-or-map: test_envmap's */
-        const cJSON *alt = schema_light(light, d->name);
+        const cJSON *alt = doc_rows_schema_alt(schema, "light", d->name);
         if (!alt) fail_msg("the schema has no light of type %s", d->name);
         const cJSON *props = cJSON_GetObjectItemCaseSensitive(alt, "properties");
         assert_int_equal(cJSON_GetArraySize(props), 1 + d->n_params);
@@ -76,7 +48,7 @@ static void test_schema_agrees(void **state)
             const cJSON *sp = cJSON_GetObjectItemCaseSensitive(props, p->key);
             if (!sp) fail_msg("%s: the table has %s, the schema does not", d->name, p->key);
             bool req = (p->flags & TS_LPARAM_REQUIRED) != 0;
-            if (req != in_required(alt, p->key))
+            if (req != doc_rows_schema_required(alt, p->key))
                 fail_msg("%s.%s: required in %s only", d->name, p->key, req ? "the table" : "the schema");
             const cJSON *def = cJSON_GetObjectItemCaseSensitive(sp, "default");
             if (req) {

@@ -30,20 +30,6 @@
 #include "materials/material_desc.h"
 #include "scene/scene.h"
 
-static cJSON *schema_material(const cJSON *schema, const char *type)
-{
-    const cJSON *defs = cJSON_GetObjectItemCaseSensitive(schema, "$defs");
-    const cJSON *one = cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(defs, "material"), "oneOf");
-    const cJSON *alt;
-    cJSON_ArrayForEach(alt, one)
-    {
-        const cJSON *props = cJSON_GetObjectItemCaseSensitive(alt, "properties");
-        const cJSON *t = cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(props, "type"), "const");
-        if (cJSON_IsString(t) && strcmp(t->valuestring, type) == 0) return (cJSON *)props;
-    }
-    return NULL;
-}
-
 /* The schema's words for a row's range: which $ref or bound it uses. */
 static void check_schema_range(const ts_material_param *p, const cJSON *prop, const char *type)
 {
@@ -75,7 +61,7 @@ static void test_schema_agrees(void **state)
     for (int t = 0; t < TS_MATERIAL_TYPE_COUNT; t++) {
         const ts_material_desc *d = &ts_material_descs[t];
         assert_int_equal(d->type, t);
-        const cJSON *props = schema_material(schema, d->name);
+        const cJSON *props = cJSON_GetObjectItemCaseSensitive(doc_rows_schema_alt(schema, "material", d->name), "properties");
         if (!props) fail_msg("the schema has no material of type %s", d->name);
         /* The keys the table makes the JSON front end accept (scene_json.c). */
         const char *keys[40];

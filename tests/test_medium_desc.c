@@ -26,28 +26,13 @@ static cJSON *load_schema(void)
     return s;
 }
 
-static bool required(const cJSON *alt, const char *key)
-{
-    const cJSON *e;
-    cJSON_ArrayForEach(e, cJSON_GetObjectItemCaseSensitive(alt, "required"))
-    if (cJSON_IsString(e) && strcmp(e->valuestring, key) == 0) return true;
-    return false;
-}
-
 static void test_schema_agrees(void **state)
 {
     (void)state;
     cJSON *schema = load_schema();
-    const cJSON *medium = cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(schema, "$defs"), "medium");
     for (int t = 0; t < TS_MEDIUM_DESC_COUNT; t++) {
         const ts_medium_type_desc *d = &ts_medium_descs[t];
-        const cJSON *alt = NULL, *e;
-        cJSON_ArrayForEach(e, cJSON_GetObjectItemCaseSensitive(medium, "oneOf"))
-        {
-            const cJSON *c = cJSON_GetObjectItemCaseSensitive(
-                cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(e, "properties"), "type"), "const");
-            if (cJSON_IsString(c) && strcmp(c->valuestring, d->name) == 0) alt = e;
-        }
+        const cJSON *alt = doc_rows_schema_alt(schema, "medium", d->name);
         if (!alt) fail_msg("the schema has no medium of type %s", d->name);
         const cJSON *props = cJSON_GetObjectItemCaseSensitive(alt, "properties");
         int n = 1 + d->n_params + ((d->flags & TS_VDESC_TRANSFORM) ? 1 : 0);
@@ -59,7 +44,7 @@ static void test_schema_agrees(void **state)
             const cJSON *sp = cJSON_GetObjectItemCaseSensitive(props, p->key);
             if (!sp) fail_msg("%s: the table has %s, the schema does not", d->name, p->key);
             bool req = p->kind == TS_VPARAM_COUNT || p->kind == TS_VPARAM_DENSITY;
-            if (req != required(alt, p->key)) fail_msg("%s.%s: required in one of the table and the schema only", d->name, p->key);
+            if (req != doc_rows_schema_required(alt, p->key)) fail_msg("%s.%s: required in one of the table and the schema only", d->name, p->key);
             const cJSON *def = cJSON_GetObjectItemCaseSensitive(sp, "default");
             if (p->kind == TS_VPARAM_NUMBER && (!cJSON_IsNumber(def) || def->valuedouble != p->def[0]))
                 fail_msg("%s.%s: the schema's default differs from the table's %g", d->name, p->key, p->def[0]);

@@ -26,19 +26,6 @@ static cJSON *load_schema(void)
     return s;
 }
 
-static const cJSON *schema_texture(const cJSON *schema, const char *name)
-{
-    const cJSON *tex = cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(schema, "$defs"), "texture");
-    const cJSON *alt;
-    cJSON_ArrayForEach(alt, cJSON_GetObjectItemCaseSensitive(tex, "oneOf"))
-    {
-        const cJSON *props = cJSON_GetObjectItemCaseSensitive(alt, "properties");
-        const cJSON *t = cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(props, "type"), "const");
-        if (cJSON_IsString(t) && strcmp(t->valuestring, name) == 0) return props;
-    }
-    return NULL;
-}
-
 static void test_schema_agrees(void **state)
 {
     (void)state;
@@ -46,7 +33,7 @@ static void test_schema_agrees(void **state)
     for (int t = 0; t < TS_TEXTURE_TYPE_COUNT; t++) {
         const ts_texture_desc *d = &ts_texture_descs[t];
         assert_int_equal(d->type, t);
-        const cJSON *props = schema_texture(schema, d->name);
+        const cJSON *props = cJSON_GetObjectItemCaseSensitive(doc_rows_schema_alt(schema, "texture", d->name), "properties");
         if (!props) fail_msg("the schema has no texture of type %s", d->name);
         /* The keys the JSON front end takes for this type (json/scene_json_texture.c); a
          * checkerboard's are its 2D description's, which the schema lists. */
